@@ -1,0 +1,28 @@
+// The command-line layer: one file per subcommand in this folder, each a thin parser over library calls.
+// `prt NAME ...` and the standalone `prt-NAME ...` run the same code.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace prt::cli {
+
+// Adds one subcommand to `app`. The subcommand's callback does the work and throws prt::Error on bad input;
+// the driver maps that to a message and an exit code.
+void addEnvshCommand(CLI::App& app);
+void addMeshprepCommand(CLI::App& app);
+void addSceneCommand(CLI::App& app);
+void addTransferCommand(CLI::App& app);
+void addReferenceCommand(CLI::App& app);
+void addRelightCommand(CLI::App& app);
+void addCompareCommand(CLI::App& app);
+void addBenchCommand(CLI::App& app);
+
+// Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
+int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
+
+// Number of worker threads to use: `requested` if positive, else the hardware concurrency.
+int resolveThreads(int requested);
+
+} // namespace prt::cli

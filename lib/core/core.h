@@ -1,0 +1,108 @@
+// prt core: errors, atomic artifact writes, content hashes, logging with progress, and stage cost.
+//
+// Every stage reports failures as prt::Error, which names the file, the place inside it and the problem.
+// The driver turns an Error into one line on stderr and its exit code; see README "Exit codes".
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace prt {
+
+// Process exit codes, documented in the README.
+enum ExitCode : int {
+    kExitOk = 0,
+    kExitFailure = 1,     // internal error (a bug)
+    kExitUsage = 2,       // bad command line
+    kExitInput = 3,       // bad or missing input file
+    kExitOutput = 4,      // output could not be written
+    kExitInterrupted = 5, // stopped by a signal
+};
+
+// An error the user can act on. what() reads "FILE: PLACE: PROBLEM" (empty parts are skipped).
+class Error : public std::runtime_error {
+public:
+    Error(std::string file, std::string place, std::string problem, int exitCode = kExitInput);
+    const std::string& file() const { return file_; }
+    const std::string& place() const { return place_; }
+    const std::string& problem() const { return problem_; }
+    int exitCode() const { return exitCode_; }
+
+private:
+    std::string file_, place_, problem_;
+    int exitCode_;
+};
+
+// Reads a whole file. Throws Error naming the path when it is missing or unreadable.
+std::string readFileBytes(const std::string& path);
+
+// Writes an artifact atomically: `write` receives a temporary path in the same folder, fills it, and returns;
+// the temporary file is then fsynced and renamed onto `path`. If `write` throws, the temporary file is removed
+// and the exception propagates, so `path` never exists half-written and an older `path` is left untouched.
+// Temporary names are ".NAME.tmp-PID-N", so a SIGKILLed stage leaves at most such a file, never `path`.
+void writeFileAtomic(const std::string& path, const std::function<void(const std::string& tmpPath)>& write);
+
+// Convenience over writeFileAtomic for an in-memory buffer.
+void writeBytesAtomic(const std::string& path, std::string_view bytes);
+
+// Content hash (XXH3-128) as 32 lowercase hex digits, prefixed "xxh128:". Stable across machines and runs.
+std::string hashBytes(const void* data, size_t size);
+std::string hashFile(const std::string& path);
+
+// ---- logging and progress ----------------------------------------------------------------------------------
+// One process-wide log sink on stderr. Human text by default; with json, one JSON object per line
+// ({"level":..,"msg":..} or {"event":"progress",..}). quiet suppresses info and progress, not warnings or errors.
+struct LogOptions {
+    bool quiet = false;
+    bool json = false;
+};
+void setLogOptions(const LogOptions& options);
+const LogOptions& logOptions();
+void logInfo(const std::string& message);
+void logWarn(const std::string& message);
+void logError(const std::string& message);
+// Emits a structured record (JSON mode: as-is plus "event"; text mode: "event: k=v ...").
+void logEvent(const std::string& event, const std::string& jsonObject);
+
+// Progress over a known amount of work, printed at most a few times per second with rate and ETA.
+// Thread-safe: add() may be called from worker threads.
+class Progress {
+public:
+    Progress(std::string label, uint64_t total);
+    ~Progress();
+    void add(uint64_t done);
+    void finish();
+
+    struct State;
+
+private:
+    State* state_;
+};
+
+// ---- cost ---------------------------------------------------------------------------------------------------
+// What a stage spent. Every stage fills one and prints it (text) or logs it (JSON) when it ends.
+struct StageCost {
+    std::string stage;
+    double seconds = 0.0;
+    uint64_t rays = 0;
+    uint64_t peakMemoryBytes = 0; // process peak resident set size
+};
+uint64_t peakMemoryBytes();
+void reportCost(const StageCost& cost);
+
+// Monotonic wall clock in seconds.
+double nowSeconds();
+
+// Lower-case file extension without the dot ("glb", "obj"); empty if none.
+std::string fileExtension(const std::string& path);
+
+// ---- .npy arrays --------------------------------------------------------------------------------------------
+// float32, C order. Used for per-vertex radiance [V,3] and other per-element outputs.
+void writeNpy(const std::string& path, const std::vector<float>& data, const std::vector<size_t>& shape);
+std::vector<float> readNpy(const std::string& path, std::vector<size_t>* shape);
+
+} // namespace prt

@@ -1,0 +1,71 @@
+#include "core.h"
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fcntl.h>
+#include <fstream>
+#include <sstream>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace prt {
+
+std::string readFileBytes(const std::string& path) {
+    struct stat info;
+    if (stat(path.c_str(), &info) != 0) throw Error(path, "", std::string("cannot open: ") + std::strerror(errno));
+    if (S_ISDIR(info.st_mode)) throw Error(path, "", "is a folder, not a file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(path, "", std::string("cannot open: ") + std::strerror(errno));
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    if (in.bad()) throw Error(path, "", "read failed");
+    return bytes.str();
+}
+
+static std::string temporaryPath(const std::string& path) {
+    static std::atomic<unsigned> counter{0};
+    size_t slash = path.find_last_of('/');
+    std::string folder = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+    std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+    return folder + "." + name + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(counter++);
+}
+
+// fsync the file and its folder so a crash after rename never exposes an empty or partial artifact.
+static void syncPath(const std::string& path, bool directory) {
+    int fd = open(path.c_str(), directory ? O_RDONLY | O_DIRECTORY : O_RDONLY);
+    if (fd < 0) return;
+    fsync(fd);
+    close(fd);
+}
+
+void writeFileAtomic(const std::string& path, const std::function<void(const std::string& tmpPath)>& write) {
+    std::string tmp = temporaryPath(path);
+    try {
+        write(tmp);
+        struct stat info;
+        if (stat(tmp.c_str(), &info) != 0) throw Error(path, "", "writer produced no file", kExitOutput);
+        syncPath(tmp, false);
+        if (std::rename(tmp.c_str(), path.c_str()) != 0)
+            throw Error(path, "", std::string("cannot rename into place: ") + std::strerror(errno), kExitOutput);
+    } catch (...) {
+        std::remove(tmp.c_str());
+        throw;
+    }
+    size_t slash = path.find_last_of('/');
+    syncPath(slash == std::string::npos ? "." : path.substr(0, slash + 1), true);
+}
+
+void writeBytesAtomic(const std::string& path, std::string_view bytes) {
+    writeFileAtomic(path, [&](const std::string& tmp) {
+        std::FILE* file = std::fopen(tmp.c_str(), "wb");
+        if (!file) throw Error(path, "", std::string("cannot create: ") + std::strerror(errno), kExitOutput);
+        size_t written = std::fwrite(bytes.data(), 1, bytes.size(), file);
+        bool ok = written == bytes.size() && std::fflush(file) == 0;
+        ok = std::fclose(file) == 0 && ok;
+        if (!ok) throw Error(path, "", std::string("write failed: ") + std::strerror(errno), kExitOutput);
+    });
+}
+
+} // namespace prt

@@ -1,0 +1,72 @@
+#include "core.h"
+
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+namespace prt {
+
+void writeNpy(const std::string& path, const std::vector<float>& data, const std::vector<size_t>& shape) {
+    size_t count = 1;
+    for (size_t n : shape) count *= n;
+    if (count != data.size()) throw Error(path, "", "internal: npy shape does not match data size", kExitFailure);
+    std::string shapeText = "(";
+    for (size_t i = 0; i < shape.size(); ++i) shapeText += std::to_string(shape[i]) + (shape.size() == 1 || i + 1 < shape.size() ? "," : "");
+    shapeText += ")";
+    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shapeText + ", }";
+    // Version 1.0: magic(6) + version(2) + header length(2) + header padded with spaces to a multiple of 64, '\n'.
+    size_t total = 10 + header.size() + 1;
+    header.append((64 - total % 64) % 64, ' ');
+    header += '\n';
+    std::string bytes("\x93NUMPY\x01\x00", 8);
+    uint16_t headerLength = uint16_t(header.size());
+    bytes.append(reinterpret_cast<const char*>(&headerLength), 2);
+    bytes += header;
+    bytes.append(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(float));
+    writeBytesAtomic(path, bytes);
+}
+
+std::vector<float> readNpy(const std::string& path, std::vector<size_t>* shape) {
+    std::string bytes = readFileBytes(path);
+    if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0) throw Error(path, "header", "not a .npy file");
+    unsigned major = (unsigned char)bytes[6];
+    size_t headerLength, offset;
+    if (major == 1) {
+        headerLength = (unsigned char)bytes[8] | (unsigned char)bytes[9] << 8;
+        offset = 10;
+    } else if (major == 2 || major == 3) {
+        if (bytes.size() < 12) throw Error(path, "header", "truncated");
+        headerLength = (unsigned char)bytes[8] | (unsigned char)bytes[9] << 8 | (unsigned char)bytes[10] << 16 |
+                       size_t((unsigned char)bytes[11]) << 24;
+        offset = 12;
+    } else {
+        throw Error(path, "header", "unsupported .npy version " + std::to_string(major));
+    }
+    if (bytes.size() < offset + headerLength) throw Error(path, "header", "truncated");
+    std::string header = bytes.substr(offset, headerLength);
+    if (header.find("'<f4'") == std::string::npos) throw Error(path, "header", "dtype must be float32 ('<f4')");
+    if (header.find("'fortran_order': False") == std::string::npos) throw Error(path, "header", "Fortran order is not supported");
+    size_t open = header.find('(', header.find("'shape'")), close = header.find(')', open);
+    if (open == std::string::npos || close == std::string::npos) throw Error(path, "header", "no shape");
+    std::vector<size_t> dims;
+    size_t count = 1;
+    for (size_t i = open + 1; i < close;) {
+        while (i < close && (header[i] == ' ' || header[i] == ',')) ++i;
+        if (i >= close) break;
+        size_t end;
+        unsigned long long n = std::stoull(header.substr(i, close - i), &end);
+        dims.push_back(size_t(n));
+        count *= size_t(n);
+        i += end;
+    }
+    size_t dataOffset = offset + headerLength;
+    if (bytes.size() - dataOffset != count * sizeof(float))
+        throw Error(path, "data", "expected " + std::to_string(count) + " floats, file holds " +
+                                      std::to_string((bytes.size() - dataOffset) / sizeof(float)));
+    std::vector<float> data(count);
+    std::memcpy(data.data(), bytes.data() + dataOffset, count * sizeof(float));
+    if (shape) *shape = dims;
+    return data;
+}
+
+} // namespace prt

@@ -1,0 +1,37 @@
+// Images and environment maps through OpenImageIO: float RGB in memory, validated on load.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace prt {
+
+// A float RGB image, row-major, row 0 at the top, 3 floats per pixel, linear values.
+struct Image {
+    int width = 0;
+    int height = 0;
+    std::vector<float> rgb;
+};
+
+// How an environment image maps to directions (docs/conventions.md).
+enum class EnvLayout { Equirectangular, CubeStrip };
+
+// Distant lighting: radiance per direction.
+struct EnvironmentMap {
+    EnvLayout layout = EnvLayout::Equirectangular;
+    Image radiance;
+};
+
+// Reads any image OpenImageIO reads, keeping the first three channels (grey is replicated).
+// Throws prt::Error naming the file for: missing, not an image, unreadable pixels.
+Image readImage(const std::string& path);
+
+// Reads an environment map: 2:1 images are equirectangular, 1:6 images (or an EXR with envmap=cube) are
+// cube strips. Throws prt::Error naming the file and the first bad texel (x, y, channel) for NaN, infinite or
+// negative radiance, and for any other aspect ratio.
+EnvironmentMap readEnvironmentMap(const std::string& path);
+
+// Writes a float RGB image atomically (EXR as float or half by `half`, other formats by extension).
+void writeImage(const std::string& path, const Image& image, bool half = false);
+
+} // namespace prt

@@ -1,0 +1,80 @@
+// Real spherical harmonics: evaluation, rotation, windowing, triple products and environment projection.
+// Convention (orthonormal, no Condon-Shortley phase, index l*l+l+m, "order L" = L bands = L*L coefficients):
+// docs/conventions.md. Coefficient arrays of RGB functions are [coefficient][3].
+#pragma once
+
+#include "image.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt::sh {
+
+// Highest supported order (bands). Evaluation is stable to at least this order.
+inline constexpr int kMaxOrder = 32;
+
+inline constexpr int coefficientCount(int order) { return order * order; }
+inline constexpr int index(int l, int m) { return l * l + l + m; }
+
+// Evaluates all order*order basis functions at the unit direction (x, y, z).
+// Needs 1 <= order <= kMaxOrder and out sized order*order. Uses the associated-Legendre recurrence in
+// (x, y, z) directly, with no trigonometric calls, so it is exact at the poles and stable to kMaxOrder.
+void evaluate(int order, double x, double y, double z, double* out);
+void evaluate(int order, float x, float y, float z, float* out);
+
+// Clamped-cosine convolution factor A_l (Ramamoorthi-Hanrahan, multiplier form): pi, 2pi/3, pi/4, 0, -pi/24, ...
+// Irradiance coefficient E_lm = A_l * L_lm.
+double clampedCosine(int l);
+
+// ---- rotation ----------------------------------------------------------------------------------------------
+// A rotation of SH coefficient vectors: block diagonal, one (2l+1)^2 block per band, stored band after band.
+struct Rotation {
+    int order = 0;
+    std::vector<double> blocks;
+};
+// Builds the SH rotation for the 3x3 rotation matrix R (row-major, acting on column vectors: d' = R d), so that
+// if f'(d) = f(R^T d) (f rotated by R) then coeffs(f') = apply(rotation(R), coeffs(f)).
+Rotation rotation(int order, const double R[9]);
+// out = rotation * in, for `channels` interleaved channels ([coefficient][channels]). in and out may not alias.
+void rotate(const Rotation& rotation, const float* in, float* out, int channels);
+void rotate(const Rotation& rotation, const double* in, double* out, int channels);
+// The 3x3 matrix of a rotation by `degrees` about +Y.
+void rotationY(double degrees, double R[9]);
+
+// ---- windowing and energy ------------------------------------------------------------------------------------
+enum class Window { None, Hann, Lanczos };
+// Parses "none" | "hann" | "lanczos"; throws prt::Error(kExitUsage) otherwise.
+Window parseWindow(const std::string& name);
+const char* windowName(Window window);
+// Per-band weight w_l for a window over `order` bands: Hann (1 + cos(pi l / order)) / 2, Lanczos sinc(l / order).
+double windowWeight(Window window, int l, int order);
+// Scales each band by its weight, in place.
+void applyWindow(Window window, int order, float* coeffs, int channels);
+// Energy per band: sum over m of c_lm^2 (summed over channels). Returns `order` values.
+std::vector<double> bandEnergy(int order, const float* coeffs, int channels);
+
+// ---- triple products ----------------------------------------------------------------------------------------
+// The Gaunt tensor G_ijk = integral Y_i Y_j Y_k over the sphere, stored sparse: every nonzero (i, j, k) entry
+// for i, j, k < order^2 (all orderings, so products are a single pass). Selection rules: l_i + l_j + l_k even,
+// triangle inequality, and the real-SH m rules.
+struct TripleProduct {
+    int order = 0;
+    std::vector<uint32_t> i, j, k;
+    std::vector<double> value;
+};
+TripleProduct tripleProduct(int order);
+// Projection of the product of two functions onto the first order^2 coefficients: out_i = sum G_ijk a_j b_k.
+void multiply(const TripleProduct& tensor, const float* a, const float* b, float* out);
+
+// ---- environment projection --------------------------------------------------------------------------------
+// Direction of the centre of equirectangular pixel (x, y) (docs/conventions.md).
+void equirectDirection(int width, int height, double x, double y, double d[3]);
+// Exact solid angle of every pixel of the environment's layout, row-major. They sum to 4 pi.
+std::vector<double> texelSolidAngles(const EnvironmentMap& env);
+// Projects radiance onto `order` bands with exact per-texel solid angles. Returns [order^2][3].
+std::vector<float> projectEnvironment(const EnvironmentMap& env, int order);
+// Irradiance at normal n from RGB radiance coefficients ([order^2][3]) via the clamped-cosine convolution.
+void irradiance(int order, const float* radianceCoeffs, const double n[3], double out[3]);
+
+} // namespace prt::sh
