@@ -28,7 +28,9 @@ Image readImage(const std::string& path);
 
 // Reads an environment map: 2:1 images are equirectangular, 1:6 images (or an EXR with envmap=cube) are
 // cube strips. Throws prt::Error naming the file and the first bad texel (x, y, channel) for NaN, infinite or
-// negative radiance, and for any other aspect ratio.
+// negative radiance, and for any other aspect ratio. Negative values no lower than -0.1 times the map's mean
+// radiance are lossy-compression noise (DWA EXRs have them); they are set to 0 and logged. The returned
+// radiance is finite and >= 0 everywhere.
 EnvironmentMap readEnvironmentMap(const std::string& path);
 
 // Writes a float RGB image atomically (EXR as float or half by `half`, other formats by extension).

@@ -23,6 +23,18 @@ inline constexpr int index(int l, int m) { return l * l + l + m; }
 void evaluate(int order, double x, double y, double z, double* out);
 void evaluate(int order, float x, float y, float z, float* out);
 
+// Gauss-Legendre rule on [-1, 1] with n nodes (ascending), exact for polynomials of degree <= 2n - 1.
+void gaussLegendre(int n, double* nodes, double* weights);
+
+// A product rule on the unit sphere: Gauss-Legendre in z (cos of the polar angle from +Z) times uniform
+// azimuth. Exact for every polynomial in (x, y, z) of degree <= `degree`, so SH products of total band
+// degree <= `degree` integrate exactly. Weights sum to 4 pi.
+struct SphereQuadrature {
+    std::vector<double> directions; // [count][3], unit
+    std::vector<double> weights;    // [count]
+};
+SphereQuadrature sphereQuadrature(int degree);
+
 // Clamped-cosine convolution factor A_l (Ramamoorthi-Hanrahan, multiplier form): pi, 2pi/3, pi/4, 0, -pi/24, ...
 // Irradiance coefficient E_lm = A_l * L_lm.
 double clampedCosine(int l);
@@ -39,7 +51,7 @@ Rotation rotation(int order, const double R[9]);
 // out = rotation * in, for `channels` interleaved channels ([coefficient][channels]). in and out may not alias.
 void rotate(const Rotation& rotation, const float* in, float* out, int channels);
 void rotate(const Rotation& rotation, const double* in, double* out, int channels);
-// The 3x3 matrix of a rotation by `degrees` about +Y.
+// The 3x3 matrix of a right-handed rotation by `degrees` about +Y (90 degrees takes +Z to +X).
 void rotationY(double degrees, double R[9]);
 
 // ---- windowing and energy ------------------------------------------------------------------------------------
@@ -57,24 +69,35 @@ std::vector<double> bandEnergy(int order, const float* coeffs, int channels);
 // ---- triple products ----------------------------------------------------------------------------------------
 // The Gaunt tensor G_ijk = integral Y_i Y_j Y_k over the sphere, stored sparse: every nonzero (i, j, k) entry
 // for i, j, k < order^2 (all orderings, so products are a single pass). Selection rules: l_i + l_j + l_k even,
-// triangle inequality, and the real-SH m rules.
+// triangle inequality, and the real-SH m rules. Computed by exact quadrature (Gauss-Legendre in z times uniform
+// azimuth); permuted entries hold identical bits. Needs 1 <= order <= kMaxOrder; the entry count grows about as
+// order^5 (order 8: 12868 entries).
 struct TripleProduct {
     int order = 0;
     std::vector<uint32_t> i, j, k;
     std::vector<double> value;
 };
 TripleProduct tripleProduct(int order);
-// Projection of the product of two functions onto the first order^2 coefficients: out_i = sum G_ijk a_j b_k.
+// Projection of the product of two single-channel functions onto the first order^2 coefficients:
+// out_i = sum G_ijk a_j b_k, accumulated in double. a, b and out hold tensor.order^2 values. Exact when the
+// product's bands fit in the tensor's order.
 void multiply(const TripleProduct& tensor, const float* a, const float* b, float* out);
 
 // ---- environment projection --------------------------------------------------------------------------------
-// Direction of the centre of equirectangular pixel (x, y) (docs/conventions.md).
+// Unit direction of equirectangular pixel (x, y) (docs/conventions.md). Integer x, y give texel centres;
+// fractions up to +-0.5 move within the texel.
 void equirectDirection(int width, int height, double x, double y, double d[3]);
+// Unit direction of pixel (x, y) of a cube strip with faces of `faceSize` texels (docs/conventions.md), with
+// the same texel-centre coordinates as equirectDirection; the face is the one holding texel row round(y).
+void cubeStripDirection(int faceSize, double x, double y, double d[3]);
 // Exact solid angle of every pixel of the environment's layout, row-major. They sum to 4 pi.
 std::vector<double> texelSolidAngles(const EnvironmentMap& env);
-// Projects radiance onto `order` bands with exact per-texel solid angles. Returns [order^2][3].
+// Projects radiance onto `order` bands (1..kMaxOrder) with exact per-texel solid angles: the basis is evaluated
+// once at each texel centre and accumulated in double. Runs on TBB over fixed row blocks summed in a fixed order,
+// so the result is bit-identical for any thread count. Returns [order^2][3].
 std::vector<float> projectEnvironment(const EnvironmentMap& env, int order);
-// Irradiance at normal n from RGB radiance coefficients ([order^2][3]) via the clamped-cosine convolution.
+// Irradiance at the unit normal n from RGB radiance coefficients ([order^2][3]) via the clamped-cosine
+// convolution: E(n) = sum A_l L_lm Y_lm(n).
 void irradiance(int order, const float* radianceCoeffs, const double n[3], double out[3]);
 
 } // namespace prt::sh

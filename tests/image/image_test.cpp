@@ -1,0 +1,198 @@
+// Image and environment-map reading, validation, and atomic writing.
+#include "image.h"
+
+#include "core.h"
+
+#include <OpenImageIO/deepdata.h>
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+class ImageTest : public testing::Test {
+protected:
+    void SetUp() override {
+        folder = fs::temp_directory_path() /
+                 ("prt-image-test-" + std::to_string(getpid()) + "-" +
+                  testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(folder);
+        fs::create_directories(folder);
+    }
+    void TearDown() override { fs::remove_all(folder); }
+    std::string file(const std::string& name) const { return (folder / name).string(); }
+
+    fs::path folder;
+};
+
+prt::Image gradient(int width, int height) {
+    prt::Image image{width, height, std::vector<float>(size_t(width) * height * 3)};
+    for (size_t i = 0; i < image.rgb.size(); ++i) image.rgb[i] = 0.001f * float(i) + 0.123f;
+    return image;
+}
+
+// Runs `read` expecting a prt::Error whose message holds every one of `parts`.
+template <typename Read>
+void expectError(Read read, std::initializer_list<std::string> parts) {
+    try {
+        read();
+        FAIL() << "no error thrown";
+    } catch (const prt::Error& e) {
+        EXPECT_EQ(e.exitCode(), prt::kExitInput);
+        for (const std::string& part : parts)
+            EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what() << " lacks " << part;
+    }
+}
+
+} // namespace
+
+TEST_F(ImageTest, FloatExrRoundTripsExactly) {
+    prt::Image image = gradient(7, 5);
+    std::string path = file("round.exr");
+    prt::writeImage(path, image);
+    prt::Image back = prt::readImage(path);
+    EXPECT_EQ(back.width, 7);
+    EXPECT_EQ(back.height, 5);
+    EXPECT_EQ(back.rgb, image.rgb);
+}
+
+TEST_F(ImageTest, HalfExrRoundTripsToHalfPrecision) {
+    prt::Image image = gradient(6, 3);
+    std::string path = file("half.exr");
+    prt::writeImage(path, image, true);
+    prt::Image back = prt::readImage(path);
+    ASSERT_EQ(back.rgb.size(), image.rgb.size());
+    for (size_t i = 0; i < image.rgb.size(); ++i) EXPECT_NEAR(back.rgb[i], image.rgb[i], image.rgb[i] * 1e-3f);
+    bool lossy = false;
+    for (size_t i = 0; i < image.rgb.size(); ++i) lossy |= back.rgb[i] != image.rgb[i];
+    EXPECT_TRUE(lossy) << "values were not stored as half";
+}
+
+TEST_F(ImageTest, PngStoresEightBitsByExtension) {
+    prt::Image image{3, 1, {0.0f, 0.25f, 0.5f, 0.75f, 1.0f, 0.1f, 0.2f, 0.3f, 0.4f}};
+    std::string path = file("small.png");
+    prt::writeImage(path, image);
+    prt::Image back = prt::readImage(path);
+    ASSERT_EQ(back.rgb.size(), image.rgb.size());
+    for (size_t i = 0; i < image.rgb.size(); ++i) EXPECT_NEAR(back.rgb[i], image.rgb[i], 0.5f / 255.0f + 1e-6f);
+}
+
+TEST_F(ImageTest, WriteReplacesAtomicallyAndLeavesNoTemporaries) {
+    std::string path = file("over.exr");
+    prt::writeImage(path, gradient(4, 2));
+    prt::Image second = gradient(2, 1);
+    prt::writeImage(path, second);
+    EXPECT_EQ(prt::readImage(path).rgb, second.rgb);
+    int entries = 0;
+    for (const auto& entry : fs::directory_iterator(folder)) entries += entry.is_regular_file();
+    EXPECT_EQ(entries, 1);
+}
+
+TEST_F(ImageTest, WriteIntoMissingFolderFailsWithOutputError) {
+    std::string path = file("missing/out.exr");
+    try {
+        prt::writeImage(path, gradient(2, 1));
+        FAIL() << "no error thrown";
+    } catch (const prt::Error& e) {
+        EXPECT_EQ(e.exitCode(), prt::kExitOutput);
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
+    }
+    EXPECT_FALSE(fs::exists(path));
+}
+
+TEST_F(ImageTest, GreyImagesAreReplicated) {
+    std::string path = file("grey.exr");
+    std::vector<float> grey = {0.5f, 1.5f, 2.5f, 3.5f};
+    auto output = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(output);
+    ASSERT_TRUE(output->open(path, OIIO::ImageSpec(2, 2, 1, OIIO::TypeDesc::FLOAT)));
+    ASSERT_TRUE(output->write_image(OIIO::TypeDesc::FLOAT, grey.data()));
+    ASSERT_TRUE(output->close());
+    prt::Image image = prt::readImage(path);
+    ASSERT_EQ(image.rgb.size(), 12u);
+    for (int p = 0; p < 4; ++p)
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(image.rgb[p * 3 + c], grey[p]);
+}
+
+TEST_F(ImageTest, MissingFileNamesTheFile) {
+    std::string path = file("absent.exr");
+    expectError([&] { prt::readImage(path); }, {path, "not found"});
+    expectError([&] { prt::readEnvironmentMap(path); }, {path, "not found"});
+}
+
+TEST_F(ImageTest, TextRenamedExrIsNotAnImage) {
+    std::string path = file("notes.exr");
+    std::ofstream(path) << "these are notes, not pixels\n";
+    expectError([&] { prt::readImage(path); }, {path, "not a readable image"});
+    expectError([&] { prt::readEnvironmentMap(path); }, {path});
+}
+
+// A deep EXR stores per-pixel sample lists rather than an image: named as such, not misread.
+TEST_F(ImageTest, DeepExrIsNotAnImage) {
+    std::string path = file("deep.exr");
+    OIIO::ImageSpec spec(2, 2, 1, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = {"Z"};
+    spec.deep = true;
+    OIIO::DeepData deep(spec);
+    for (int p = 0; p < 4; ++p) deep.set_samples(p, 1);
+    auto output = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(output);
+    ASSERT_TRUE(output->open(path, spec));
+    ASSERT_TRUE(output->write_deep_image(deep)) << output->geterror();
+    ASSERT_TRUE(output->close());
+    expectError([&] { prt::readImage(path); }, {path, "deep"});
+}
+
+TEST_F(ImageTest, TruncatedExrIsAnError) {
+    std::string whole = file("whole.exr"), cut = file("cut.exr");
+    prt::writeImage(whole, gradient(64, 32));
+    std::string bytes = prt::readFileBytes(whole);
+    std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    expectError([&] { prt::readEnvironmentMap(cut); }, {cut});
+}
+
+TEST_F(ImageTest, EnvironmentLayoutFollowsAspectRatio) {
+    std::string equirect = file("latlong.exr"), cube = file("cube.exr"), square = file("square.exr");
+    prt::writeImage(equirect, gradient(8, 4));
+    prt::writeImage(cube, gradient(4, 24));
+    prt::writeImage(square, gradient(4, 4));
+    EXPECT_EQ(prt::readEnvironmentMap(equirect).layout, prt::EnvLayout::Equirectangular);
+    EXPECT_EQ(prt::readEnvironmentMap(cube).layout, prt::EnvLayout::CubeStrip);
+    expectError([&] { prt::readEnvironmentMap(square); }, {square, "4x4", "2:1"});
+}
+
+TEST_F(ImageTest, BadTexelsNameFileAndFirstTexel) {
+    struct Case {
+        float value;
+        const char* problem;
+    };
+    for (Case bad : {Case{std::numeric_limits<float>::quiet_NaN(), "NaN"},
+                     Case{-0.5f, "negative"},
+                     Case{std::numeric_limits<float>::infinity(), "infinite"}}) {
+        prt::Image image = gradient(8, 4);
+        image.rgb[(3 * 8 + 5) * 3 + 1] = bad.value; // texel (5, 3), green
+        image.rgb[(3 * 8 + 6) * 3 + 0] = bad.value; // a later one, not reported
+        std::string path = file(std::string(bad.problem) + ".exr");
+        prt::writeImage(path, image);
+        expectError([&] { prt::readEnvironmentMap(path); }, {path, "texel (5, 3) channel 1", bad.problem});
+        EXPECT_EQ(prt::readImage(path).width, 8) << "plain images are not validated";
+    }
+}
+
+// DWA-compressed maps undershoot zero slightly near bright texels; that noise is clamped, not rejected.
+TEST_F(ImageTest, CompressionNoiseBelowZeroIsClampedToZero) {
+    prt::Image image = gradient(8, 4);
+    image.rgb[7] = -0.001f; // the mean is about 0.17
+    std::string path = file("noisy.exr");
+    prt::writeImage(path, image);
+    prt::EnvironmentMap env = prt::readEnvironmentMap(path);
+    EXPECT_EQ(env.radiance.rgb[7], 0.0f);
+    EXPECT_EQ(env.radiance.rgb[8], image.rgb[8]);
+}
