@@ -56,11 +56,26 @@ inline constexpr const char* kBundleExtension = "PRT_bundle";
 // Writes `bundle` as a .glb atomically. The mesh is a standard glTF primitive (POSITION, NORMAL, TEXCOORD_0,
 // COLOR_0 when present); layers go into buffer views referenced only from the PRT_bundle extension, with a
 // checksum of the binary chunk so readers detect truncation and tampering.
+// Needs: a mesh with at least one triangle and per-vertex arrays of matching sizes; layers with unique non-empty
+// names, data.size() equal to the product of shape (or no data when that product is 0 or params.uri names an
+// external file), vertex-domain layers with vertexCount() rows. JSON (producer, inputs, convention, params) is
+// stored as glTF stores it: null members and empty arrays or objects are left out, integers beyond 32 bits become
+// doubles; NaN, infinities and integers beyond 2^53 are refused. Throws prt::Error (kExitFailure) when these
+// needs are not met and prt::Error (kExitOutput) when the file cannot be written; either way `path` is untouched.
 void writeBundle(const std::string& path, const Bundle& bundle);
+
+// The "convention" record stages write into their bundles: the choices of docs/conventions.md, by name.
+nlohmann::json conventionRecord();
 
 // Reads a .glb or .gltf. Throws prt::Error naming the file and the problem for: a missing file, a truncated or
 // malformed glTF, a PRT_bundle of an unsupported version, a checksum mismatch. A plain glTF without the extension
 // reads as a bundle with no layers.
+// The mesh merges every TRIANGLES primitive reachable from the default scene (or every mesh when the file has no
+// scene), with node transforms applied (winding kept counter-clockwise under mirroring transforms). NORMAL and
+// TEXCOORD_0 are kept when every primitive has them. Albedo is COLOR_0 times the material's baseColorFactor, or
+// the factor alone, and stays empty when it would be 1 everywhere. Indices are not range-checked here (lib/mesh
+// validation reports them); an index outside its own primitive reads as 0xFFFFFFFF so merging cannot hide it.
+// Every accessor is bounds-checked against its buffer, so a malformed file cannot cause an out-of-bounds read.
 Bundle readBundle(const std::string& path);
 
 // Finds a layer by name; nullptr if absent.

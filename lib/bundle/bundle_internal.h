@@ -1,0 +1,35 @@
+// Shared by prt_bundle's sources only: the PRT_bundle extension as glTF stores it, and the mesh reader.
+#pragma once
+
+#include "bundle.h"
+
+#include <tiny_gltf.h>
+
+#include <string>
+#include <vector>
+
+namespace prt::detail {
+
+// `value` in the form that reads back unchanged through tinygltf, whose Value type has no null, no empty array or
+// object (it writes them as null) and no integer wider than 32 bits: null members and empty containers are left
+// out of objects and wide integers become doubles. Throws Error(file, place + the JSON path) for what has no such
+// form: NaN, infinities, integers beyond 2^53, null or empty array elements.
+nlohmann::json storableJson(const nlohmann::json& value, const std::string& file, const std::string& place);
+
+// The tinygltf::Value holding `storable` (a result of storableJson) exactly.
+tinygltf::Value toGltfValue(const nlohmann::json& storable);
+
+// Appends the canonical text of `value` (docs/bundle.md, "Checksum"): what Python's
+// json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False) writes, so engines in any language
+// can reproduce it. nlohmann's dump is not used because its float digits are not always the shortest.
+void appendCanonicalJson(const nlohmann::json& value, std::string& out);
+
+// The bundle checksum (docs/bundle.md, "Checksum"): hashBytes over the bytes of buffer 0 followed by the
+// canonical text of the extension object with its "checksum" member removed.
+std::string extensionChecksum(const std::vector<unsigned char>& buffer, nlohmann::json extension);
+
+// The triangle mesh of a loaded glTF model, as readBundle describes. Throws Error(file, ...) for accessors that
+// reach outside their buffers, unsupported accessor kinds, malformed node trees and files without triangles.
+TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file);
+
+} // namespace prt::detail

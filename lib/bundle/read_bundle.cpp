@@ -1,0 +1,163 @@
+#include "bundle_internal.h"
+
+#include "core.h"
+
+#include <bit>
+#include <cctype>
+#include <cstring>
+#include <limits>
+#include <set>
+
+namespace prt {
+
+using nlohmann::json;
+
+static_assert(std::endian::native == std::endian::little, "GLB buffers are little-endian");
+
+// prt reads geometry only; leaving images undecoded saves time and never fails a load over a texture.
+static bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+    return true;
+}
+
+static tinygltf::Model loadModel(const std::string& path) {
+    std::string bytes = readFileBytes(path);
+    if (bytes.empty()) throw Error(path, "", "empty file");
+    if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error(path, "", "larger than 4 GiB, the glTF limit");
+    bool binary = bytes.compare(0, 4, "glTF") == 0;
+    const std::string place = binary ? "glTF binary" : "glTF";
+    // The most common damage, a cut-off download or copy, gets a plain message instead of tinygltf's generic one.
+    uint32_t declaredLength = 0;
+    if (binary && bytes.size() >= 12) std::memcpy(&declaredLength, bytes.data() + 8, 4);
+    if (declaredLength > bytes.size())
+        throw Error(path, place, "truncated: the header declares " + std::to_string(declaredLength) + " bytes, the file has " +
+                                     std::to_string(bytes.size()));
+
+    size_t slash = path.find_last_of('/');
+    std::string folder = slash == std::string::npos ? "." : path.substr(0, slash); // for external buffers of a .gltf
+    tinygltf::TinyGLTF loader;
+    loader.SetStoreOriginalJSONForExtrasAndExtensions(true);
+    loader.SetImageLoader(skipImage, nullptr);
+    tinygltf::Model model;
+    std::string error, warning;
+    bool loaded = false;
+    try {
+        loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                                      unsigned(bytes.size()), folder)
+                        : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), unsigned(bytes.size()), folder);
+    } catch (const std::exception& e) { // tinygltf parses untrusted bytes; whatever it throws is about the file
+        error = e.what();
+    }
+    if (!loaded) {
+        while (!error.empty() && std::isspace((unsigned char)error.back())) error.pop_back();
+        throw Error(path, place, error.empty() ? "not a glTF file" : error);
+    }
+    return model;
+}
+
+// A member that must be a JSON object when present; absent (glTF leaves out empty objects) reads as {}.
+static json objectMember(const json& parent, const char* key, const std::string& path, const std::string& place) {
+    if (!parent.contains(key)) return json::object();
+    if (!parent[key].is_object()) throw Error(path, place + "." + key, "is not a JSON object");
+    return parent[key];
+}
+
+static std::string stringMember(const json& parent, const char* key, const std::string& path, const std::string& place) {
+    if (!parent.contains(key) || !parent[key].is_string()) throw Error(path, place + "." + key, "missing or not a string");
+    return parent[key].get<std::string>();
+}
+
+static Layer readLayer(const json& record, const tinygltf::Model& model, size_t vertexCount, const std::string& path,
+                       const std::string& place) {
+    auto refuse = [&](const std::string& problem) { throw Error(path, place, problem); };
+    if (!record.is_object()) refuse("layer is not a JSON object");
+    Layer layer;
+    layer.name = stringMember(record, "name", path, place);
+    layer.domain = stringMember(record, "domain", path, place);
+    layer.semantic = stringMember(record, "semantic", path, place);
+    layer.params = objectMember(record, "params", path, place);
+    if (!record.contains("shape") || !record["shape"].is_array() || record["shape"].empty()) refuse("shape is missing or empty");
+    uint64_t count = 1;
+    bool overflow = false;
+    for (const json& extent : record["shape"]) {
+        if (!extent.is_number_unsigned()) refuse("shape holds something other than non-negative integers");
+        layer.shape.push_back(extent.get<uint64_t>());
+        overflow = overflow || (layer.shape.back() != 0 && count > std::numeric_limits<uint64_t>::max() / layer.shape.back());
+        count *= layer.shape.back();
+    }
+    if (overflow) refuse("shape is too large");
+    if (layer.domain == "vertex" && layer.shape[0] != vertexCount)
+        refuse("vertex layer has " + std::to_string(layer.shape[0]) + " rows but the mesh has " + std::to_string(vertexCount) + " vertices");
+
+    if (!record.contains("bufferView")) {
+        bool external = layer.params.contains("uri") && layer.params["uri"].is_string();
+        if (count != 0 && !external) refuse("layer has neither a bufferView nor params.uri");
+        return layer;
+    }
+    if (record.value("componentType", "") != "float32") refuse("componentType must be \"float32\"");
+    if (!record["bufferView"].is_number_unsigned() || record["bufferView"].get<uint64_t>() >= model.bufferViews.size())
+        refuse("bufferView does not exist");
+    const tinygltf::BufferView& view = model.bufferViews[record["bufferView"].get<size_t>()];
+    if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size()) refuse("bufferView has no valid buffer");
+    const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
+    if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
+        refuse("bufferView reaches past the end of its buffer");
+    if (count > view.byteLength / sizeof(float) || view.byteLength != count * sizeof(float))
+        refuse("bufferView holds " + std::to_string(view.byteLength) + " bytes, shape needs " + std::to_string(count) + " float32");
+    layer.data.resize(count);
+    if (count > 0) std::memcpy(layer.data.data(), buffer.data() + view.byteOffset, view.byteLength);
+    return layer;
+}
+
+// The PRT_bundle object, after checking its version and checksum: nothing else in it is trusted before that.
+static json verifiedExtension(const tinygltf::Model& model, const std::string& path) {
+    const std::string place = kBundleExtension;
+    json extension = json::parse(model.extensions_json_string).at(kBundleExtension);
+    if (!extension.is_object()) throw Error(path, place, "is not a JSON object");
+    json version = extension.value("version", json());
+    if (!version.is_number_integer() || version.get<int64_t>() != kBundleVersion)
+        throw Error(path, place, "version " + version.dump() + " is not supported; this build reads version " +
+                                     std::to_string(kBundleVersion));
+    if (!extension.contains("checksum") || !extension["checksum"].is_string()) throw Error(path, place, "checksum is missing");
+    static const std::vector<unsigned char> kNoBuffer;
+    const std::vector<unsigned char>& buffer = model.buffers.empty() ? kNoBuffer : model.buffers[0].data;
+    if (extension["checksum"].get<std::string>() != detail::extensionChecksum(buffer, extension))
+        throw Error(path, place, "checksum mismatch: the bundle is truncated or was modified");
+    return extension;
+}
+
+static void readRecords(const json& extension, const tinygltf::Model& model, const std::string& path, Bundle& bundle) {
+    const std::string place = kBundleExtension;
+    bundle.producer = objectMember(extension, "producer", path, place);
+    bundle.inputs = objectMember(extension, "inputs", path, place);
+    bundle.convention = objectMember(extension, "convention", path, place);
+    if (!extension.contains("layers")) return;
+    if (!extension["layers"].is_array()) throw Error(path, place + ".layers", "is not an array");
+    std::set<std::string> names;
+    for (size_t i = 0; i < extension["layers"].size(); ++i) {
+        std::string layerPlace = place + ".layers[" + std::to_string(i) + "]";
+        bundle.layers.push_back(readLayer(extension["layers"][i], model, bundle.mesh.vertexCount(), path, layerPlace));
+        if (!names.insert(bundle.layers.back().name).second) throw Error(path, layerPlace, "duplicate layer name");
+    }
+}
+
+Bundle readBundle(const std::string& path) {
+    tinygltf::Model model = loadModel(path);
+    bool hasExtension = model.extensions.count(kBundleExtension) > 0;
+    Bundle bundle;
+    try {
+        json extension = hasExtension ? verifiedExtension(model, path) : json();
+        bundle.mesh = detail::readGltfMesh(model, path);
+        if (hasExtension) readRecords(extension, model, path, bundle);
+    } catch (const json::exception& e) {
+        throw Error(path, kBundleExtension, std::string("malformed extension JSON: ") + e.what());
+    }
+    return bundle;
+}
+
+const Layer* findLayer(const Bundle& bundle, const std::string& name) {
+    for (const Layer& layer : bundle.layers)
+        if (layer.name == name) return &layer;
+    return nullptr;
+}
+
+} // namespace prt

@@ -1,0 +1,275 @@
+#include "bundle_internal.h"
+
+#include "core.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace prt::detail {
+namespace {
+
+// Column-major 4x4, glTF's layout for node matrices.
+using Matrix = std::array<double, 16>;
+constexpr Matrix kIdentity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+
+Matrix multiply(const Matrix& a, const Matrix& b) {
+    Matrix product{};
+    for (int column = 0; column < 4; ++column)
+        for (int row = 0; row < 4; ++row)
+            for (int k = 0; k < 4; ++k) product[column * 4 + row] += a[k * 4 + row] * b[column * 4 + k];
+    return product;
+}
+
+// The node's transform relative to its parent: its matrix, or translation * rotation * scale.
+Matrix localMatrix(const tinygltf::Node& node) {
+    Matrix m = kIdentity;
+    if (node.matrix.size() == 16) {
+        std::copy(node.matrix.begin(), node.matrix.end(), m.begin());
+        return m;
+    }
+    if (node.rotation.size() == 4) {
+        double x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
+        m = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),     0,
+             2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),     0,
+             2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y), 0,
+             0,                       0,                       0,                       1};
+    }
+    if (node.scale.size() == 3)
+        for (int column = 0; column < 3; ++column)
+            for (int row = 0; row < 3; ++row) m[column * 4 + row] *= node.scale[column];
+    if (node.translation.size() == 3)
+        for (int row = 0; row < 3; ++row) m[12 + row] = node.translation[row];
+    return m;
+}
+
+// Where an accessor's elements lie, after checking that all of them are inside its buffer view and buffer.
+struct Elements {
+    const unsigned char* first = nullptr;
+    size_t stride = 0;
+    size_t count = 0;
+    int componentType = 0;
+    int type = 0;
+    bool normalized = false;
+};
+
+Elements locate(const tinygltf::Model& model, int index, const std::string& file, const std::string& place) {
+    auto refuse = [&](const std::string& problem) { throw Error(file, place, problem); };
+    if (index < 0 || size_t(index) >= model.accessors.size()) refuse("accessor " + std::to_string(index) + " does not exist");
+    const tinygltf::Accessor& accessor = model.accessors[index];
+    if (accessor.sparse.isSparse) refuse("sparse accessors are not supported");
+    if (accessor.bufferView < 0 || size_t(accessor.bufferView) >= model.bufferViews.size())
+        refuse("accessor has no valid buffer view");
+    const tinygltf::BufferView& view = model.bufferViews[accessor.bufferView];
+    if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size()) refuse("buffer view has no valid buffer");
+    const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
+    int componentSize = tinygltf::GetComponentSizeInBytes(uint32_t(accessor.componentType));
+    int components = tinygltf::GetNumComponentsInType(uint32_t(accessor.type));
+    if (componentSize <= 0 || components <= 0) refuse("unknown component or element type");
+    size_t elementSize = size_t(componentSize) * size_t(components);
+    size_t stride = view.byteStride ? view.byteStride : elementSize;
+    if (stride < elementSize) refuse("byte stride is smaller than one element");
+    if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
+        refuse("buffer view reaches past the end of its buffer");
+    Elements elements{nullptr, stride, accessor.count, accessor.componentType, accessor.type, accessor.normalized};
+    if (accessor.count == 0) return elements;
+    if (accessor.byteOffset > view.byteLength || view.byteLength - accessor.byteOffset < elementSize ||
+        accessor.count - 1 > (view.byteLength - accessor.byteOffset - elementSize) / stride)
+        refuse("accessor reaches past the end of its buffer view");
+    elements.first = buffer.data() + view.byteOffset + accessor.byteOffset;
+    return elements;
+}
+
+// One component as a number; normalized integers map to [0, 1] or [-1, 1] by glTF's rule.
+double component(const unsigned char* bytes, int componentType, bool normalized) {
+    auto load = [bytes](auto value) {
+        std::memcpy(&value, bytes, sizeof(value));
+        return value;
+    };
+    switch (componentType) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return load(float());
+    case TINYGLTF_COMPONENT_TYPE_DOUBLE: return load(double());
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return load(uint8_t()) / (normalized ? 255.0 : 1.0);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return load(uint16_t()) / (normalized ? 65535.0 : 1.0);
+    case TINYGLTF_COMPONENT_TYPE_BYTE: return normalized ? std::max(load(int8_t()) / 127.0, -1.0) : load(int8_t());
+    case TINYGLTF_COMPONENT_TYPE_SHORT: return normalized ? std::max(load(int16_t()) / 32767.0, -1.0) : load(int16_t());
+    default: return load(uint32_t());
+    }
+}
+
+// Appends the first `width` components of each element of vector accessor `index` to `out` as floats (COLOR_0
+// may be RGBA: alpha is dropped). Returns the element count.
+size_t appendFloats(const tinygltf::Model& model, int index, int width, std::vector<float>& out, const std::string& file,
+                    const std::string& place) {
+    Elements elements = locate(model, index, file, place);
+    int components = tinygltf::GetNumComponentsInType(uint32_t(elements.type));
+    bool isVector = elements.type == TINYGLTF_TYPE_VEC2 || elements.type == TINYGLTF_TYPE_VEC3 || elements.type == TINYGLTF_TYPE_VEC4;
+    if (!isVector || components < width) throw Error(file, place, "needs a vector of at least " + std::to_string(width) + " components");
+    int componentSize = tinygltf::GetComponentSizeInBytes(uint32_t(elements.componentType));
+    for (size_t i = 0; i < elements.count; ++i)
+        for (int c = 0; c < width; ++c)
+            out.push_back(float(component(elements.first + i * elements.stride + c * componentSize, elements.componentType,
+                                          elements.normalized)));
+    return elements.count;
+}
+
+std::vector<uint32_t> readIndices(const tinygltf::Model& model, int index, const std::string& file, const std::string& place) {
+    Elements elements = locate(model, index, file, place);
+    bool integer = elements.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                   elements.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+                   elements.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    if (elements.type != TINYGLTF_TYPE_SCALAR || !integer) throw Error(file, place, "indices must be unsigned integer scalars");
+    std::vector<uint32_t> indices(elements.count);
+    for (size_t i = 0; i < elements.count; ++i)
+        indices[i] = uint32_t(component(elements.first + i * elements.stride, elements.componentType, false));
+    return indices;
+}
+
+struct MeshBuilder {
+    const tinygltf::Model& model;
+    const std::string& file;
+    TriMesh mesh;
+    bool allNormals = true;
+    bool allTexcoords = true;
+    bool anyAlbedo = false;
+    size_t skippedPrimitives = 0;
+};
+
+void transformPoints(std::vector<float>& xyz, size_t first, const Matrix& m) {
+    for (size_t i = first; i < xyz.size(); i += 3) {
+        double x = xyz[i], y = xyz[i + 1], z = xyz[i + 2];
+        for (int row = 0; row < 3; ++row) xyz[i + row] = float(m[row] * x + m[4 + row] * y + m[8 + row] * z + m[12 + row]);
+    }
+}
+
+// Normals transform by the inverse transpose of the linear part: its cofactor matrix, whose columns are cross
+// products of the linear part's columns, times the sign of its determinant (the length is renormalized).
+void transformNormals(std::vector<float>& xyz, size_t first, const Matrix& m, double determinantSign) {
+    auto column = [&](int c) { return std::array<double, 3>{m[c * 4], m[c * 4 + 1], m[c * 4 + 2]}; };
+    auto cross = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+        return std::array<double, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    };
+    std::array<double, 3> a0 = column(0), a1 = column(1), a2 = column(2);
+    std::array<std::array<double, 3>, 3> cofactor = {cross(a1, a2), cross(a2, a0), cross(a0, a1)};
+    for (size_t i = first; i < xyz.size(); i += 3) {
+        double n[3] = {0, 0, 0};
+        for (int c = 0; c < 3; ++c)
+            for (int row = 0; row < 3; ++row) n[row] += determinantSign * cofactor[c][row] * xyz[i + c];
+        double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (length > 0)
+            for (int row = 0; row < 3; ++row) xyz[i + row] = float(n[row] / length);
+    }
+}
+
+double linearDeterminant(const Matrix& m) {
+    return m[0] * (m[5] * m[10] - m[6] * m[9]) - m[4] * (m[1] * m[10] - m[2] * m[9]) + m[8] * (m[1] * m[6] - m[2] * m[5]);
+}
+
+void addPrimitive(MeshBuilder& builder, const tinygltf::Primitive& primitive, const Matrix& world, const std::string& place) {
+    if (primitive.mode != TINYGLTF_MODE_TRIANGLES && primitive.mode != -1) {
+        ++builder.skippedPrimitives;
+        return;
+    }
+    TriMesh& mesh = builder.mesh;
+    const tinygltf::Model& model = builder.model;
+    auto attribute = [&](const char* name) {
+        auto found = primitive.attributes.find(name);
+        return found == primitive.attributes.end() ? -1 : found->second;
+    };
+    if (attribute("POSITION") < 0) throw Error(builder.file, place, "primitive has no POSITION");
+    size_t base = mesh.vertexCount();
+    size_t count = appendFloats(model, attribute("POSITION"), 3, mesh.positions, builder.file, place + ".POSITION");
+
+    bool identity = world == kIdentity;
+    double determinant = linearDeterminant(world);
+    if (!identity) transformPoints(mesh.positions, base * 3, world);
+
+    builder.allNormals = builder.allNormals && attribute("NORMAL") >= 0;
+    if (builder.allNormals) {
+        size_t normalCount = appendFloats(model, attribute("NORMAL"), 3, mesh.normals, builder.file, place + ".NORMAL");
+        if (normalCount != count) throw Error(builder.file, place + ".NORMAL", "count differs from POSITION's");
+        if (!identity) transformNormals(mesh.normals, base * 3, world, determinant < 0 ? -1.0 : 1.0);
+    }
+    builder.allTexcoords = builder.allTexcoords && attribute("TEXCOORD_0") >= 0;
+    if (builder.allTexcoords &&
+        appendFloats(model, attribute("TEXCOORD_0"), 2, mesh.texcoords, builder.file, place + ".TEXCOORD_0") != count)
+        throw Error(builder.file, place + ".TEXCOORD_0", "count differs from POSITION's");
+
+    // Albedo is gathered for every primitive and dropped at the end if it is 1 everywhere.
+    std::array<double, 3> factor = {1.0, 1.0, 1.0};
+    if (primitive.material >= 0) {
+        if (size_t(primitive.material) >= model.materials.size()) throw Error(builder.file, place, "material does not exist");
+        const std::vector<double>& baseColor = model.materials[primitive.material].pbrMetallicRoughness.baseColorFactor;
+        if (baseColor.size() >= 3) factor = {baseColor[0], baseColor[1], baseColor[2]};
+    }
+    size_t albedoBase = mesh.albedo.size();
+    if (attribute("COLOR_0") >= 0) {
+        if (appendFloats(model, attribute("COLOR_0"), 3, mesh.albedo, builder.file, place + ".COLOR_0") != count)
+            throw Error(builder.file, place + ".COLOR_0", "count differs from POSITION's");
+        for (size_t i = albedoBase; i < mesh.albedo.size(); ++i) mesh.albedo[i] = float(mesh.albedo[i] * factor[i % 3]);
+        builder.anyAlbedo = true;
+    } else {
+        for (size_t i = 0; i < count; ++i) mesh.albedo.insert(mesh.albedo.end(), {float(factor[0]), float(factor[1]), float(factor[2])});
+        builder.anyAlbedo = builder.anyAlbedo || factor != std::array<double, 3>{1.0, 1.0, 1.0};
+    }
+
+    std::vector<uint32_t> indices;
+    if (primitive.indices >= 0) {
+        indices = readIndices(model, primitive.indices, builder.file, place + ".indices");
+    } else {
+        indices.resize(count);
+        for (size_t i = 0; i < count; ++i) indices[i] = uint32_t(i);
+    }
+    if (indices.size() % 3 != 0) throw Error(builder.file, place, "index count is not a multiple of 3");
+    for (uint32_t& index : indices) index = index < count ? uint32_t(base + index) : std::numeric_limits<uint32_t>::max();
+    // A mirroring transform turns counter-clockwise triangles clockwise.
+    if (determinant < 0)
+        for (size_t t = 0; t < indices.size(); t += 3) std::swap(indices[t + 1], indices[t + 2]);
+    mesh.indices.insert(mesh.indices.end(), indices.begin(), indices.end());
+}
+
+void addMesh(MeshBuilder& builder, int meshIndex, const Matrix& world, const std::string& place) {
+    if (meshIndex < 0 || size_t(meshIndex) >= builder.model.meshes.size())
+        throw Error(builder.file, place, "mesh " + std::to_string(meshIndex) + " does not exist");
+    const tinygltf::Mesh& mesh = builder.model.meshes[meshIndex];
+    for (size_t p = 0; p < mesh.primitives.size(); ++p)
+        addPrimitive(builder, mesh.primitives[p], world,
+                     "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(p) + "]");
+}
+
+void visitNode(MeshBuilder& builder, int nodeIndex, const Matrix& parent, std::vector<char>& onPath) {
+    std::string place = "nodes[" + std::to_string(nodeIndex) + "]";
+    if (nodeIndex < 0 || size_t(nodeIndex) >= builder.model.nodes.size()) throw Error(builder.file, place, "node does not exist");
+    if (onPath[nodeIndex]) throw Error(builder.file, place, "node is its own ancestor");
+    onPath[nodeIndex] = 1;
+    const tinygltf::Node& node = builder.model.nodes[nodeIndex];
+    Matrix world = multiply(parent, localMatrix(node));
+    if (node.mesh >= 0) addMesh(builder, node.mesh, world, place);
+    for (int child : node.children) visitNode(builder, child, world, onPath);
+    onPath[nodeIndex] = 0;
+}
+
+} // namespace
+
+TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
+    MeshBuilder builder{model, file, TriMesh{}};
+    if (model.scenes.empty()) {
+        for (size_t m = 0; m < model.meshes.size(); ++m) addMesh(builder, int(m), kIdentity, "meshes");
+    } else {
+        int sceneIndex = model.defaultScene >= 0 && size_t(model.defaultScene) < model.scenes.size() ? model.defaultScene : 0;
+        std::vector<char> onPath(model.nodes.size(), 0);
+        for (int root : model.scenes[sceneIndex].nodes) visitNode(builder, root, kIdentity, onPath);
+    }
+    if (builder.skippedPrimitives > 0)
+        logWarn(file + ": skipped primitives that are not triangle lists: " + std::to_string(builder.skippedPrimitives));
+    TriMesh& mesh = builder.mesh;
+    if (mesh.indices.empty()) throw Error(file, "", "no triangles: no TRIANGLES primitive is reachable from the scene");
+    if (!builder.allNormals) mesh.normals.clear();
+    if (!builder.allTexcoords) mesh.texcoords.clear();
+    if (!builder.anyAlbedo) mesh.albedo.clear();
+    return std::move(mesh);
+}
+
+} // namespace prt::detail
