@@ -1,0 +1,183 @@
+// prt reference: ground-truth outgoing radiance by path tracing, per vertex or as a pinhole image.
+#include "cli.h"
+
+#include "bundle.h"
+#include "compare.h"
+#include "core.h"
+#include "image.h"
+#include "reference.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+namespace prt::cli {
+
+namespace {
+
+struct ReferenceCommandOptions {
+    std::string mesh;
+    std::string env;
+    std::string output;
+    std::string standardErrorOutput;
+    int bounces = 0;
+    int samples = 256;
+    uint64_t seed = 0;
+    int threads = 0;
+    std::string albedo; // "R,G,B"
+    std::string imageSize; // "W,H"
+    std::string camera;    // "EYE,TARGET,UP,FOVY"
+};
+
+// Parses exactly `count` comma-separated finite numbers.
+std::vector<float> parseNumbers(const std::string& text, size_t count, const char* option) {
+    std::vector<float> numbers;
+    const char* cursor = text.data();
+    const char* end = text.data() + text.size();
+    for (;;) {
+        const char* comma = std::find(cursor, end, ',');
+        float value;
+        auto [parsed, error] = std::from_chars(cursor, comma, value);
+        if (error != std::errc() || parsed != comma || !std::isfinite(value))
+            throw Error("", option, "\"" + text + "\" is not " + std::to_string(count) + " comma-separated numbers",
+                        kExitUsage);
+        numbers.push_back(value);
+        if (comma == end) break;
+        cursor = comma + 1;
+    }
+    if (numbers.size() != count)
+        throw Error("", option, "expected " + std::to_string(count) + " numbers, got " + std::to_string(numbers.size()),
+                    kExitUsage);
+    return numbers;
+}
+
+void requireExtension(const std::string& path, const char* option, std::initializer_list<const char*> extensions) {
+    std::string extension = fileExtension(path);
+    std::string allowed;
+    for (const char* e : extensions) {
+        if (extension == e) return;
+        allowed += std::string(allowed.empty() ? "." : " or .") + e;
+    }
+    throw Error(path, option, "needs a " + allowed + " file", kExitUsage);
+}
+
+// Mean standard error over mean radiance, over every value: the run's relative noise level.
+double relativeNoise(const std::vector<float>& radiance, const std::vector<float>& standardError) {
+    double radianceSum = 0.0, errorSum = 0.0;
+    for (size_t i = 0; i < radiance.size(); ++i) radianceSum += radiance[i], errorSum += standardError[i];
+    return radianceSum > 0.0 ? errorSum / radianceSum : 0.0;
+}
+
+void runReference(const ReferenceCommandOptions& options) {
+    double start = nowSeconds();
+    bool imageMode = !options.imageSize.empty();
+    if (imageMode != !options.camera.empty())
+        throw Error("", "--image", "--image and --camera go together", kExitUsage);
+    if (options.samples < 2) throw Error("", "--samples", "need at least 2 for a standard error", kExitUsage);
+    if (options.bounces < 0) throw Error("", "--bounces", "must be >= 0", kExitUsage);
+    if (imageMode) {
+        requireExtension(options.output, "-o", {"exr"});
+        if (!options.standardErrorOutput.empty())
+            requireExtension(options.standardErrorOutput, "--stderr-out", {"exr"});
+    } else {
+        requireExtension(options.output, "-o", {"npy", "csv"});
+        if (!options.standardErrorOutput.empty())
+            requireExtension(options.standardErrorOutput, "--stderr-out", {"npy", "csv"});
+    }
+
+    ReferenceOptions reference;
+    reference.bounces = options.bounces;
+    reference.samples = options.samples;
+    reference.seed = options.seed;
+    reference.threads = resolveThreads(options.threads);
+    if (!options.albedo.empty()) {
+        std::vector<float> albedo = parseNumbers(options.albedo, 3, "--albedo");
+        for (float a : albedo)
+            if (a < 0.0f || a > 1.0f) throw Error("", "--albedo", "each channel must lie in [0, 1]", kExitUsage);
+        reference.albedo = std::array<float, 3>{albedo[0], albedo[1], albedo[2]};
+    }
+    PinholeCamera camera;
+    if (imageMode) {
+        std::vector<float> size = parseNumbers(options.imageSize, 2, "--image");
+        std::vector<float> view = parseNumbers(options.camera, 10, "--camera");
+        if (size[0] < 1 || size[1] < 1 || size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]))
+            throw Error("", "--image", "width and height must be positive integers", kExitUsage);
+        if (!(view[9] > 0.0f && view[9] < 180.0f)) throw Error("", "--camera", "FOVY must lie in (0, 180)", kExitUsage);
+        camera.width = int(size[0]);
+        camera.height = int(size[1]);
+        std::copy(view.begin(), view.begin() + 3, camera.eye.begin());
+        std::copy(view.begin() + 3, view.begin() + 6, camera.target.begin());
+        std::copy(view.begin() + 6, view.begin() + 9, camera.up.begin());
+        camera.fovyDegrees = view[9];
+    }
+
+    Bundle bundle = readBundle(options.mesh);
+    const TriMesh& mesh = bundle.mesh;
+    if (mesh.normals.empty()) throw Error(options.mesh, "", "mesh has no vertex normals (prt meshprep adds them)");
+    EnvironmentMap env = readEnvironmentMap(options.env);
+    std::string albedoSource = reference.albedo ? "constant" : mesh.albedo.empty() ? "white" : "per vertex";
+    logInfo("reference: " + options.mesh + " (" + std::to_string(mesh.vertexCount()) + " vertices) under " +
+            options.env + ", " + std::to_string(options.samples) + " samples, " + std::to_string(options.bounces) +
+            " bounces, albedo " + albedoSource + ", " + std::to_string(reference.threads) + " threads");
+
+    uint64_t rays = 0;
+    double noise = 0.0;
+    if (imageMode) {
+        ReferenceImage image = referenceImage(mesh, env, camera, reference);
+        writeImage(options.output, image.radiance);
+        if (!options.standardErrorOutput.empty()) writeImage(options.standardErrorOutput, image.standardError);
+        rays = image.rays;
+        noise = relativeNoise(image.radiance.rgb, image.standardError.rgb);
+    } else {
+        ReferenceRadiance radiance = referenceVertexRadiance(mesh, env, reference);
+        writeVertexRadiance(options.output, radiance.radiance);
+        if (!options.standardErrorOutput.empty())
+            writeVertexRadiance(options.standardErrorOutput, radiance.standardError);
+        rays = radiance.rays;
+        noise = relativeNoise(radiance.radiance, radiance.standardError);
+    }
+    char summary[64];
+    std::snprintf(summary, sizeof summary, "%.3g%%", 100.0 * noise);
+    logInfo("reference: wrote " + options.output + "; mean standard error is " + summary + " of mean radiance");
+
+    StageCost cost;
+    cost.stage = "reference";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = rays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
+} // namespace
+
+void addReferenceCommand(CLI::App& app) {
+    auto options = std::make_shared<ReferenceCommandOptions>();
+    CLI::App* command = app.add_subcommand(
+        "reference", "Ground-truth outgoing radiance by path tracing (diffuse, environment lighting), per vertex or "
+                     "as an image");
+    command->add_option("mesh", options->mesh, "Mesh (.glb/.gltf) with vertex normals")->required();
+    command->add_option("--env", options->env, "Environment map: 2:1 equirectangular or 1:6 cube strip")->required();
+    command->add_option("-o,--output", options->output,
+                        "Radiance per vertex (.npy [V,3] or .csv), in the mesh's vertex order; with --image an .exr")
+        ->required();
+    command->add_option("--bounces", options->bounces, "Extra diffuse bounces; 0 = direct lighting only (shadowed)")
+        ->capture_default_str();
+    command->add_option("--samples", options->samples, "Paths per vertex or pixel (>= 2)")->capture_default_str();
+    command->add_option("--albedo", options->albedo,
+                        "Constant diffuse albedo R,G,B in [0,1], e.g. 0.8,0.8,0.8 (default: the mesh's COLOR_0, "
+                        "else white)");
+    command->add_option("--seed", options->seed, "Random seed; same seed, same output for any thread count")
+        ->capture_default_str();
+    command->add_option("--threads", options->threads, "Worker threads (default: all)");
+    command->add_option("--stderr-out", options->standardErrorOutput,
+                        "Also write the standard error of each value, in the same format as -o");
+    command->add_option("--image", options->imageSize, "Render a W,H pinhole image instead, e.g. 640,480");
+    command->add_option("--camera", options->camera,
+                        "With --image: EYE,TARGET,UP,FOVY as 10 comma-separated numbers (three x,y,z triples, then "
+                        "the vertical field of view in degrees), e.g. 0,1,3,0,0.5,0,0,1,0,40");
+    command->callback([options] { runReference(*options); });
+}
+
+} // namespace prt::cli

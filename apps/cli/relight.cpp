@@ -1,0 +1,95 @@
+// prt relight: per-vertex outgoing radiance of a bundle's transfer under an environment map or SH lighting.
+#include "cli.h"
+
+#include "compare.h"
+#include "core.h"
+#include "runtime.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+
+namespace prt::cli {
+
+namespace {
+
+struct RelightOptions {
+    std::string bundle;
+    std::string env;
+    std::string shJson;
+    double rotateYDegrees = 0.0;
+    std::string window = "none";
+    std::string output;
+};
+
+void runRelight(const RelightOptions& options) {
+    double start = nowSeconds();
+    sh::Window window = sh::parseWindow(options.window);
+    // writeVertexRadiance checks this too, but only after the work; a typo should fail at once.
+    std::string outputExtension = fileExtension(options.output);
+    if (outputExtension != "npy" && outputExtension != "csv")
+        throw Error(options.output, "-o", "output must end in .npy or .csv", kExitUsage);
+
+    RelightModel model = loadRelightModel(options.bundle);
+    const int coefficients = sh::coefficientCount(model.order);
+    double R[9];
+    sh::rotationY(options.rotateYDegrees, R);
+    const double* rotation = options.rotateYDegrees != 0.0 ? R : nullptr;
+
+    // Same order of operations as `prt envsh`: project, rotate, window; windowed over the transfer's bands.
+    std::vector<float> lighting;
+    if (!options.env.empty()) {
+        lighting = environmentLighting(readEnvironmentMap(options.env), model.order, rotation, window);
+    } else {
+        int lightingOrder = 0;
+        std::vector<float> read = readLightingJson(options.shJson, &lightingOrder);
+        if (lightingOrder != model.order)
+            logInfo("relight: lighting has order " + std::to_string(lightingOrder) + ", transfer order " +
+                    std::to_string(model.order) + "; using their common " +
+                    std::to_string(std::min(lightingOrder, model.order)) + " bands");
+        lighting = fitLighting(read.data(), sh::coefficientCount(lightingOrder), coefficients);
+        if (rotation) lighting = rotateLighting(lighting.data(), model.order, rotation);
+        sh::applyWindow(window, model.order, lighting.data(), 3);
+    }
+
+    double relightStart = nowSeconds();
+    std::vector<float> radiance(size_t(model.vertexCount) * 3);
+    relight(model, lighting.data(), 0, model.vertexCount, radiance.data());
+    double relightSeconds = nowSeconds() - relightStart;
+    char rate[160];
+    std::snprintf(rate, sizeof rate, "relight: %u vertices at order %d in %.3f ms (%.1f Mvertices/s)",
+                  model.vertexCount, model.order, relightSeconds * 1e3,
+                  relightSeconds > 0.0 ? model.vertexCount / relightSeconds / 1e6 : 0.0);
+    logInfo(rate);
+
+    writeVertexRadiance(options.output, radiance);
+    logInfo("relight: wrote " + options.output);
+
+    StageCost cost;
+    cost.stage = "relight";
+    cost.seconds = nowSeconds() - start;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
+} // namespace
+
+void addRelightCommand(CLI::App& app) {
+    auto options = std::make_shared<RelightOptions>();
+    CLI::App* command =
+        app.add_subcommand("relight", "Per-vertex outgoing radiance of a bundle's transfer under new lighting");
+    command->add_option("bundle", options->bundle, "Bundle (.glb) with a \"transfer\" layer")->required();
+    CLI::Option_group* lighting = command->add_option_group("lighting", "Where the lighting comes from");
+    lighting->add_option("--env", options->env, "Environment map: 2:1 equirect or 1:6 cube strip");
+    lighting->add_option("--sh", options->shJson, "SH lighting as `prt envsh` writes it (prt-sh JSON), any order: the bands it shares with the "
+                         "transfer are used");
+    lighting->require_option(1);
+    command->add_option("--rotate-y", options->rotateYDegrees,
+                        "Turn the lighting by this many degrees about +Y (right-handed)");
+    command->add_option("--window", options->window, "Band window against ringing: none, hann or lanczos");
+    command->add_option("-o,--output", options->output, "Per-vertex radiance [V,3]: .npy (float32) or .csv")
+        ->required();
+    command->callback([options] { runRelight(*options); });
+}
+
+} // namespace prt::cli

@@ -1,0 +1,211 @@
+// prt transfer: per-vertex diffuse SH transfer of a mesh, written as the "transfer" layer of a bundle.
+#include "cli.h"
+
+#include "bundle.h"
+#include "core.h"
+#include "sh.h"
+#include "transfer.h"
+
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <sstream>
+
+#ifndef PRT_VERSION
+#define PRT_VERSION "0.0.0"
+#endif
+
+namespace prt::cli {
+
+namespace {
+
+struct TransferArgs {
+    std::string input;
+    std::string output;
+    std::string mode = "shadowed";
+    int order = 3;
+    int samples = 1024;
+    int bounces = -1; // -1: not given
+    std::string albedo;
+    uint64_t seed = 0;
+    int threads = 0;
+    std::string shard;
+};
+
+Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
+
+// "R,G,B" or a single grey value, each in [0, 1]; kept in double so the bundle records what was typed.
+std::array<double, 3> parseAlbedo(const std::string& text) {
+    std::vector<double> values;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        size_t used = 0;
+        double value = 0.0;
+        try {
+            value = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size()) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
+        if (!(value >= 0.0 && value <= 1.0)) throw usage("--albedo", "components must lie in [0, 1]");
+        values.push_back(value);
+    }
+    if (values.size() == 1) return {values[0], values[0], values[0]};
+    if (values.size() != 3) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
+    return {values[0], values[1], values[2]};
+}
+
+// "I/N" with 0 <= I < N.
+void parseShard(const std::string& text, int& index, int& count) {
+    char slash = 0, rest = 0;
+    std::istringstream in(text);
+    if (!(in >> index >> slash >> count) || slash != '/' || (in >> rest) || count < 1 || index < 0 || index >= count)
+        throw usage("--shard", "'" + text + "' is not I/N with 0 <= I < N");
+}
+
+TransferOptions resolveOptions(const TransferArgs& args) {
+    TransferOptions options;
+    options.mode = parseTransferMode(args.mode);
+    if (args.order < 1 || args.order > sh::kMaxOrder)
+        throw usage("--order", std::to_string(args.order) + " outside 1.." + std::to_string(sh::kMaxOrder));
+    options.order = args.order;
+    if (args.samples < 1 || args.samples > kMaxTransferSamples)
+        throw usage("--samples", std::to_string(args.samples) + " outside 1.." + std::to_string(kMaxTransferSamples));
+    options.samples = args.samples;
+    bool interreflected = options.mode == TransferMode::Interreflected;
+    if (args.bounces >= 0 && !interreflected) throw usage("--bounces", "only applies to --mode interreflected");
+    if (args.bounces < -1) throw usage("--bounces", "must be >= 0");
+    options.bounces = interreflected ? (args.bounces >= 0 ? args.bounces : 2) : 0;
+    if (!args.albedo.empty()) {
+        std::array<double, 3> albedo = parseAlbedo(args.albedo);
+        options.albedo = {float(albedo[0]), float(albedo[1]), float(albedo[2])};
+        options.albedoOverride = true;
+    }
+    // Bundle JSON holds integers exactly up to 2^53.
+    if (args.seed > (uint64_t(1) << 53)) throw usage("--seed", "must be at most 2^53");
+    options.seed = args.seed;
+    if (args.threads < 0) throw usage("--threads", "must be >= 0 (0: all cores)");
+    options.threads = resolveThreads(args.threads);
+    return options;
+}
+
+void runTransfer(const TransferArgs& args) {
+    double start = nowSeconds();
+    TransferOptions options = resolveOptions(args);
+    int shardIndex = 0, shardCount = 1;
+    if (!args.shard.empty()) {
+        parseShard(args.shard, shardIndex, shardCount);
+        if (options.bounces > 0)
+            throw usage("--shard", "interreflected bounces gather from every vertex; run them unsharded");
+    }
+
+    Bundle input = readBundle(args.input);
+    TriMesh& mesh = input.mesh;
+    if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
+    size_t vertexCount = mesh.vertexCount();
+    options.vertexBegin = vertexCount * shardIndex / shardCount;
+    options.vertexEnd = vertexCount * (shardIndex + 1) / shardCount;
+    bool perVertexAlbedo = !mesh.albedo.empty() && !options.albedoOverride;
+    logInfo("transfer: " + args.input + " (" + std::to_string(vertexCount) + " vertices) " + args.mode + ", order " +
+            std::to_string(options.order) + ", " + std::to_string(options.samples) + " samples" +
+            (options.bounces > 0 ? ", " + std::to_string(options.bounces) + " bounces" : "") +
+            (shardCount > 1 ? ", shard " + args.shard : ""));
+
+    Transfer transfer;
+    try {
+        transfer = computeTransfer(mesh, options);
+    } catch (const Error& e) {
+        if (!e.file().empty() || e.exitCode() != kExitInput) throw;
+        throw Error(args.input, e.place(), e.problem(), e.exitCode());
+    }
+    const TransferStats& stats = transfer.stats;
+    if (stats.backFaceHits > 0)
+        logWarn("transfer: " + std::to_string(stats.backFaceHits) + " of " + std::to_string(stats.rays) +
+                " rays hit back faces (open or inside-out mesh?); they count as occluded and reflect nothing");
+
+    Layer layer;
+    layer.name = "transfer";
+    layer.semantic = "sh_transfer_rgb";
+    uint64_t rows = transfer.vertexEnd - transfer.vertexBegin;
+    uint64_t coefficients = uint64_t(options.order) * options.order;
+    layer.shape = {rows, coefficients, 3};
+    layer.data = std::move(transfer.coefficients);
+    nlohmann::json albedo = "per-vertex";
+    if (!perVertexAlbedo)
+        albedo = args.albedo.empty() ? std::array<double, 3>{1.0, 1.0, 1.0} : parseAlbedo(args.albedo);
+    layer.params = {{"mode", args.mode},
+                    {"order", options.order},
+                    {"samples", options.mode == TransferMode::Unshadowed ? 0 : options.samples},
+                    {"bounces", options.bounces},
+                    {"albedo", albedo},
+                    {"seed", options.seed},
+                    {"direction_set", kTransferDirectionSet},
+                    {"ray_offset", stats.rayOffset},
+                    {"rays", stats.rays},
+                    {"back_face_hits", stats.backFaceHits}};
+    if (shardCount > 1) {
+        // A slice of the vertex rows; a merge step concatenates the shards into one "vertex" layer.
+        layer.domain = "vertex_range";
+        layer.params["shard"] = {shardIndex, shardCount};
+        layer.params["row_begin"] = transfer.vertexBegin;
+        layer.params["row_end"] = transfer.vertexEnd;
+        layer.params["vertex_count"] = vertexCount;
+    } else {
+        layer.domain = "vertex";
+    }
+
+    Bundle output;
+    output.mesh = std::move(mesh);
+    output.layers.push_back(std::move(layer));
+    output.producer = {{"tool", "prt"}, {"version", PRT_VERSION}, {"stage", "transfer"}};
+    output.inputs = {{"mesh", hashFile(args.input)}};
+    output.convention = conventionRecord();
+    writeBundle(args.output, output);
+    logInfo("transfer: wrote " + args.output);
+
+    nlohmann::json record = {{"rays", stats.rays},
+                             {"hits", stats.hits},
+                             {"back_face_hits", stats.backFaceHits},
+                             {"build_seconds", stats.buildSeconds},
+                             {"direct_seconds", stats.directSeconds},
+                             {"bounce_seconds", stats.bounceSeconds},
+                             {"hit_record_bytes", stats.hitRecordBytes},
+                             {"transfer_bytes", stats.transferBytes}};
+    logEvent("transfer_stats", record.dump());
+
+    StageCost cost;
+    cost.stage = "transfer";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = stats.rays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
+} // namespace
+
+void addTransferCommand(CLI::App& app) {
+    auto args = std::make_shared<TransferArgs>();
+    CLI::App* command = app.add_subcommand("transfer", "Per-vertex diffuse SH transfer by Monte Carlo ray casting");
+    command->add_option("mesh", args->input, "Input mesh with normals: a bundle or glb from `prt meshprep`")
+        ->required();
+    command->add_option("-o,--output", args->output, "Output bundle (.glb) with the mesh and a 'transfer' layer")
+        ->required();
+    command->add_option("--mode", args->mode, "unshadowed, shadowed or interreflected (default shadowed)");
+    command->add_option("--order", args->order, "Number of SH bands L (L*L coefficients), 1.." +
+                                                    std::to_string(sh::kMaxOrder) + " (default 3)");
+    command->add_option("--samples", args->samples, "Hemisphere directions per vertex, 1.." +
+                                                        std::to_string(kMaxTransferSamples) + " (default 1024)");
+    command->add_option("--bounces", args->bounces, "Interreflection bounces, interreflected only (default 2)");
+    command->add_option("--albedo", args->albedo,
+                        "Diffuse albedo R,G,B (or one grey value) in [0,1]; overrides the mesh's per-vertex "
+                        "albedo (default: the mesh's, else 1)");
+    command->add_option("--seed", args->seed, "Seed of the per-vertex direction rotations (default 0)");
+    command->add_option("--threads", args->threads, "Worker threads (default 0: all cores)");
+    command->add_option("--shard", args->shard,
+                        "I/N: compute only the I-th of N contiguous vertex ranges, written as a 'vertex_range' "
+                        "layer for a later merge");
+    command->callback([args] { runTransfer(*args); });
+}
+
+} // namespace prt::cli

@@ -1,0 +1,157 @@
+// The reference drivers: per-vertex radiance and pinhole images, parallel over points, each point's samples
+// run in a fixed order from its own random streams.
+#include "reference.h"
+
+#include "core.h"
+#include "path_tracer.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <cmath>
+#include <numbers>
+
+namespace prt {
+
+namespace {
+
+using namespace pathtrace;
+
+void checkInputs(const TriMesh& mesh, const ReferenceOptions& options) {
+    if (options.samples < 2) throw Error("", "reference", "need at least 2 samples for a standard error", kExitUsage);
+    if (options.bounces < 0) throw Error("", "reference", "bounces must be >= 0", kExitUsage);
+    if (mesh.normals.size() != mesh.positions.size()) throw Error("", "mesh", "has no vertex normals");
+    if (!mesh.albedo.empty() && mesh.albedo.size() != mesh.positions.size())
+        throw Error("", "mesh", "albedo is not rgb per vertex");
+}
+
+// Mean of `samples` path estimates from `point` and its standard error (Welford's running variance, which
+// stays accurate when the mean is large against the spread).
+void estimatePoint(const SceneTracer& scene, const EnvironmentSampler& environment, const ShadingPoint& point,
+                   uint64_t pointIndex, const ReferenceOptions& options, float mean[3], float standardError[3],
+                   uint64_t& rays) {
+    double running[3] = {0, 0, 0}, squares[3] = {0, 0, 0};
+    for (int sample = 0; sample < options.samples; ++sample) {
+        Pcg32 random = sampleGenerator(options.seed, pointIndex, uint64_t(sample));
+        double radiance[3];
+        estimateRadiance(scene, environment, point, options.bounces, random, radiance, rays);
+        for (int c = 0; c < 3; ++c) {
+            double delta = radiance[c] - running[c];
+            running[c] += delta / (sample + 1);
+            squares[c] += delta * (radiance[c] - running[c]);
+        }
+    }
+    double n = options.samples;
+    for (int c = 0; c < 3; ++c) {
+        mean[c] = float(running[c]);
+        standardError[c] = float(std::sqrt(squares[c] / (n - 1.0) / n));
+    }
+}
+
+// Runs body(begin, end, rays) over [0, count) in blocks, with Progress; returns the rays counted.
+template <typename Body>
+uint64_t parallelOverPoints(const char* label, size_t count, const Body& body) {
+    std::atomic<uint64_t> rays{0};
+    Progress progress(label, count);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
+        uint64_t blockRays = 0;
+        body(range.begin(), range.end(), blockRays);
+        rays += blockRays;
+        progress.add(range.size());
+    });
+    progress.finish();
+    return rays;
+}
+
+// Runs `work` with at most `threads` workers (0: all), Embree's scene build included.
+template <typename Work>
+auto withThreads(int threads, const Work& work) {
+    tbb::task_arena arena(threads > 0 ? threads : int(tbb::task_arena::automatic));
+    return arena.execute(work);
+}
+
+void normalize(float v[3]) {
+    float length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int c = 0; c < 3; ++c) v[c] /= length;
+}
+
+void cross(const float a[3], const float b[3], float out[3]) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+} // namespace
+
+ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const EnvironmentMap& env,
+                                          const ReferenceOptions& options) {
+    checkInputs(mesh, options);
+    EnvironmentSampler environment = makeEnvironmentSampler(env);
+    return withThreads(options.threads, [&] {
+        SceneTracer scene(mesh, options.albedo);
+        ReferenceRadiance result;
+        result.radiance.resize(mesh.vertexCount() * 3);
+        result.standardError.resize(mesh.vertexCount() * 3);
+        auto shadeVertices = [&](size_t begin, size_t end, uint64_t& rays) {
+            for (size_t v = begin; v < end; ++v)
+                estimatePoint(scene, environment, scene.vertexPoint(uint32_t(v)), v, options, &result.radiance[v * 3],
+                              &result.standardError[v * 3], rays);
+        };
+        result.rays = parallelOverPoints("reference", mesh.vertexCount(), shadeVertices);
+        return result;
+    });
+}
+
+ReferenceImage referenceImage(const TriMesh& mesh, const EnvironmentMap& env, const PinholeCamera& camera,
+                              const ReferenceOptions& options) {
+    checkInputs(mesh, options);
+    if (camera.width <= 0 || camera.height <= 0) throw Error("", "camera", "image size must be positive", kExitUsage);
+    float forward[3], right[3], up[3];
+    for (int c = 0; c < 3; ++c) forward[c] = camera.target[c] - camera.eye[c];
+    cross(forward, camera.up.data(), right);
+    cross(right, forward, up);
+    if (!(std::sqrt(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]) > 0.0f))
+        throw Error("", "camera", "eye equals target or up is parallel to the view direction", kExitUsage);
+    normalize(forward);
+    normalize(right);
+    normalize(up);
+    float halfHeight = std::tan(camera.fovyDegrees * std::numbers::pi_v<float> / 360.0f);
+    float halfWidth = halfHeight * float(camera.width) / float(camera.height);
+
+    EnvironmentSampler environment = makeEnvironmentSampler(env);
+    return withThreads(options.threads, [&] {
+        SceneTracer scene(mesh, options.albedo);
+        ReferenceImage result;
+        for (Image* image : {&result.radiance, &result.standardError}) {
+            image->width = camera.width;
+            image->height = camera.height;
+            image->rgb.assign(size_t(camera.width) * camera.height * 3, 0.0f);
+        }
+        auto shadePixels = [&](size_t begin, size_t end, uint64_t& rays) {
+            for (size_t pixel = begin; pixel < end; ++pixel) {
+                float sx = (2.0f * (float(pixel % camera.width) + 0.5f) / float(camera.width) - 1.0f) * halfWidth;
+                float sy = (1.0f - 2.0f * (float(pixel / camera.width) + 0.5f) / float(camera.height)) * halfHeight;
+                float d[3];
+                for (int c = 0; c < 3; ++c) d[c] = forward[c] + sx * right[c] + sy * up[c];
+                normalize(d);
+                ++rays;
+                ShadingPoint hit;
+                HitKind kind = scene.intersect(camera.eye.data(), d, &hit);
+                float* radiance = &result.radiance.rgb[pixel * 3];
+                if (kind == HitKind::Miss) {
+                    const float* emitted = environment.texels[environmentTexel(environment, d)].radiance;
+                    std::copy(emitted, emitted + 3, radiance);
+                } else if (kind == HitKind::FrontFace) {
+                    estimatePoint(scene, environment, hit, pixel, options, radiance,
+                                  &result.standardError.rgb[pixel * 3], rays);
+                } // a back face stays black, as it ends a path
+            }
+        };
+        result.rays = parallelOverPoints("reference image", size_t(camera.width) * camera.height, shadePixels);
+        return result;
+    });
+}
+
+} // namespace prt

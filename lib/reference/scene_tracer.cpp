@@ -1,0 +1,150 @@
+// The mesh in an Embree 3 scene: nearest hits with their shading frame, and shadow rays.
+#include "path_tracer.h"
+
+#include "core.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace prt::pathtrace {
+
+namespace {
+
+void throwIfEmbreeFailed(RTCDevice device, const char* step) {
+    RTCError error = rtcGetDeviceError(device);
+    if (error != RTC_ERROR_NONE)
+        throw Error("", std::string("embree ") + step, "error code " + std::to_string(int(error)), kExitFailure);
+}
+
+void normalize(float v[3]) {
+    float length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int c = 0; c < 3; ++c) v[c] /= length;
+}
+
+RTCRay makeRay(const float origin[3], const float d[3]) {
+    RTCRay ray{};
+    ray.org_x = origin[0], ray.org_y = origin[1], ray.org_z = origin[2];
+    ray.dir_x = d[0], ray.dir_y = d[1], ray.dir_z = d[2];
+    ray.tnear = 0.0f;
+    ray.tfar = std::numeric_limits<float>::infinity();
+    ray.mask = ~0u;
+    return ray;
+}
+
+} // namespace
+
+SceneTracer::SceneTracer(const TriMesh& mesh, const std::optional<std::array<float, 3>>& constantAlbedo)
+    : mesh_(mesh), constantAlbedo_(constantAlbedo), device_(rtcNewDevice(nullptr)) {
+    if (!device_)
+        throw Error("", "embree device",
+                    "cannot create (error code " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")",
+                    kExitFailure);
+    scene_.reset(rtcNewScene(device_.get()));
+    // Robust traversal: no rays slip between adjacent triangles, so closed cavities never leak light.
+    rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(scene_.get(), RTC_BUILD_QUALITY_HIGH);
+
+    if (mesh.triangleCount() > 0) {
+        std::unique_ptr<RTCGeometryTy, EmbreeRelease> geometry(
+            rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE));
+        // Embree's own buffers carry the padding its SIMD loads need, so copy rather than share.
+        auto* positions = static_cast<float*>(rtcSetNewGeometryBuffer(
+            geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertexCount()));
+        auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+            geometry.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangleCount()));
+        throwIfEmbreeFailed(device_.get(), "buffers");
+        std::copy(mesh.positions.begin(), mesh.positions.end(), positions);
+        std::copy(mesh.indices.begin(), mesh.indices.end(), indices);
+        rtcCommitGeometry(geometry.get());
+        rtcAttachGeometry(scene_.get(), geometry.get());
+    }
+    rtcCommitScene(scene_.get());
+    throwIfEmbreeFailed(device_.get(), "scene build");
+
+    float lower[3] = {0, 0, 0}, upper[3] = {0, 0, 0};
+    for (size_t v = 0; v < mesh.vertexCount(); ++v)
+        for (int c = 0; c < 3; ++c) {
+            float p = mesh.positions[v * 3 + c];
+            lower[c] = v == 0 ? p : std::min(lower[c], p);
+            upper[c] = v == 0 ? p : std::max(upper[c], p);
+        }
+    float diagonal = std::sqrt((upper[0] - lower[0]) * (upper[0] - lower[0]) +
+                               (upper[1] - lower[1]) * (upper[1] - lower[1]) +
+                               (upper[2] - lower[2]) * (upper[2] - lower[2]));
+    rayOffset_ = 1e-4f * diagonal;
+}
+
+void SceneTracer::albedoAt(const uint32_t* triangle, float u, float v, float out[3]) const {
+    if (constantAlbedo_) {
+        std::copy(constantAlbedo_->begin(), constantAlbedo_->end(), out);
+    } else if (mesh_.albedo.empty()) {
+        std::fill(out, out + 3, 1.0f);
+    } else {
+        const float* a0 = &mesh_.albedo[triangle[0] * 3];
+        const float* a1 = &mesh_.albedo[triangle[1] * 3];
+        const float* a2 = &mesh_.albedo[triangle[2] * 3];
+        for (int c = 0; c < 3; ++c) out[c] = (1.0f - u - v) * a0[c] + u * a1[c] + v * a2[c];
+    }
+}
+
+ShadingPoint SceneTracer::vertexPoint(uint32_t vertex) const {
+    ShadingPoint point;
+    for (int c = 0; c < 3; ++c) {
+        point.position[c] = mesh_.positions[vertex * 3 + c];
+        point.normal[c] = mesh_.normals[vertex * 3 + c];
+    }
+    normalize(point.normal);
+    std::copy(point.normal, point.normal + 3, point.offsetNormal);
+    // A vertex reads its own albedo: the first corner of a triangle made of it alone.
+    uint32_t corners[3] = {vertex, vertex, vertex};
+    albedoAt(corners, 0.0f, 0.0f, point.albedo);
+    return point;
+}
+
+HitKind SceneTracer::intersect(const float origin[3], const float d[3], ShadingPoint* point) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rayHit{};
+    rayHit.ray = makeRay(origin, d);
+    rayHit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_.get(), &context, &rayHit);
+    if (rayHit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return HitKind::Miss;
+
+    const uint32_t* triangle = &mesh_.indices[size_t(rayHit.hit.primID) * 3];
+    const float* p0 = &mesh_.positions[triangle[0] * 3];
+    const float* p1 = &mesh_.positions[triangle[1] * 3];
+    const float* p2 = &mesh_.positions[triangle[2] * 3];
+    // The winding gives the front side (counter-clockwise seen from it, docs/conventions.md).
+    float e1[3], e2[3], faceNormal[3];
+    for (int c = 0; c < 3; ++c) e1[c] = p1[c] - p0[c], e2[c] = p2[c] - p0[c];
+    faceNormal[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    faceNormal[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    faceNormal[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    if (faceNormal[0] * d[0] + faceNormal[1] * d[1] + faceNormal[2] * d[2] > 0.0f) return HitKind::BackFace;
+
+    float u = rayHit.hit.u, v = rayHit.hit.v, w = 1.0f - u - v;
+    const float* n0 = &mesh_.normals[triangle[0] * 3];
+    const float* n1 = &mesh_.normals[triangle[1] * 3];
+    const float* n2 = &mesh_.normals[triangle[2] * 3];
+    for (int c = 0; c < 3; ++c) {
+        point->position[c] = w * p0[c] + u * p1[c] + v * p2[c];
+        point->normal[c] = w * n0[c] + u * n1[c] + v * n2[c];
+        point->offsetNormal[c] = faceNormal[c];
+    }
+    normalize(point->normal);
+    normalize(point->offsetNormal);
+    albedoAt(triangle, u, v, point->albedo);
+    return HitKind::FrontFace;
+}
+
+bool SceneTracer::occluded(const float origin[3], const float d[3]) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray = makeRay(origin, d);
+    rtcOccluded1(scene_.get(), &context, &ray);
+    return ray.tfar < 0.0f; // Embree marks an occluded ray with tfar = -inf
+}
+
+} // namespace prt::pathtrace

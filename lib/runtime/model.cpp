@@ -1,0 +1,65 @@
+// Loading a bundle's transfer layer into a RelightModel, validated so the kernel can trust its sizes.
+#include "runtime.h"
+
+#include "core.h"
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace prt {
+
+namespace {
+
+std::string shapeText(const std::vector<uint64_t>& shape) {
+    std::string text = "[";
+    for (size_t i = 0; i < shape.size(); ++i) text += (i ? ", " : "") + std::to_string(shape[i]);
+    return text + "]";
+}
+
+} // namespace
+
+RelightModel relightModel(Bundle bundle, const std::string& source) {
+    Layer* layer = nullptr;
+    for (Layer& candidate : bundle.layers)
+        if (candidate.name == "transfer") layer = &candidate;
+    if (!layer)
+        throw Error(source, "PRT_bundle", "no \"transfer\" layer to relight (run `prt transfer` to make one)");
+    const std::string place = "layer \"transfer\"";
+    if (layer->domain != "vertex" || layer->semantic != "sh_transfer_rgb")
+        throw Error(source, place, "domain \"" + layer->domain + "\", semantic \"" + layer->semantic +
+                                       "\"; expected domain \"vertex\", semantic \"sh_transfer_rgb\"");
+
+    const std::vector<uint64_t>& shape = layer->shape;
+    int order = int(std::lround(std::sqrt(shape.size() == 3 ? double(shape[1]) : 0.0)));
+    if (shape.size() != 3 || shape[2] != 3 || order < 1 || order > sh::kMaxOrder ||
+        uint64_t(order) * order != shape[1])
+        throw Error(source, place, "shape " + shapeText(shape) + " is not [V, L*L, 3] for an order L in 1.." +
+                                       std::to_string(sh::kMaxOrder));
+    const nlohmann::json& paramOrder = layer->params.contains("order") ? layer->params["order"] : nlohmann::json();
+    if (!paramOrder.is_null() && !(paramOrder.is_number_integer() && paramOrder.get<int64_t>() == order))
+        throw Error(source, place, "params.order " + paramOrder.dump() + " does not match shape " + shapeText(shape));
+    if (shape[0] != bundle.mesh.vertexCount() || shape[0] > std::numeric_limits<uint32_t>::max())
+        throw Error(source, place, "has " + std::to_string(shape[0]) + " rows for a mesh of " +
+                                       std::to_string(bundle.mesh.vertexCount()) + " vertices");
+    if (layer->data.size() != shape[0] * shape[1] * 3)
+        throw Error(source, place, "holds " + std::to_string(layer->data.size()) + " floats, shape " +
+                                       shapeText(shape) + " needs " + std::to_string(shape[0] * shape[1] * 3));
+    for (size_t i = 0; i < layer->data.size(); ++i)
+        if (!std::isfinite(layer->data[i]))
+            throw Error(source, place + ", vertex " + std::to_string(i / (shape[1] * 3)),
+                        "transfer value is not finite");
+
+    RelightModel model;
+    model.vertexCount = uint32_t(shape[0]);
+    model.order = order;
+    model.transfer = std::move(layer->data);
+    return model;
+}
+
+RelightModel loadRelightModel(const std::string& bundlePath) {
+    return relightModel(readBundle(bundlePath), bundlePath);
+}
+
+} // namespace prt

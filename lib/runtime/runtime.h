@@ -1,0 +1,69 @@
+// The thin runtime: relights a bundle's precomputed transfer under new distant lighting, per vertex.
+// It needs no ray tracer or solver, only the bundle reader and SH; an engine links prt::runtime (see
+// tests/runtime/consumer for a complete find_package(prt) project).
+//
+// Outgoing radiance of vertex v in channel c is radiance[v][c] = sum_j transfer[v][j][c] * lighting[j][c]
+// (docs/conventions.md), with lighting as RGB SH radiance coefficients [coefficient][3].
+#pragma once
+
+#include "bundle.h"
+#include "core.h" // prt::Error, thrown by the loaders
+#include "image.h"
+#include "sh.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+// Per-vertex transfer ready to relight: the "transfer" layer of a bundle (semantic "sh_transfer_rgb").
+struct RelightModel {
+    uint32_t vertexCount = 0;
+    int order = 0;               // SH bands; order * order coefficients per vertex
+    std::vector<float> transfer; // [vertexCount][order * order][3], the mesh's vertex order
+};
+
+// Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying). `source` names the
+// bundle in errors.
+// Needs a vertex-domain layer of semantic "sh_transfer_rgb", shape [V, L*L, 3] with L = params.order when that
+// is set, V equal to the mesh's vertex count, finite values. Throws prt::Error naming `source` otherwise.
+RelightModel relightModel(Bundle bundle, const std::string& source);
+
+// Reads a bundle file and takes its transfer layer, as relightModel does.
+RelightModel loadRelightModel(const std::string& bundlePath);
+
+// ---- lighting ------------------------------------------------------------------------------------------------
+// Lighting of `coefficientCount` RGB coefficients from lighting of another count: their common prefix, with
+// missing coefficients set to zero. Both counts are squares, so this is projecting both onto their common bands.
+std::vector<float> fitLighting(const float* lighting, int lightingCoefficientCount, int coefficientCount);
+
+// Reads prt-sh JSON as `prt envsh` writes it ({"format":"prt-sh","order":L,"coefficients":[[r,g,b],...]}).
+// Returns [L*L][3] and sets *order to L. Throws prt::Error naming the file and the bad member.
+std::vector<float> readLightingJson(const std::string& path, int* order);
+
+// Lighting for `order` bands from an environment map: projected with exact texel solid angles, then rotated so
+// the environment turns by `rotation` (row-major 3x3, d' = R d; null for none), then windowed against ringing.
+std::vector<float> environmentLighting(const EnvironmentMap& env, int order, const double* rotation,
+                                       sh::Window window);
+
+// Rotates RGB lighting of `order` bands so the environment it describes turns by `rotation` (d' = R d).
+std::vector<float> rotateLighting(const float* lighting, int order, const double rotation[9]);
+
+// ---- relighting ----------------------------------------------------------------------------------------------
+// The real-time kernel: radiance[v][c] = sum_j transfer[v][j][c] * lighting[j][c] for v < vertexCount.
+// transfer is [vertexCount][coefficientCount][3], lighting [coefficientCount][3], radiance [vertexCount][3].
+// Single-threaded and allocation-free; sums in float in a fixed order, so results do not depend on how callers
+// split the vertices. To stream a range [begin, end), pass transfer + begin * coefficientCount * 3 and
+// end - begin vertices.
+void relight(const float* transfer, size_t vertexCount, int coefficientCount, const float* lighting,
+             float* radiance);
+
+// Relights vertices [begin, end) of `model` across TBB's threads, bit-identical to the kernel on that range.
+// Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
+// radiance sized (end - begin) * 3: row 0 of radiance is vertex `begin`. Throws prt::Error for a range outside
+// the model.
+void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance);
+
+} // namespace prt

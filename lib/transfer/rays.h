@@ -1,0 +1,71 @@
+// Internal to lib/transfer: what the transfer passes and the bare yardstick share, so both cast the same rays.
+#pragma once
+
+#include "transfer.h"
+
+#include <embree3/rtcore.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace prt::rays {
+
+// Vertices per work block: the unit of parallel work and of hit-record storage. Fixed, so that no result
+// depends on how blocks land on threads.
+inline constexpr size_t kBlockVertices = 256;
+
+// An Embree device and committed scene over the mesh's triangles (build quality high); released on destruction.
+struct Scene {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+
+    explicit Scene(const TriMesh& mesh);
+    ~Scene();
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+};
+
+// The shared direction set in the local frame (normal = +z): uniform-hemisphere Hammersley, cos(theta_k) = z_k =
+// (k + 0.5) / N exactly as computed in double and rounded once.
+struct Hemisphere {
+    std::vector<float> x, y, z;
+};
+Hemisphere hemisphere(int samples);
+
+// Where vertex v's rays start and the frame they are turned into: columns tangent, bitangent, normal.
+// The frame turns about the normal by an angle hashed from (seed, v).
+struct Fan {
+    double tangent[3], bitangent[3], normal[3];
+    float origin[3];
+    float axes[9]; // tangent, bitangent, normal as floats, for the ray directions
+};
+Fan fan(const TriMesh& mesh, size_t vertex, uint64_t seed, float offset);
+
+// The ray of sample k of a fan, ready for rtcOccluded1 / rtcIntersect1.
+inline void setRay(const Fan& fan, const Hemisphere& set, int k, float offset, RTCRay& ray) {
+    float sx = set.x[k], sy = set.y[k], sz = set.z[k];
+    const float* a = fan.axes;
+    ray.org_x = fan.origin[0];
+    ray.org_y = fan.origin[1];
+    ray.org_z = fan.origin[2];
+    ray.dir_x = a[0] * sx + a[3] * sy + a[6] * sz;
+    ray.dir_y = a[1] * sx + a[4] * sy + a[7] * sz;
+    ray.dir_z = a[2] * sx + a[5] * sy + a[8] * sz;
+    ray.tnear = offset;
+    ray.tfar = INFINITY;
+    ray.time = 0.0f;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+}
+
+// Checks what every pass relies on: normals present and nonzero, indices in range, finite positions.
+// Throws prt::Error(kExitInput) naming the first offending element.
+void validateMesh(const TriMesh& mesh);
+
+// The options' vertex range clipped to the mesh.
+void clipRange(const TriMesh& mesh, const TransferOptions& options, size_t& begin, size_t& end);
+
+} // namespace prt::rays

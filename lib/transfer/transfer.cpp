@@ -1,0 +1,393 @@
+// Per-vertex diffuse SH transfer: a direct pass of rays, then Jacobi Neumann bounces (thesis Fig. 4.2) that
+// gather the previous bounce at the direct pass's recorded hits instead of casting new rays.
+#include "transfer.h"
+
+#include "core.h"
+#include "rays.h"
+#include "sh.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <ctime>
+#include <numbers>
+#include <optional>
+
+namespace prt {
+
+TransferMode parseTransferMode(const std::string& name) {
+    if (name == "unshadowed") return TransferMode::Unshadowed;
+    if (name == "shadowed") return TransferMode::Shadowed;
+    if (name == "interreflected") return TransferMode::Interreflected;
+    throw Error("", "--mode", "'" + name + "' is not one of unshadowed, shadowed, interreflected", kExitUsage);
+}
+
+const char* transferModeName(TransferMode mode) {
+    switch (mode) {
+    case TransferMode::Unshadowed: return "unshadowed";
+    case TransferMode::Shadowed: return "shadowed";
+    case TransferMode::Interreflected: return "interreflected";
+    }
+    return "?";
+}
+
+namespace {
+
+// The direct pass's front-face hits for one block of vertices, in vertex then sample order: 10 bytes per hit.
+struct HitBlock {
+    std::vector<uint32_t> end;         // per vertex of the block: one past its last hit
+    std::vector<uint32_t> triangle;
+    std::vector<uint32_t> barycentric; // u | v << 16, each quantised to 1/65535
+    std::vector<uint16_t> sample;
+};
+
+// What every pass reads.
+struct Context {
+    const TriMesh& mesh;
+    const TransferOptions& options;
+    size_t begin, end;      // vertex range written by the direct pass
+    int coefficients;       // order^2
+    int stride;             // floats per vertex row: order^2 * 3
+    float offset;
+    rays::Hemisphere directions;
+    std::vector<float> weightedBasis; // [sample][coefficient]: cos(theta_k) * Y_j(s_k) in the local frame
+    std::vector<float> cosines;       // [sample]
+    std::vector<double> lambert;      // [coefficient]: A_l / pi, the unshadowed transfer's band factor
+
+    std::array<float, 3> albedo(size_t vertex) const {
+        if (mesh.albedo.empty() || options.albedoOverride) return options.albedo;
+        const float* a = &mesh.albedo[3 * vertex];
+        return {a[0], a[1], a[2]};
+    }
+};
+
+void checkOptions(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end) {
+    auto usage = [](const std::string& place, const std::string& problem) {
+        return Error("", place, problem, kExitUsage);
+    };
+    if (options.order < 1 || options.order > sh::kMaxOrder)
+        throw usage("order", std::to_string(options.order) + " outside 1.." + std::to_string(sh::kMaxOrder));
+    if (options.mode != TransferMode::Unshadowed &&
+        (options.samples < 1 || options.samples > kMaxTransferSamples))
+        throw usage("samples", std::to_string(options.samples) + " outside 1.." +
+                                   std::to_string(kMaxTransferSamples));
+    if (options.bounces < 0) throw usage("bounces", "must be >= 0");
+    if (options.bounces > 0 && options.mode != TransferMode::Interreflected)
+        throw usage("bounces", "need mode interreflected");
+    for (float a : options.albedo)
+        if (!(a >= 0.0f && a <= 1.0f)) throw usage("albedo", "components must lie in [0, 1]");
+    if (options.bounces > 0 && (begin != 0 || end != mesh.vertexCount()))
+        throw usage("vertex range", "interreflected bounces gather from every vertex, so they need the whole mesh");
+    if (!mesh.albedo.empty() && !options.albedoOverride)
+        for (size_t i = 0; i < mesh.albedo.size(); ++i)
+            if (!(mesh.albedo[i] >= 0.0f && mesh.albedo[i] <= 1.0f))
+                throw Error("", "vertex " + std::to_string(i / 3), "albedo outside [0, 1]");
+}
+
+Context makeContext(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end) {
+    Context context{mesh, options, begin, end, options.order * options.order, 3 * options.order * options.order,
+                    rayOffset(mesh), {}, {}, {}, {}};
+    int n = options.order * options.order;
+    context.lambert.resize(n);
+    for (int l = 0; l < options.order; ++l)
+        for (int m = -l; m <= l; ++m) context.lambert[sh::index(l, m)] = sh::clampedCosine(l) / std::numbers::pi;
+    if (options.mode == TransferMode::Unshadowed) return context;
+
+    int samples = options.samples;
+    context.directions = rays::hemisphere(samples);
+    context.weightedBasis.resize(size_t(samples) * n);
+    context.cosines.resize(samples);
+    std::vector<double> basis(n);
+    for (int k = 0; k < samples; ++k) {
+        const rays::Hemisphere& d = context.directions;
+        double cosine = (k + 0.5) / samples;
+        sh::evaluate(options.order, double(d.x[k]), double(d.y[k]), double(d.z[k]), basis.data());
+        for (int j = 0; j < n; ++j) context.weightedBasis[size_t(k) * n + j] = float(cosine * basis[j]);
+        context.cosines[k] = float(cosine);
+    }
+    return context;
+}
+
+// Per-unit-albedo direct transfer of one vertex in world coordinates, t_j = (1/pi) integral V cos Y_j:
+// the exact unshadowed part A_l/pi Y_j(n) minus (2/N) times the occluded samples' sum rotated out of the local
+// frame. `occluded` is that sum in the local frame; `anyOccluded` false skips the rotation (the sum is zero).
+// Writes albedo * t to `row` ([order^2][3]) and, when `unitRow` is not null, t itself ([order^2]).
+void directRow(const Context& context, const rays::Fan& fan, const std::vector<double>& occluded, bool anyOccluded,
+               size_t vertex, std::vector<double>& scratch, float* row, float* unitRow) {
+    int n = context.coefficients, order = context.options.order;
+    scratch.resize(2 * size_t(n));
+    double* normalBasis = scratch.data();
+    double* rotated = scratch.data() + n;
+    sh::evaluate(order, fan.normal[0], fan.normal[1], fan.normal[2], normalBasis);
+    std::fill(rotated, rotated + n, 0.0);
+    if (anyOccluded) {
+        // Columns tangent, bitangent, normal: maps local directions to world ones.
+        const double frame[9] = {fan.tangent[0], fan.bitangent[0], fan.normal[0],
+                                 fan.tangent[1], fan.bitangent[1], fan.normal[1],
+                                 fan.tangent[2], fan.bitangent[2], fan.normal[2]};
+        sh::rotate(sh::rotation(order, frame), occluded.data(), rotated, 1);
+    }
+    double weight = 2.0 / context.options.samples;
+    std::array<float, 3> albedo = context.albedo(vertex);
+    for (int j = 0; j < n; ++j) {
+        double transfer = context.lambert[j] * normalBasis[j] - weight * rotated[j];
+        for (int c = 0; c < 3; ++c) row[3 * j + c] = float(albedo[c] * transfer);
+        if (unitRow) unitRow[j] = float(transfer);
+    }
+}
+
+struct DirectCounts {
+    std::atomic<uint64_t> rays{0}, hits{0}, backFaceHits{0};
+};
+
+uint32_t quantiseBarycentric(float w) { return uint32_t(std::lround(std::clamp(w, 0.0f, 1.0f) * 65535.0f)); }
+
+// Casts one vertex's rays: occlusion rays, or nearest-hit rays when `hits` is not null, whose front-face hits are
+// appended to `hits` and back-face hits counted in `backFaceHits`. Adds the weighted local basis of every
+// occluded sample to `occluded`; returns whether there was any.
+bool traceVertex(const Context& context, const rays::Scene& scene, const rays::Fan& fan,
+                 RTCIntersectContext& intersectContext, std::vector<double>& occluded, HitBlock* hits,
+                 uint64_t& backFaceHits) {
+    int n = context.coefficients;
+    bool anyOccluded = false;
+    for (int k = 0; k < context.options.samples; ++k) {
+        RTCRayHit rayHit;
+        rays::setRay(fan, context.directions, k, context.offset, rayHit.ray);
+        bool blocked;
+        if (!hits) {
+            rtcOccluded1(scene.scene, &intersectContext, &rayHit.ray);
+            blocked = rayHit.ray.tfar < 0.0f;
+        } else {
+            rayHit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(scene.scene, &intersectContext, &rayHit);
+            blocked = rayHit.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            // Embree's triangle Ng is (v1 - v0) x (v2 - v0), on the counter-clockwise front side.
+            const RTCHit& hit = rayHit.hit;
+            float facing = hit.Ng_x * rayHit.ray.dir_x + hit.Ng_y * rayHit.ray.dir_y + hit.Ng_z * rayHit.ray.dir_z;
+            if (blocked && facing > 0.0f) {
+                ++backFaceHits;
+            } else if (blocked) {
+                hits->triangle.push_back(hit.primID);
+                hits->barycentric.push_back(quantiseBarycentric(hit.u) | quantiseBarycentric(hit.v) << 16);
+                hits->sample.push_back(uint16_t(k));
+            }
+        }
+        if (blocked) {
+            anyOccluded = true;
+            const float* weighted = &context.weightedBasis[size_t(k) * n];
+            for (int j = 0; j < n; ++j) occluded[j] += weighted[j];
+        }
+    }
+    return anyOccluded;
+}
+
+// Shadowed and interreflected direct pass over the context's range into `out` (rows from context.begin) and,
+// when not null, unit-albedo single-channel rows into `unitOut`. Interreflected records front-face hits into
+// `hitBlocks` (one per block of the whole range).
+void directPass(const Context& context, const rays::Scene& scene, float* out, float* unitOut,
+                std::vector<HitBlock>* hitBlocks, DirectCounts& counts) {
+    int n = context.coefficients;
+    size_t blockCount = (context.end - context.begin + rays::kBlockVertices - 1) / rays::kBlockVertices;
+    std::optional<Progress> progress;
+    if (context.options.progress)
+        progress.emplace(hitBlocks ? "transfer direct pass (hits recorded)" : "transfer direct pass",
+                         context.end - context.begin);
+
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blockCount, 1), [&](const tbb::blocked_range<size_t>& blocks) {
+        std::vector<double> occluded(n), scratch;
+        RTCIntersectContext intersectContext;
+        rtcInitIntersectContext(&intersectContext);
+        for (size_t block = blocks.begin(); block != blocks.end(); ++block) {
+            size_t first = context.begin + block * rays::kBlockVertices;
+            size_t last = std::min(first + rays::kBlockVertices, context.end);
+            HitBlock* hits = hitBlocks ? &(*hitBlocks)[block] : nullptr;
+            uint64_t backFaceHits = 0;
+            for (size_t v = first; v < last; ++v) {
+                rays::Fan fan = rays::fan(context.mesh, v, context.options.seed, context.offset);
+                std::fill(occluded.begin(), occluded.end(), 0.0);
+                bool anyOccluded = traceVertex(context, scene, fan, intersectContext, occluded, hits, backFaceHits);
+                if (hits) hits->end.push_back(uint32_t(hits->triangle.size()));
+                size_t row = v - context.begin;
+                directRow(context, fan, occluded, anyOccluded, v, scratch, out + row * context.stride,
+                          unitOut ? unitOut + row * n : nullptr);
+            }
+            if (hits) {
+                hits->triangle.shrink_to_fit();
+                hits->barycentric.shrink_to_fit();
+                hits->sample.shrink_to_fit();
+                counts.hits += hits->triangle.size();
+            }
+            counts.rays += uint64_t(last - first) * context.options.samples;
+            counts.backFaceHits += backFaceHits;
+            if (progress) progress->add(last - first);
+        }
+    });
+    if (progress) progress->finish();
+}
+
+// One Jacobi bounce, number `number` (1-based). Every vertex gathers `previous` at its recorded hits, each hit
+// weighted by its cosine and interpolated with its barycentrics, and scales the sum by 2/N; the result goes to
+// `next` (when not null) and is added to `total` ([order^2][3] rows).
+// With `channels` 3 the rows are RGB and the scale includes the vertex's albedo. With `channels` 1 (one albedo
+// for the whole mesh) the rows are unit-albedo G_b, a third of the bytes to gather, and `total` receives
+// albedo^(number+1) * G_b per channel, since bounce b of uniform albedo rho is rho^(b+1) G_b.
+// `previous` is only read, so each vertex's gather order (its hits in sample order) fixes every bit.
+void bounce(const Context& context, const std::vector<HitBlock>& hitBlocks, int channels, const float* previous,
+            float* next, float* total, int number) {
+    const TriMesh& mesh = context.mesh;
+    const size_t rowFloats = size_t(context.coefficients) * channels, rowBytes = rowFloats * sizeof(float);
+    const float weight = 2.0f / float(context.options.samples);
+    float power[3] = {1.0f, 1.0f, 1.0f};
+    for (int c = 0; c < 3; ++c)
+        for (int b = 0; b <= number; ++b) power[c] *= context.options.albedo[c];
+    std::optional<Progress> progress;
+    if (context.options.progress) progress.emplace("transfer bounce " + std::to_string(number), mesh.vertexCount());
+
+    // Rows of hit triangles are scattered over the mesh: fetch them a few hits ahead (and their corner indices
+    // further ahead) so the memory latency overlaps the arithmetic.
+    constexpr size_t kRowsAhead = 8, kCornersAhead = 16;
+    auto prefetchRows = [&](uint32_t triangle) {
+        const uint32_t* corner = &mesh.indices[3 * size_t(triangle)];
+        for (int k = 0; k < 3; ++k) {
+            const char* row = reinterpret_cast<const char*>(previous + corner[k] * rowFloats);
+            for (size_t byte = 0; byte < rowBytes; byte += 64) __builtin_prefetch(row + byte);
+            __builtin_prefetch(row + rowBytes - 1);
+        }
+    };
+
+    tbb::blocked_range<size_t> allBlocks(0, hitBlocks.size(), 1);
+    tbb::parallel_for(allBlocks, [&](const tbb::blocked_range<size_t>& blocks) {
+        std::vector<float> gathered(rowFloats), light(rowFloats);
+        for (size_t block = blocks.begin(); block != blocks.end(); ++block) {
+            const HitBlock& hits = hitBlocks[block];
+            const size_t hitCount = hits.triangle.size(), first = block * rays::kBlockVertices;
+            for (size_t h = 0; h < std::min(kRowsAhead, hitCount); ++h) prefetchRows(hits.triangle[h]);
+            size_t h = 0;
+            for (size_t i = 0; i < hits.end.size(); ++i) {
+                size_t v = first + i;
+                if (h == hits.end[i]) {
+                    // Nothing to gather: leaves `total` untouched to the bit (adding +0 would flip -0).
+                    if (next) std::fill(next + v * rowFloats, next + (v + 1) * rowFloats, 0.0f);
+                    continue;
+                }
+                float* __restrict sum = gathered.data();
+                std::fill(sum, sum + rowFloats, 0.0f);
+                for (; h < hits.end[i]; ++h) {
+                    if (h + kCornersAhead < hitCount)
+                        __builtin_prefetch(&mesh.indices[3 * size_t(hits.triangle[h + kCornersAhead])]);
+                    if (h + kRowsAhead < hitCount) prefetchRows(hits.triangle[h + kRowsAhead]);
+                    const uint32_t* corner = &mesh.indices[3 * size_t(hits.triangle[h])];
+                    const float* __restrict a = previous + corner[0] * rowFloats;
+                    const float* __restrict b = previous + corner[1] * rowFloats;
+                    const float* __restrict c = previous + corner[2] * rowFloats;
+                    float cosine = context.cosines[hits.sample[h]];
+                    float wb = cosine * float(hits.barycentric[h] & 0xFFFFu) * (1.0f / 65535.0f);
+                    float wc = cosine * float(hits.barycentric[h] >> 16) * (1.0f / 65535.0f);
+                    float wa = cosine - wb - wc;
+                    for (size_t x = 0; x < rowFloats; ++x) sum[x] += wa * a[x] + wb * b[x] + wc * c[x];
+                }
+                float* totalRow = total + v * context.stride;
+                if (channels == 3) {
+                    std::array<float, 3> albedo = context.albedo(v);
+                    for (size_t x = 0; x < rowFloats; ++x) light[x] = sum[x] * (albedo[x % 3] * weight);
+                    for (size_t x = 0; x < rowFloats; ++x) totalRow[x] += light[x];
+                } else {
+                    for (size_t x = 0; x < rowFloats; ++x) light[x] = sum[x] * weight;
+                    for (size_t j = 0; j < rowFloats; ++j)
+                        for (int c = 0; c < 3; ++c) totalRow[3 * j + c] += power[c] * light[j];
+                }
+                if (next) std::copy(light.begin(), light.end(), next + v * rowFloats);
+            }
+            if (progress) progress->add(hits.end.size());
+        }
+    });
+    if (progress) progress->finish();
+}
+
+// The closed form (albedo/pi) A_l Y_lm(n) for every vertex of the range: directRow with nothing occluded.
+void unshadowedPass(const Context& context, float* out) {
+    tbb::blocked_range<size_t> vertices(context.begin, context.end, rays::kBlockVertices);
+    tbb::parallel_for(vertices, [&](const tbb::blocked_range<size_t>& range) {
+        std::vector<double> none(context.coefficients, 0.0), scratch;
+        for (size_t v = range.begin(); v != range.end(); ++v) {
+            rays::Fan fan = rays::fan(context.mesh, v, context.options.seed, context.offset);
+            directRow(context, fan, none, false, v, scratch, out + (v - context.begin) * context.stride, nullptr);
+        }
+    });
+}
+
+} // namespace
+
+Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
+    rays::validateMesh(mesh);
+    size_t begin, end;
+    rays::clipRange(mesh, options, begin, end);
+    checkOptions(mesh, options, begin, end);
+    Context context = makeContext(mesh, options, begin, end);
+
+    Transfer result;
+    result.order = options.order;
+    result.vertexBegin = begin;
+    result.vertexEnd = end;
+    TransferStats& stats = result.stats;
+    stats.rayOffset = context.offset;
+    std::vector<float>& total = result.coefficients;
+    total.resize((end - begin) * context.stride);
+    stats.transferBytes = total.size() * sizeof(float);
+
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+        if (options.mode == TransferMode::Unshadowed) {
+            double start = nowSeconds();
+            unshadowedPass(context, total.data());
+            stats.directSeconds = nowSeconds() - start;
+            return;
+        }
+        bool interreflected = options.mode == TransferMode::Interreflected;
+        // One albedo for the whole mesh lets bounces run on one channel (see bounce()).
+        int channels = mesh.albedo.empty() || options.albedoOverride ? 1 : 3;
+        bool unitRows = interreflected && options.bounces > 0 && channels == 1;
+        std::vector<float> previous(unitRows ? (end - begin) * context.coefficients : 0);
+        std::vector<HitBlock> hitBlocks;
+        if (interreflected)
+            hitBlocks.resize((end - begin + rays::kBlockVertices - 1) / rays::kBlockVertices);
+        DirectCounts counts;
+        double start = nowSeconds();
+        {
+            rays::Scene scene(mesh); // released before the bounces, which need only the hits
+            stats.buildSeconds = nowSeconds() - start;
+            start = nowSeconds();
+            std::clock_t cpuStart = std::clock();
+            directPass(context, scene, total.data(), unitRows ? previous.data() : nullptr,
+                       interreflected ? &hitBlocks : nullptr, counts);
+            stats.directCpuSeconds = double(std::clock() - cpuStart) / CLOCKS_PER_SEC;
+            stats.directSeconds = nowSeconds() - start;
+        }
+        stats.rays = counts.rays;
+        stats.hits = counts.hits;
+        stats.backFaceHits = counts.backFaceHits;
+        for (const HitBlock& block : hitBlocks)
+            stats.hitRecordBytes += block.end.size() * 4 + block.triangle.size() * 10;
+        if (options.bounces == 0) return;
+
+        // Jacobi iteration: bounce b gathers bounce b-1 everywhere before anything overwrites it.
+        if (channels == 3) previous = total;
+        std::vector<float> next(options.bounces > 1 ? previous.size() : 0);
+        stats.transferBytes += (previous.size() + next.size()) * sizeof(float);
+        for (int b = 1; b <= options.bounces; ++b) {
+            start = nowSeconds();
+            bool last = b == options.bounces;
+            bounce(context, hitBlocks, channels, previous.data(), last ? nullptr : next.data(), total.data(), b);
+            if (!last) previous.swap(next);
+            stats.bounceSeconds.push_back(nowSeconds() - start);
+        }
+    });
+    stats.peakMemoryBytes = peakMemoryBytes();
+    return result;
+}
+
+} // namespace prt

@@ -1,0 +1,44 @@
+// Writes a small bundle, loads its transfer with the installed runtime and relights it: exit 0 when the
+// radiance is the hand-computed one.
+#include <runtime.h>
+
+#include <cmath>
+#include <cstdio>
+
+int main(int argc, char** argv) {
+    if (argc != 2) {
+        std::fprintf(stderr, "usage: consumer BUNDLE.glb\n");
+        return 2;
+    }
+    // Three vertices at order 1: transfer[v][0][c] = v + 1, lighting (1, 2, 3), so radiance[v][c] = (v+1)(c+1).
+    prt::Bundle bundle;
+    bundle.mesh.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    bundle.mesh.indices = {0, 1, 2};
+    prt::Layer transfer;
+    transfer.name = "transfer";
+    transfer.domain = "vertex";
+    transfer.semantic = "sh_transfer_rgb";
+    transfer.shape = {3, 1, 3};
+    transfer.data = {1, 1, 1, 2, 2, 2, 3, 3, 3};
+    transfer.params = {{"order", 1}};
+    bundle.layers.push_back(transfer);
+    try {
+        prt::writeBundle(argv[1], bundle);
+        prt::RelightModel model = prt::loadRelightModel(argv[1]);
+        const float lighting[3] = {1, 2, 3};
+        float radiance[9];
+        prt::relight(model, lighting, 0, model.vertexCount, radiance);
+        for (int v = 0; v < 3; ++v)
+            for (int c = 0; c < 3; ++c)
+                if (std::fabs(radiance[v * 3 + c] - float((v + 1) * (c + 1))) > 1e-6f) {
+                    std::fprintf(stderr, "radiance[%d][%d] = %g, expected %d\n", v, c, radiance[v * 3 + c],
+                                 (v + 1) * (c + 1));
+                    return 1;
+                }
+    } catch (const prt::Error& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return 1;
+    }
+    std::printf("consumer: relit %d vertices\n", 3);
+    return 0;
+}

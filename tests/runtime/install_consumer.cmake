@@ -1,0 +1,22 @@
+# Run by ctest (see CMakeLists.txt): installs the runtime component of BUILD_DIR under WORK_DIR/prefix, then
+# configures, builds and runs the consumer project in SOURCE_DIR against that prefix alone.
+file(REMOVE_RECURSE ${WORK_DIR})
+
+function(run step)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE result OUTPUT_VARIABLE output ERROR_VARIABLE output)
+  if(NOT result EQUAL 0)
+    message(FATAL_ERROR "${step} failed (${result}):\n${output}")
+  endif()
+  message(STATUS "${step}: ok")
+endfunction()
+
+run(install ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix --component prt_runtime)
+set(launcher)
+if(COMPILER_LAUNCHER)
+  set(launcher -DCMAKE_CXX_COMPILER_LAUNCHER=${COMPILER_LAUNCHER})
+endif()
+run(configure ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -G ${GENERATOR} -DCMAKE_BUILD_TYPE=Release
+    -DCMAKE_CXX_COMPILER=${CXX_COMPILER} ${launcher} -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix
+    -DEXPECTED_PRT_DIR=${WORK_DIR}/prefix/lib/cmake/prt)
+run(build ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run(relight ${WORK_DIR}/build/consumer ${WORK_DIR}/consumer.glb)
