@@ -1,0 +1,340 @@
+// One stage job: run `prt STAGE ...` (or merge shards) into a private folder of the store, then commit it.
+// The stage runs with that folder as its current directory and sees its inputs as symlinks there, so the
+// command line, and anything the stage records from it, is the same whichever store or run it belongs to.
+#include "pipeline_internal.h"
+
+#include "core.h"
+
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <fcntl.h>
+#include <filesystem>
+#include <memory>
+#include <sys/prctl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace prt {
+
+double epochSeconds() {
+    using namespace std::chrono;
+    return duration<double>(system_clock::now().time_since_epoch()).count();
+}
+
+void syncFolder(const std::string& path) {
+    int fd = open(path.c_str(), O_RDONLY | O_DIRECTORY);
+    if (fd < 0) return;
+    fsync(fd);
+    close(fd);
+}
+
+std::string storeDir(const RunOptions& options) { return options.cacheDir + "/store"; }
+
+std::string absolutePath(const std::string& path) { return fs::absolute(path).lexically_normal().string(); }
+
+std::map<std::string, std::string> inputHashes(const StageInputs& inputs) {
+    std::map<std::string, std::string> hashes;
+    for (const auto& [port, file] : inputs) hashes[port] = file.hash;
+    return hashes;
+}
+
+std::string jobRecordPath(const std::string& runDir, const std::string& stageId, int shardIndex, int shardCount) {
+    std::string part = shardCount <= 1 ? "all"
+                       : shardIndex < 0 ? "merge"
+                                        : std::to_string(shardIndex) + "of" + std::to_string(shardCount);
+    return runDir + "/jobs/" + stageId + "." + part + ".json";
+}
+
+std::string readableLogTail(const std::string& logPath, size_t lines) {
+    std::string text;
+    try {
+        text = readFileBytes(logPath);
+    } catch (const Error&) {
+        return "(no log)";
+    }
+    std::vector<std::string> kept;
+    size_t start = 0;
+    while (start < text.size()) {
+        size_t end = text.find('\n', start);
+        if (end == std::string::npos) end = text.size();
+        std::string line = text.substr(start, end - start);
+        start = end + 1;
+        nlohmann::json record = nlohmann::json::parse(line, nullptr, false);
+        if (record.is_object() && record.contains("event")) continue;
+        if (record.is_object() && record.contains("msg"))
+            line = record.value("level", "") + ": " + record["msg"].get<std::string>();
+        if (!line.empty()) kept.push_back(line);
+    }
+    std::string tail;
+    for (size_t i = kept.size() > lines ? kept.size() - lines : 0; i < kept.size(); ++i) tail += "\n  | " + kept[i];
+    return tail.empty() ? "(empty log)" : tail;
+}
+
+namespace {
+
+struct ChildResult {
+    int status = 0;
+    uint64_t peakMemoryBytes = 0;
+    uint64_t rays = 0;
+};
+
+// Runs `args` in `dir` with stdout and stderr appended to `logPath`. The stage logs JSON lines: its progress is
+// shown here under `label` and its cost record read for the ray count. The child dies with this process.
+ChildResult runLogged(const std::vector<std::string>& args, const std::string& dir, const std::string& logPath,
+                      const std::string& label) {
+    int log = open(logPath.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    int pipeFds[2];
+    if (log < 0 || pipe2(pipeFds, O_CLOEXEC) != 0)
+        throw Error(logPath, "", std::string("cannot create the stage log: ") + std::strerror(errno), kExitOutput);
+    std::vector<char*> argv;
+    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+    argv.push_back(nullptr);
+    std::fflush(nullptr);
+    pid_t parent = getpid();
+    pid_t pid = fork();
+    if (pid == 0) {
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != parent) _exit(127);
+        if (chdir(dir.c_str()) != 0 || dup2(log, 1) < 0 || dup2(pipeFds[1], 2) < 0) _exit(127);
+        execv(argv[0], argv.data());
+        dprintf(2, "{\"level\":\"error\",\"msg\":\"cannot run %s: %s\"}\n", argv[0], std::strerror(errno));
+        _exit(127);
+    }
+    close(pipeFds[1]);
+    if (pid < 0) {
+        close(pipeFds[0]);
+        close(log);
+        throw Error("", "", std::string("cannot start a stage: ") + std::strerror(errno), kExitFailure);
+    }
+
+    ChildResult result;
+    std::map<std::string, std::pair<std::unique_ptr<Progress>, uint64_t>> progress;
+    std::string pending;
+    char buffer[4096];
+    ssize_t got;
+    while ((got = read(pipeFds[0], buffer, sizeof(buffer))) != 0) {
+        if (got < 0) {
+            if (errno == EINTR) continue;
+            break;
+        }
+        if (write(log, buffer, size_t(got)) != got) logWarn("could not write all of " + logPath);
+        pending.append(buffer, size_t(got));
+        size_t newline;
+        while ((newline = pending.find('\n')) != std::string::npos) {
+            nlohmann::json line = nlohmann::json::parse(pending.substr(0, newline), nullptr, false);
+            pending.erase(0, newline + 1);
+            if (!line.is_object()) continue;
+            std::string event = line.value("event", "");
+            if (event == "cost") result.rays += line.value("rays", uint64_t(0));
+            if (event != "progress") continue;
+            auto& [bar, done] = progress[line.value("label", "")];
+            if (!bar) {
+                std::string what = line.value("label", "");
+                bar = std::make_unique<Progress>(what.empty() || label.rfind(what, 0) == 0 ? label : label + ": " + what,
+                                                 line.value("total", uint64_t(0)));
+            }
+            uint64_t now = line.value("done", uint64_t(0));
+            if (now > done) bar->add(now - done);
+            done = std::max(done, now);
+        }
+    }
+    close(pipeFds[0]);
+    close(log);
+    struct rusage usage {};
+    while (wait4(pid, &result.status, 0, &usage) < 0 && errno == EINTR) {
+    }
+    result.peakMemoryBytes = uint64_t(usage.ru_maxrss) * 1024;
+    return result;
+}
+
+std::string exitText(int status) {
+    if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
+    if (WIFSIGNALED(status))
+        return "was killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
+    return "ended with wait status " + std::to_string(status);
+}
+
+std::string paramText(const nlohmann::json& value) {
+    char text[32];
+    if (value.is_number_integer()) return std::to_string(value.get<int64_t>());
+    if (value.is_number()) {
+        std::snprintf(text, sizeof(text), "%.17g", value.get<double>());
+        return text;
+    }
+    if (value.is_array()) {
+        std::string list;
+        for (const nlohmann::json& item : value) list += (list.empty() ? "" : ",") + paramText(item);
+        return list;
+    }
+    return value.get<std::string>();
+}
+
+// The command line of a stage run in its entry folder; inputs are symlinked there as "input-<port>.<ext>".
+std::vector<std::string> stageCommand(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options,
+                                      const std::string& dir, int shardIndex, int shardCount) {
+    const StageSpec& spec = *stage.spec;
+    std::vector<std::string> args = {options.prt, "--log-json", spec.name};
+    for (const ParamSpec& param : spec.params)
+        if (param.positional && stage.params.contains(param.name)) args.push_back(paramText(stage.params[param.name]));
+    std::vector<std::string> flagged;
+    for (const PortSpec& port : spec.inputs) {
+        auto input = inputs.find(port.name);
+        if (input == inputs.end()) continue;
+        std::string link = "input-" + port.name + "." + fileExtension(input->second.path);
+        fs::create_symlink(absolutePath(input->second.path), dir + "/" + link);
+        if (port.flag.empty()) args.push_back(link);
+        else flagged.insert(flagged.end(), {port.flag, link});
+    }
+    args.insert(args.end(), flagged.begin(), flagged.end());
+    for (const PortSpec& port : spec.outputs) args.insert(args.end(), {port.flag, port.name + "." + port.extension});
+    for (const ParamSpec& param : spec.params) {
+        if (param.positional || !stage.params.contains(param.name)) continue;
+        const nlohmann::json& value = stage.params[param.name];
+        if (value.is_boolean()) {
+            if (value.get<bool>()) args.push_back("--" + param.name);
+        } else {
+            args.insert(args.end(), {"--" + param.name, paramText(value)});
+        }
+    }
+    if (spec.takesThreads && options.threads > 0) args.insert(args.end(), {"--threads", std::to_string(options.threads)});
+    if (shardCount > 1) args.insert(args.end(), {"--shard", std::to_string(shardIndex) + "/" + std::to_string(shardCount)});
+    return args;
+}
+
+nlohmann::json describeOutputs(const StageSpec& spec, const std::string& dir, const std::string& label) {
+    nlohmann::json outputs = nlohmann::json::object();
+    for (const PortSpec& port : spec.outputs) {
+        std::string file = port.name + "." + port.extension;
+        std::error_code error;
+        uintmax_t bytes = fs::file_size(dir + "/" + file, error);
+        if (error) throw Error(dir + "/" + file, label, "the stage succeeded but wrote no '" + port.name + "' output", kExitFailure);
+        outputs[port.name] = {{"file", file}, {"hash", hashFile(dir + "/" + file)}, {"bytes", bytes}};
+    }
+    return outputs;
+}
+
+// Joins the stored shards of `stage` into `dir`; returns the merge's cost.
+nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, const std::map<std::string, std::string>& hashes,
+                         const std::string& store, int shardCount, const std::string& label) {
+    double start = nowSeconds();
+    const PortSpec& port = stage.spec->outputs.front(); // shardable stages write one bundle
+    std::vector<Bundle> shards;
+    std::vector<std::string> files;
+    for (int i = 0; i < shardCount; ++i) {
+        std::string shardKey = keyOf(keyIngredients(stage, hashes, i, shardCount));
+        std::optional<StoreEntry> entry = findStoreEntry(store, shardKey);
+        if (!entry)
+            throw Error(store, label, "shard " + std::to_string(i + 1) + "/" + std::to_string(shardCount) + " (" +
+                                          shardKey + ") is not in the store", kExitFailure);
+        files.push_back(entry->dir + "/" + entry->manifest["outputs"][port.name]["file"].get<std::string>());
+        shards.push_back(readBundle(files.back()));
+    }
+    writeBundle(dir + "/" + port.name + "." + port.extension, mergeShards(shards, files));
+    writeBytesAtomic(dir + "/stage.log", "merged " + std::to_string(shardCount) + " shards\n");
+    return {{"seconds", nowSeconds() - start}, {"rays", 0}, {"peak_memory_bytes", peakMemoryBytes()}};
+}
+
+// Runs `prt STAGE` with `dir` as its current directory; returns its cost and command line.
+nlohmann::json runStageIn(const std::string& dir, const PipelineStage& stage, const StageInputs& inputs,
+                          const RunOptions& options, int shardIndex, int shardCount, const std::string& label) {
+    double start = nowSeconds();
+    std::vector<std::string> args = stageCommand(stage, inputs, options, dir, shardIndex, shardCount);
+    logInfo(label + ": running " + stage.spec->name);
+    ChildResult child = runLogged(args, dir, dir + "/stage.log", label);
+    if (!WIFEXITED(child.status) || WEXITSTATUS(child.status) != 0)
+        throw Error("", label, "`prt " + stage.spec->name + "` " + exitText(child.status) + "; its log ends:" +
+                                   readableLogTail(dir + "/stage.log", 20),
+                    WIFEXITED(child.status) ? WEXITSTATUS(child.status) : kExitInterrupted); // the stage's own code
+    for (const fs::directory_entry& item : fs::directory_iterator(dir))
+        if (item.is_symlink()) fs::remove(item.path()); // the entry holds outputs, not links to its inputs
+    args[0] = "prt";
+    return {{"seconds", nowSeconds() - start}, {"rays", child.rays}, {"peak_memory_bytes", child.peakMemoryBytes},
+            {"command", args}};
+}
+
+} // namespace
+
+nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options, int shardIndex,
+                      int shardCount, bool force) {
+    bool sharded = shardCount > 1;
+    bool merge = sharded && shardIndex < 0;
+    std::string store = storeDir(options);
+    std::map<std::string, std::string> hashes = inputHashes(inputs);
+    std::string stageKey = keyOf(keyIngredients(stage, hashes));
+    nlohmann::json ingredients = sharded && !merge ? keyIngredients(stage, hashes, shardIndex, shardCount)
+                                                   : keyIngredients(stage, hashes);
+    std::string key = keyOf(ingredients);
+    std::string label = stage.id + (merge     ? " merge"
+                                    : sharded ? " shard " + std::to_string(shardIndex + 1) + "/" + std::to_string(shardCount)
+                                              : "");
+
+    nlohmann::json record = {{"id", stage.id}, {"stage", stage.spec->name}, {"key", key}, {"host", hostName()},
+                             {"start", epochSeconds()}, {"rays", 0}, {"peak_memory_bytes", 0}};
+    if (sharded) record["shard"] = merge ? nlohmann::json("merge") : nlohmann::json{shardIndex, shardCount};
+    std::optional<StoreEntry> existing = findStoreEntry(store, key);
+    // A shard whose merged stage is already stored has nothing to add.
+    if (!existing && sharded && !merge && !force) existing = findStoreEntry(store, stageKey);
+    if (existing && !force) {
+        record.update({{"status", "cached"}, {"end", epochSeconds()}, {"seconds", 0.0},
+                       {"outputs", existing->manifest["outputs"]}});
+        return record;
+    }
+
+    fs::create_directories(store);
+    std::string dir = privateEntryPath(store, ".tmp-", key);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    try {
+        nlohmann::json cost = merge ? mergeInto(dir, stage, hashes, store, shardCount, label)
+                                    : runStageIn(dir, stage, inputs, options, shardIndex, shardCount, label);
+        nlohmann::json outputs = describeOutputs(*stage.spec, dir, label);
+        if (existing && existing->manifest["outputs"] != outputs)
+            logWarn(label + ": output differs from the stored result of the same key: the stage is not deterministic");
+        nlohmann::json manifest = {{"key", key}, {"ingredients", ingredients}, {"outputs", outputs}, {"cost", cost}};
+        writeBytesAtomic(dir + "/manifest.json", manifest.dump(2) + "\n");
+        commitStoreEntry(store, key, dir, force);
+        record.update({{"status", "ran"}, {"end", epochSeconds()}, {"seconds", cost["seconds"]}, {"rays", cost["rays"]},
+                       {"peak_memory_bytes", cost["peak_memory_bytes"]}, {"outputs", outputs}});
+        return record;
+    } catch (Error& e) {
+        // Keep the log where a person finds it; the half-built entry goes.
+        std::string kept = options.cacheDir + "/failed/" + stage.id + "-" + keyHex(key).substr(0, 12) + ".log";
+        std::error_code error;
+        fs::create_directories(options.cacheDir + "/failed", error);
+        fs::rename(dir + "/stage.log", kept, error);
+        fs::remove_all(dir, error);
+        throw Error(e.file().empty() ? kept : e.file(), e.place(), e.problem(), e.exitCode());
+    } catch (...) {
+        std::error_code error;
+        fs::remove_all(dir, error);
+        throw;
+    }
+}
+
+nlohmann::json runStageJob(const Pipeline& pipeline, const PipelineStage& stage, const RunOptions& options,
+                           int shardIndex, int shardCount, bool force) {
+    std::map<std::string, InputFile> pipelineInputs = hashPipelineInputs(pipeline);
+    std::map<std::string, StoreEntry> entries;
+    for (const PipelineStage& upstream : pipeline.stages) {
+        if (upstream.id == stage.id) break;
+        std::optional<StageInputs> inputs = resolveInputs(upstream, pipelineInputs, entries);
+        if (!inputs) continue;
+        if (std::optional<StoreEntry> entry = findStoreEntry(storeDir(options), keyOf(keyIngredients(upstream, inputHashes(*inputs)))))
+            entries[upstream.id] = *entry;
+    }
+    std::optional<StageInputs> inputs = resolveInputs(stage, pipelineInputs, entries);
+    if (!inputs) {
+        std::string missing;
+        for (const StageInput& input : stage.inputs)
+            if (!input.sourcePort.empty() && !entries.count(input.source)) missing += (missing.empty() ? "" : ", ") + input.source;
+        throw Error(pipeline.file, "stage " + stage.id, "its upstream stages " + missing + " are not in the store", kExitFailure);
+    }
+    return runJob(stage, *inputs, options, shardIndex, shardCount, force);
+}
+
+} // namespace prt

@@ -1,0 +1,193 @@
+// Declarative pipelines: a TOML file names inputs, stages (prt subcommands with parameters) and outputs; `prt run`
+// turns it into a DAG, runs each stage whose cache key changed, and keeps every result in a content-addressed
+// store. docs/pipelines.md is the reference for the file format, the cache and the executors.
+//
+// Cache key of a stage = XXH3-128 of a canonical JSON of: the stage's name, its code version (kStage table in
+// stages.cpp), its parameters as given, and the content hashes of the files it reads. A shard's key adds
+// [index, count]. Store layout: STORE/<key hex>/ holds the stage's outputs under fixed names, its log and
+// manifest.json. An entry is built in STORE/.tmp-<key hex>-<host>-<pid>/ and renamed into place as a whole, so
+// an entry exists completely or not at all, whenever the process is killed.
+#pragma once
+
+#include "bundle.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace prt {
+
+// ---- the stage catalogue --------------------------------------------------------------------------------------
+
+// What a file between stages holds. An output feeds an input of the same kind; a bundle also feeds a mesh input.
+enum class FileKind { Mesh, Bundle, Env, Sh, Radiance, Metrics, Report };
+const char* fileKindName(FileKind kind);
+
+struct PortSpec {
+    std::string name;      // key under a stage's `inputs` table, or the part after "." in "stage.port"
+    FileKind kind;
+    std::string flag = {}; // "" for a positional argument, else "--env", "-o", ...
+    std::string extension = {}; // outputs: the file the stage writes in its store entry is "<name>.<extension>"
+    bool optional = false; // inputs only
+};
+
+enum class ParamType { Integer, Number, Boolean, String, Color };
+
+struct ParamSpec {
+    std::string name; // the TOML key, and the stage's flag "--<name>"
+    ParamType type;
+    double min = 0.0, max = 0.0;      // Integer, Number and each Color channel: inclusive range
+    std::vector<std::string> choices = {}; // String: allowed values
+    bool positional = false;          // passed as a positional argument rather than a flag
+    bool required = false;
+};
+
+struct StageSpec {
+    std::string name;      // the prt subcommand
+    int version;           // bumped whenever the stage's output bytes change for the same inputs and parameters
+    std::string summary;
+    std::vector<PortSpec> inputs = {}, outputs = {};
+    std::vector<ParamSpec> params = {};
+    std::vector<std::string> exactlyOneInput = {}; // input ports of which exactly one must be wired (relight env | sh)
+    // Why these parameters do not go together, or "" when they do.
+    std::string (*paramsRefusal)(const nlohmann::json& params) = nullptr;
+    bool takesThreads = false;                // takes --threads; outputs do not depend on it, so keys ignore it
+    bool shardable = false;                   // takes --shard I/N and writes "vertex_range" layers for mergeShards
+    // Why these parameters cannot be sharded, or "" when they can (shardable stages only).
+    std::string (*shardRefusal)(const nlohmann::json& params) = nullptr;
+};
+
+// Every stage a pipeline may run, in the order they usually chain.
+const std::vector<StageSpec>& stageCatalogue();
+const StageSpec* findStageSpec(const std::string& name); // nullptr when unknown
+
+// ---- pipeline files -------------------------------------------------------------------------------------------
+
+struct PipelineInput {
+    std::string name; // [inputs] key
+    FileKind kind;    // mesh or env (or bundle, radiance)
+    std::string path; // as written: relative paths resolve against the current directory
+    int line = 0;
+};
+
+struct StageInput {
+    std::string port;       // the consuming stage's input port
+    std::string source;     // a pipeline input name or a stage id
+    std::string sourcePort; // the producing stage's output port; empty when `source` is a pipeline input
+    int line = 0;
+};
+
+struct PipelineStage {
+    std::string id;           // [stages.<id>]
+    const StageSpec* spec = nullptr;
+    int version = 0;          // spec->version, copied so that a caller can model a code change
+    nlohmann::json params;    // given parameters only, canonical: integers int64, numbers double, colors [r,g,b]
+    std::vector<StageInput> inputs; // in the spec's port order, wired ports only
+    int shards = 1;
+    int line = 0;
+};
+
+struct PipelineOutput {
+    std::string name;  // [outputs] key
+    std::string stage; // producing stage id
+    std::string port;  // its output port
+    std::string path;  // where the run copies the product
+    int line = 0;
+};
+
+struct Pipeline {
+    std::string file;        // as given to loadPipeline / parsePipeline
+    std::string name;        // [pipeline] name, else the file's stem
+    std::string description;
+    std::vector<PipelineInput> inputs;
+    std::vector<PipelineStage> stages; // topologically sorted, ties in file order
+    std::vector<PipelineOutput> outputs;
+};
+
+// Parses and validates a pipeline. Throws prt::Error(file, "line N, KEY", problem, kExitInput) for TOML syntax,
+// unknown keys, wrong types, out-of-range values, unknown stages or ports, wiring of the wrong file kind,
+// missing required inputs and parameters, cycles, duplicate names or outputs, and shards a stage cannot take.
+// Does not touch the file system: loadPipeline also checks that input files exist.
+Pipeline parsePipeline(std::string_view text, const std::string& file);
+Pipeline loadPipeline(const std::string& file);
+
+// Index of a stage in pipeline.stages; throws prt::Error(kExitUsage) naming the known stages when absent.
+size_t findStage(const Pipeline& pipeline, const std::string& id);
+
+// ---- cache keys and the store ---------------------------------------------------------------------------------
+
+// The canonical JSON a stage key hashes. `inputHashes` maps each wired input port to its file's content hash;
+// shard is {index, count} for one shard, or {0, 0} for the whole stage (sharded or not: the merged product of
+// N shards is bit-identical to the unsharded one, so they share a key).
+nlohmann::json keyIngredients(const PipelineStage& stage, const std::map<std::string, std::string>& inputHashes,
+                              int shardIndex = 0, int shardCount = 0);
+std::string keyOf(const nlohmann::json& ingredients); // "xxh128:<32 hex>"
+
+// A complete store entry: manifest.json read back and each output's size checked against it.
+struct StoreEntry {
+    std::string dir;
+    nlohmann::json manifest; // {"key","ingredients","outputs":{port:{"file","hash","bytes"}},"cost":{...}}
+};
+std::optional<StoreEntry> findStoreEntry(const std::string& store, const std::string& key);
+
+// Removes temporary entries whose writer process on this host has died, and leftovers of replaced entries.
+void sweepStore(const std::string& store);
+
+// ---- shards ---------------------------------------------------------------------------------------------------
+
+// Joins the bundles of shards 0..N-1 (any order) into the bundle the unsharded stage writes, bit for bit once
+// written: "vertex_range" layers become "vertex" layers, rows concatenated, shard bookkeeping removed from their
+// params and the counters "rays" and "back_face_hits" summed. Needs the same mesh, producer, inputs, layer names
+// and other params in every shard, and row ranges that tile [0, vertex_count) exactly once; throws prt::Error
+// naming the offending shard file otherwise.
+Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::string>& files);
+
+// ---- running --------------------------------------------------------------------------------------------------
+
+enum class Executor { Local, Slurm };
+
+struct RunOptions {
+    std::string prt;           // the prt binary the stages run as (`prt STAGE ...`)
+    std::string cacheDir = ".cache"; // store in CACHE/store, run folders in CACHE/runs
+    Executor executor = Executor::Local;
+    bool plan = false;         // print what would run and why; run nothing
+    bool force = false;        // rerun every stage
+    std::string only;          // rerun this stage alone, its inputs from the store
+    std::string from;          // rerun this stage and everything downstream, the rest from the store
+    int shards = 0;            // > 0: shard every stage that can take it into this many
+    int threads = 0;           // per stage; 0 = all cores (Slurm: the job's CPUs)
+    std::string reportPath;    // also copy the run report here
+    // Slurm
+    std::string slurmPartition;
+    int slurmCpusPerTask = 1;
+    double slurmPollSeconds = 0.5;
+    std::vector<std::string> slurmArgs; // extra sbatch arguments, passed as given
+};
+
+// Runs a pipeline and returns its report (also written to CACHE/runs/<name>-<time>-<pid>/report.json):
+// {"pipeline","file","executor","ok","seconds","cache_hits","stages_run","peak_memory_bytes",
+//  "stages":[{"id","stage","version","key","status":"cached|ran|failed|not run","reason","start","end",
+//             "seconds","rays","peak_memory_bytes","outputs":{port:{"hash","bytes"}},"shards":[...]}],
+//  "outputs":{name:{"path","hash","kind","from"}}}
+// Times are seconds from the run's start. Declared outputs are copied atomically once every stage succeeded.
+// Throws prt::Error for a stage that fails (naming it and quoting its log), after writing the report.
+nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options);
+
+// One stage job, the unit both executors run: resolves the stage's inputs from the store (its upstream stages
+// must be complete), and unless `force` is set and if the entry is missing, runs the stage (or one shard of it,
+// or the merge of its shards when shardIndex == -1 and the stage is sharded) and commits the entry.
+// Returns the job's record for the report: {"id","shard","key","status":"cached|ran","start","end","seconds",
+// "rays","peak_memory_bytes","outputs"} with epoch-second times. Throws prt::Error quoting the stage's log.
+nlohmann::json runStageJob(const Pipeline& pipeline, const PipelineStage& stage, const RunOptions& options,
+                           int shardIndex, int shardCount, bool force);
+
+// Where a Slurm job leaves its record for the waiting `prt run`: RUN_DIR/jobs/<stage id>.<part>.json, part being
+// "all", "<index>of<count>" or "merge" (shardIndex -1 with shardCount > 1).
+std::string jobRecordPath(const std::string& runDir, const std::string& stageId, int shardIndex, int shardCount);
+
+} // namespace prt

@@ -1,0 +1,58 @@
+// Shared between the pipeline library's files; not part of its interface.
+#pragma once
+
+#include "pipeline.h"
+
+#include <map>
+#include <optional>
+#include <string>
+
+namespace prt {
+
+// A file a stage reads: where it is and its content hash.
+struct InputFile {
+    std::string path;
+    std::string hash;
+};
+using StageInputs = std::map<std::string, InputFile>; // by input port
+
+std::string keyHex(const std::string& key); // the key without its "xxh128:" prefix: the entry's folder name
+std::string hostName();
+// STORE/<prefix><key hex>-<host>-<pid>: a folder only this process writes.
+std::string privateEntryPath(const std::string& store, const std::string& prefix, const std::string& key);
+// Renames a finished temporary folder into place as the entry for `key`. An entry already there (another run's)
+// is kept unless `replace`.
+void commitStoreEntry(const std::string& store, const std::string& key, const std::string& tmpDir, bool replace);
+void syncFolder(const std::string& path);
+double epochSeconds(); // wall-clock seconds since 1970: comparable between processes and hosts
+std::string storeDir(const RunOptions& options);
+std::string absolutePath(const std::string& path);
+
+// The last `lines` lines of a log a person wants to read: messages of JSON log lines, no progress records;
+// each on its own line, indented.
+std::string readableLogTail(const std::string& path, size_t lines);
+
+std::map<std::string, InputFile> hashPipelineInputs(const Pipeline& pipeline);
+// The files `stage` reads, or nothing when an upstream stage has no entry in `entries` (by stage id).
+std::optional<StageInputs> resolveInputs(const PipelineStage& stage, const std::map<std::string, InputFile>& pipelineInputs,
+                                         const std::map<std::string, StoreEntry>& entries);
+std::map<std::string, std::string> inputHashes(const StageInputs& inputs);
+
+// runStageJob with the inputs already resolved.
+nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options, int shardIndex,
+                      int shardCount, bool force);
+
+// One stage for the Slurm executor: index into pipeline.stages, its shard count, and whether it must rerun.
+struct SlurmStage {
+    size_t stage;
+    int shards;
+    bool force;
+};
+// Submits the stages as Slurm jobs (an array and a merge job for sharded ones, afterok dependencies along the
+// DAG), waits for them, and returns the jobs' records by stage id. Cancels the rest and throws prt::Error with
+// the failing job's log when a job fails.
+std::map<std::string, std::vector<nlohmann::json>> runOnSlurm(const Pipeline& pipeline, const RunOptions& options,
+                                                               const std::vector<SlurmStage>& stages,
+                                                               const std::string& runDir);
+
+} // namespace prt

@@ -1,0 +1,358 @@
+// `prt run`: plan which stages run and why, run them with an executor, copy the declared outputs, and write the
+// run report.
+#include "pipeline_internal.h"
+
+#include "core.h"
+
+#include <algorithm>
+#include <ctime>
+#include <filesystem>
+#include <set>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace prt {
+
+std::map<std::string, InputFile> hashPipelineInputs(const Pipeline& pipeline) {
+    std::map<std::string, InputFile> files;
+    for (const PipelineInput& input : pipeline.inputs) files[input.name] = {input.path, hashFile(input.path)};
+    return files;
+}
+
+std::optional<StageInputs> resolveInputs(const PipelineStage& stage, const std::map<std::string, InputFile>& pipelineInputs,
+                                         const std::map<std::string, StoreEntry>& entries) {
+    StageInputs inputs;
+    for (const StageInput& wire : stage.inputs) {
+        if (wire.sourcePort.empty()) {
+            inputs[wire.port] = pipelineInputs.at(wire.source);
+            continue;
+        }
+        auto entry = entries.find(wire.source);
+        if (entry == entries.end()) return std::nullopt;
+        const nlohmann::json& output = entry->second.manifest["outputs"][wire.sourcePort];
+        inputs[wire.port] = {entry->second.dir + "/" + output["file"].get<std::string>(), output["hash"].get<std::string>()};
+    }
+    return inputs;
+}
+
+namespace {
+
+enum class Action { Cached, Run, Skip };
+
+const char* actionName(Action action) {
+    return action == Action::Cached ? "cached" : action == Action::Run ? "run" : "skip";
+}
+
+struct StagePlan {
+    Action action = Action::Skip;
+    std::string key;    // empty while an upstream stage has yet to run
+    std::string reason;
+    int shards = 1;
+    bool selected = true; // --only/--from may leave a stage out: it is then never executed
+    bool force = false;   // rerun whatever the store holds
+};
+
+// Why a stage's key differs from the one it had at the pipeline's last run, as "parameter samples 256 -> 512; ...".
+// `hashes` is null while upstream stages have yet to run.
+std::string changeReason(const nlohmann::json& last, const PipelineStage& stage,
+                         const std::map<std::string, std::string>* hashes) {
+    if (!last.is_object()) return "never run";
+    std::vector<std::string> changes;
+    if (last.value("version", 0) != stage.version)
+        changes.push_back("code version " + std::to_string(last.value("version", 0)) + " -> " + std::to_string(stage.version));
+    const nlohmann::json& before = last.contains("params") ? last["params"] : nlohmann::json::object();
+    std::set<std::string> names;
+    for (auto& [name, value] : before.items()) names.insert(name);
+    for (auto& [name, value] : stage.params.items()) names.insert(name);
+    for (const std::string& name : names) {
+        if (!before.contains(name)) changes.push_back("parameter " + name + " added (" + stage.params[name].dump() + ")");
+        else if (!stage.params.contains(name)) changes.push_back("parameter " + name + " removed");
+        else if (before[name] != stage.params[name])
+            changes.push_back("parameter " + name + " " + before[name].dump() + " -> " + stage.params[name].dump());
+    }
+    if (hashes) {
+        const nlohmann::json& inputs = last.contains("inputs") ? last["inputs"] : nlohmann::json::object();
+        for (auto& [port, hash] : *hashes)
+            if (inputs.value(port, "") != hash) changes.push_back("input " + port + " changed");
+    }
+    if (changes.empty()) return hashes ? "not in the store (removed, or its run was interrupted)" : "";
+    std::string text;
+    for (const std::string& change : changes) text += (text.empty() ? "" : "; ") + change;
+    return text;
+}
+
+// What each stage will do and why. Keys are known down to the first stages that must run; below them they
+// wait on those stages' outputs. `entries` receives the stored results the plan relies on.
+std::vector<StagePlan> planStages(const Pipeline& pipeline, const RunOptions& options,
+                                  const std::map<std::string, InputFile>& pipelineInputs, const nlohmann::json& last,
+                                  std::map<std::string, StoreEntry>& entries) {
+    if (!options.only.empty() && !options.from.empty())
+        throw Error("", "--only/--from", "give one of them, not both", kExitUsage);
+    std::string chosen = !options.only.empty() ? options.only : options.from;
+    size_t chosenIndex = chosen.empty() ? 0 : findStage(pipeline, chosen);
+    std::string forcedBy = options.force          ? "forced (--force)"
+                           : !options.only.empty() ? "forced (--only " + options.only + ")"
+                                                   : "forced (--from " + options.from + ")";
+
+    std::vector<StagePlan> plans(pipeline.stages.size());
+    for (size_t i = 0; i < plans.size(); ++i) {
+        const PipelineStage& stage = pipeline.stages[i];
+        StagePlan& plan = plans[i];
+        // --only takes one stage, --from it and everything downstream (stages are in topological order).
+        plan.selected = chosen.empty() || i == chosenIndex;
+        if (!options.from.empty() && i > chosenIndex)
+            for (const StageInput& input : stage.inputs)
+                if (!input.sourcePort.empty() && plans[findStage(pipeline, input.source)].selected) plan.selected = true;
+        plan.force = options.force || (!chosen.empty() && plan.selected);
+        plan.shards = stage.shards;
+        std::string refusal = stage.spec->shardRefusal ? stage.spec->shardRefusal(stage.params) : "";
+        if (options.shards > 0 && stage.spec->shardable && refusal.empty()) plan.shards = options.shards;
+
+        std::optional<StageInputs> inputs = resolveInputs(stage, pipelineInputs, entries);
+        std::map<std::string, std::string> hashes = inputs ? inputHashes(*inputs) : std::map<std::string, std::string>();
+        std::optional<StoreEntry> entry;
+        if (inputs) {
+            plan.key = keyOf(keyIngredients(stage, hashes));
+            entry = findStoreEntry(storeDir(options), plan.key);
+        }
+        if (entry && !plan.force) {
+            plan.action = Action::Cached;
+            plan.reason = plan.key;
+            entries[stage.id] = *entry;
+            continue;
+        }
+        if (!plan.selected) {
+            plan.action = Action::Skip;
+            plan.reason = "outside --" + std::string(options.only.empty() ? "from " : "only ") + chosen + ", not cached";
+            continue;
+        }
+        plan.action = Action::Run;
+        std::vector<std::string> waits;
+        for (const StageInput& input : stage.inputs) {
+            if (input.sourcePort.empty() || entries.count(input.source)) continue;
+            if (plans[findStage(pipeline, input.source)].action == Action::Skip)
+                throw Error(pipeline.file, "stage " + stage.id,
+                            "its input " + input.port + " comes from stage " + input.source +
+                                ", which is not in the store: run the pipeline without --only/--from first",
+                            kExitUsage);
+            waits.push_back(input.source);
+        }
+        std::string change = changeReason(last.value(stage.id, nlohmann::json()), stage, inputs ? &hashes : nullptr);
+        if (plan.force) {
+            plan.reason = forcedBy;
+        } else if (change.empty()) { // only an upstream stage changed
+            plan.reason = "after ";
+            for (size_t w = 0; w < waits.size(); ++w) plan.reason += (w ? ", " : "") + waits[w];
+            plan.reason += ": reruns if their output changes";
+        } else {
+            plan.reason = change;
+        }
+    }
+    return plans;
+}
+
+void printPlan(const Pipeline& pipeline, const std::vector<StagePlan>& plans, bool toStdout) {
+    size_t width = 5;
+    for (const PipelineStage& stage : pipeline.stages) width = std::max(width, stage.id.size());
+    int running = 0;
+    for (const StagePlan& plan : plans) running += plan.action == Action::Run;
+    std::string text = "plan for " + pipeline.file + " (" + pipeline.name + "): " + std::to_string(plans.size()) +
+                       " stages, " + std::to_string(running) + " to run\n";
+    for (size_t i = 0; i < plans.size(); ++i) {
+        const PipelineStage& stage = pipeline.stages[i];
+        const StagePlan& plan = plans[i];
+        char line[256];
+        std::snprintf(line, sizeof(line), "  %-*s %-10s %-6s ", int(width), stage.id.c_str(), stage.spec->name.c_str(),
+                      actionName(plan.action));
+        text += line;
+        if (plan.shards > 1) text += std::to_string(plan.shards) + " shards, ";
+        text += plan.reason;
+        text += '\n';
+    }
+    if (toStdout) std::fputs(text.c_str(), stdout);
+    else logInfo(text.substr(0, text.size() - 1));
+}
+
+// Runs the planned stages with the chosen executor and records their jobs by stage id; `entries` gains each
+// stage's stored result. On a failure, `failed` names the stage that was running (if one can be named).
+void executeStages(const Pipeline& pipeline, const RunOptions& options, const std::string& runDir,
+                   const std::map<std::string, InputFile>& pipelineInputs, std::vector<StagePlan>& plans,
+                   std::map<std::string, StoreEntry>& entries, std::map<std::string, std::vector<nlohmann::json>>& jobs,
+                   std::string& failed) {
+    if (options.executor == Executor::Slurm) {
+        std::vector<SlurmStage> submit;
+        for (size_t i = 0; i < plans.size(); ++i)
+            if (plans[i].action == Action::Run) submit.push_back({i, plans[i].shards, plans[i].force});
+        if (!submit.empty()) jobs = runOnSlurm(pipeline, options, submit, runDir);
+    }
+    for (size_t i = 0; i < plans.size(); ++i) {
+        const PipelineStage& stage = pipeline.stages[i];
+        StagePlan& plan = plans[i];
+        std::optional<StageInputs> inputs = resolveInputs(stage, pipelineInputs, entries);
+        if (plan.action == Action::Cached && !plan.selected &&
+            (!inputs || keyOf(keyIngredients(stage, inputHashes(*inputs))) != plan.key)) {
+            // Downstream of --only: the stored result belongs to the inputs before the rerun.
+            entries.erase(stage.id);
+            plan.action = Action::Skip;
+            plan.reason = "outside --only " + options.only + "; its inputs changed, so its stored result is stale";
+        }
+        if (plan.action != Action::Run) continue;
+        failed = stage.id;
+        if (options.executor == Executor::Local) {
+            std::vector<nlohmann::json>& records = jobs[stage.id];
+            for (int s = 0; s < std::max(plan.shards, 1); ++s)
+                records.push_back(runJob(stage, *inputs, options, s, plan.shards, plan.force));
+            if (plan.shards > 1) records.push_back(runJob(stage, *inputs, options, -1, plan.shards, plan.force));
+        }
+        plan.key = keyOf(keyIngredients(stage, inputHashes(*inputs)));
+        std::optional<StoreEntry> entry = findStoreEntry(storeDir(options), plan.key);
+        if (!entry) throw Error(storeDir(options), "stage " + stage.id, "finished but its entry " + plan.key + " is missing", kExitFailure);
+        entries[stage.id] = *entry;
+        if (plan.reason.rfind("after ", 0) == 0 && jobs[stage.id].back()["status"] == "cached")
+            plan.reason = "cached: the upstream output came out unchanged";
+    }
+    failed.clear();
+}
+
+std::string timestamp() {
+    std::time_t now = std::time(nullptr);
+    char text[32];
+    std::strftime(text, sizeof(text), "%Y%m%dT%H%M%SZ", std::gmtime(&now));
+    return text;
+}
+
+nlohmann::json readJsonOr(const std::string& path, nlohmann::json fallback) {
+    std::error_code error;
+    if (!fs::is_regular_file(path, error)) return fallback;
+    nlohmann::json value = nlohmann::json::parse(readFileBytes(path), nullptr, false);
+    return value.is_discarded() ? fallback : value;
+}
+
+// The stage's record for the report from its jobs' records (one, or one per shard plus the merge).
+nlohmann::json stageRecord(const PipelineStage& stage, const StagePlan& plan, const std::vector<nlohmann::json>& jobs,
+                           double runStart) {
+    nlohmann::json record = {{"id", stage.id}, {"stage", stage.spec->name}, {"version", stage.version},
+                             {"reason", plan.reason}, {"shards", plan.shards}, {"key", plan.key}};
+    if (jobs.empty()) {
+        record["status"] = plan.action == Action::Cached ? "cached" : "not run";
+        return record;
+    }
+    double start = jobs.front()["start"], end = jobs.front()["end"];
+    uint64_t rays = 0, peak = 0;
+    bool ran = false;
+    nlohmann::json shards = nlohmann::json::array();
+    for (const nlohmann::json& job : jobs) {
+        start = std::min(start, job["start"].get<double>());
+        end = std::max(end, job["end"].get<double>());
+        rays += job.value("rays", uint64_t(0));
+        peak = std::max(peak, job.value("peak_memory_bytes", uint64_t(0)));
+        ran = ran || job["status"] == "ran";
+        if (job.contains("shard")) {
+            nlohmann::json shard = job;
+            shard["start"] = job["start"].get<double>() - runStart;
+            shard["end"] = job["end"].get<double>() - runStart;
+            shard.erase("outputs");
+            shards.push_back(shard);
+        }
+    }
+    record.update({{"status", ran ? "ran" : "cached"}, {"start", start - runStart}, {"end", end - runStart},
+                   {"seconds", end - start}, {"rays", rays}, {"peak_memory_bytes", peak},
+                   {"outputs", jobs.back()["outputs"]}});
+    if (!shards.empty()) record["shard_jobs"] = shards;
+    return record;
+}
+
+// Copies each declared output whose stage has a result atomically into place, unless it already holds it.
+nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string, StoreEntry>& entries) {
+    nlohmann::json copied = nlohmann::json::object();
+    for (const PipelineOutput& output : pipeline.outputs) {
+        auto entry = entries.find(output.stage);
+        if (entry == entries.end()) {
+            logInfo("output " + output.name + " (" + output.path + ") not updated: stage " + output.stage + " did not run");
+            continue;
+        }
+        const nlohmann::json& product = entry->second.manifest["outputs"][output.port];
+        std::string hash = product["hash"];
+        std::error_code error;
+        fs::path parent = fs::path(output.path).parent_path();
+        if (!parent.empty()) fs::create_directories(parent, error);
+        if (!fs::is_regular_file(output.path, error) || hashFile(output.path) != hash)
+            writeBytesAtomic(output.path, readFileBytes(entry->second.dir + "/" + product["file"].get<std::string>()));
+        const StageSpec& spec = *pipeline.stages[findStage(pipeline, output.stage)].spec;
+        FileKind kind = std::find_if(spec.outputs.begin(), spec.outputs.end(), [&](const PortSpec& port) {
+                            return port.name == output.port;
+                        })->kind;
+        copied[output.name] = {{"path", output.path}, {"hash", hash}, {"kind", fileKindName(kind)},
+                               {"from", output.stage + "." + output.port}};
+    }
+    return copied;
+}
+
+void writeJson(const std::string& path, const nlohmann::json& value) {
+    fs::path parent = fs::path(path).parent_path();
+    if (!parent.empty()) fs::create_directories(parent);
+    writeBytesAtomic(path, value.dump(2) + "\n");
+}
+
+} // namespace
+
+nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options) {
+    sweepStore(storeDir(options));
+    double runStart = epochSeconds();
+    std::string lastPath = options.cacheDir + "/runs/" + pipeline.name + ".last.json";
+    nlohmann::json last = readJsonOr(lastPath, nlohmann::json::object());
+    std::map<std::string, InputFile> pipelineInputs = hashPipelineInputs(pipeline);
+    std::map<std::string, StoreEntry> entries;
+    std::vector<StagePlan> plans = planStages(pipeline, options, pipelineInputs, last, entries);
+    printPlan(pipeline, plans, options.plan);
+    if (options.plan) {
+        nlohmann::json planned = nlohmann::json::array();
+        for (size_t i = 0; i < plans.size(); ++i)
+            planned.push_back({{"id", pipeline.stages[i].id}, {"action", actionName(plans[i].action)},
+                               {"key", plans[i].key}, {"reason", plans[i].reason}, {"shards", plans[i].shards}});
+        return {{"pipeline", pipeline.name}, {"file", pipeline.file}, {"plan", planned}};
+    }
+
+    std::string runDir = options.cacheDir + "/runs/" + pipeline.name + "-" + timestamp() + "-" + std::to_string(getpid());
+    fs::create_directories(runDir);
+    std::map<std::string, std::vector<nlohmann::json>> jobs;
+    std::optional<Error> failure;
+    std::string failed;
+    try {
+        executeStages(pipeline, options, runDir, pipelineInputs, plans, entries, jobs, failed);
+    } catch (const Error& e) {
+        failure = e;
+    }
+
+    nlohmann::json report = {{"pipeline", pipeline.name}, {"file", pipeline.file},
+                             {"executor", options.executor == Executor::Slurm ? "slurm" : "local"},
+                             {"host", hostName()}, {"run_dir", runDir}, {"stages", nlohmann::json::array()}};
+    int hits = 0, ran = 0;
+    uint64_t peak = 0;
+    for (size_t i = 0; i < plans.size(); ++i) {
+        const PipelineStage& stage = pipeline.stages[i];
+        nlohmann::json record = stageRecord(stage, plans[i], jobs[stage.id], runStart);
+        if (failure && stage.id == failed) record["status"] = "failed";
+        hits += record["status"] == "cached";
+        ran += record["status"] == "ran";
+        peak = std::max(peak, record.value("peak_memory_bytes", uint64_t(0)));
+        report["stages"].push_back(record);
+        // For the next run's reasons: the ingredients of each stored result.
+        auto entry = entries.find(stage.id);
+        if (entry != entries.end()) last[stage.id] = entry->second.manifest["ingredients"];
+    }
+    report["outputs"] = failure ? nlohmann::json::object() : copyOutputs(pipeline, entries);
+    report.update({{"ok", !failure}, {"seconds", epochSeconds() - runStart}, {"cache_hits", hits},
+                   {"stages_run", ran}, {"peak_memory_bytes", peak}});
+    if (failure) report["error"] = failure->what();
+    writeJson(runDir + "/report.json", report);
+    writeJson(lastPath, last);
+    if (!options.reportPath.empty()) writeJson(options.reportPath, report);
+    logInfo("run " + pipeline.name + ": " + std::to_string(ran) + " stages ran, " + std::to_string(hits) + " cached, " +
+            std::to_string(report["seconds"].get<double>()) + " s; report " + runDir + "/report.json");
+    if (failure) throw *failure;
+    return report;
+}
+
+} // namespace prt

@@ -1,0 +1,129 @@
+// The stages a pipeline can run: each entry mirrors one `prt STAGE` command line (apps/cli/STAGE.cpp).
+//
+// Code versions: bump a stage's `version` in the same change that alters the bytes it writes for the same inputs
+// and parameters (a new estimator, a fixed bug, a new field in its output). Every cached result of that stage,
+// and through the content hashes everything downstream that actually changes, reruns on the next `prt run`.
+// Changes that leave outputs identical (speed, logging, messages) keep the version.
+#include "pipeline.h"
+
+namespace prt {
+
+namespace {
+
+constexpr double kMaxSeed = 9007199254740992.0; // 2^53: bundles store integers in JSON doubles
+constexpr int kMaxOrder = 32;                    // sh::kMaxOrder
+
+const ParamSpec kAlbedo = {"albedo", ParamType::Color, 0.0, 1.0};
+const ParamSpec kSeed = {"seed", ParamType::Integer, 0.0, kMaxSeed};
+const ParamSpec kRotateY = {"rotate-y", ParamType::Number, -360.0, 360.0};
+const ParamSpec kWindow = {"window", ParamType::String, 0.0, 0.0, {"none", "hann", "lanczos"}};
+
+std::string transferParamsRefusal(const nlohmann::json& params) {
+    bool interreflected = params.value("mode", std::string("shadowed")) == "interreflected";
+    if (params.contains("bounces") && !interreflected) return "'bounces' only applies to mode = \"interreflected\"";
+    return "";
+}
+
+std::string transferShardRefusal(const nlohmann::json& params) {
+    bool interreflected = params.value("mode", std::string("shadowed")) == "interreflected";
+    if (interreflected && params.value("bounces", int64_t(2)) > 0)
+        return "interreflected bounces gather from every vertex, so they cannot be sharded (set bounces = 0 or "
+               "shards = 1)";
+    return "";
+}
+
+std::vector<StageSpec> makeCatalogue() {
+    std::vector<StageSpec> stages;
+
+    StageSpec scene{"scene", 1, "procedural scene with a known answer"};
+    scene.outputs = {{"mesh", FileKind::Mesh, "-o", "glb"}};
+    scene.params = {{"name", ParamType::String, 0.0, 0.0,
+                     {"sphere", "plane", "box-room", "cavity", "sphere-in-cavity", "two-spheres"}, true, true}};
+    stages.push_back(scene);
+
+    StageSpec meshprep{"meshprep", 1, "clean a mesh: weld, normals, decimation"};
+    meshprep.inputs = {{"mesh", FileKind::Mesh, "", ""}};
+    meshprep.outputs = {{"mesh", FileKind::Mesh, "-o", "glb"}, {"report", FileKind::Report, "--report", "json"}};
+    meshprep.params = {{"weld-tolerance", ParamType::Number, 0.0, 1.0}, // of the bounding-box diagonal
+                       {"weld-ignore-attributes", ParamType::Boolean},
+                       {"recompute-normals", ParamType::Boolean},
+                       {"decimate-to", ParamType::Integer, 1.0, 2147483647.0}, // triangles
+                       {"scale", ParamType::Number, 1e-30, 1e30}};
+    stages.push_back(meshprep);
+
+    StageSpec envsh{"envsh", 1, "project an environment map onto SH"};
+    envsh.inputs = {{"env", FileKind::Env, "", ""}};
+    envsh.outputs = {{"sh", FileKind::Sh, "-o", "json"}};
+    envsh.params = {{"order", ParamType::Integer, 1.0, kMaxOrder}, kRotateY, kWindow};
+    stages.push_back(envsh);
+
+    StageSpec transfer{"transfer", 1, "per-vertex SH transfer by ray casting"};
+    transfer.inputs = {{"mesh", FileKind::Mesh, "", ""}};
+    transfer.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
+    transfer.params = {{"mode", ParamType::String, 0.0, 0.0, {"unshadowed", "shadowed", "interreflected"}},
+                       {"order", ParamType::Integer, 1.0, kMaxOrder},
+                       {"samples", ParamType::Integer, 1.0, 65536.0},
+                       {"bounces", ParamType::Integer, 0.0, 64.0},
+                       kAlbedo,
+                       kSeed};
+    transfer.takesThreads = true;
+    transfer.shardable = true;
+    transfer.paramsRefusal = transferParamsRefusal;
+    transfer.shardRefusal = transferShardRefusal;
+    stages.push_back(transfer);
+
+    StageSpec reference{"reference", 1, "ground-truth radiance by path tracing"};
+    reference.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"env", FileKind::Env, "--env", ""}};
+    reference.outputs = {{"radiance", FileKind::Radiance, "-o", "npy"},
+                         {"standard-error", FileKind::Radiance, "--stderr-out", "npy"}};
+    reference.params = {{"bounces", ParamType::Integer, 0.0, 64.0},
+                        {"samples", ParamType::Integer, 2.0, 16777216.0},
+                        kAlbedo,
+                        kSeed};
+    reference.takesThreads = true;
+    stages.push_back(reference);
+
+    StageSpec relight{"relight", 1, "per-vertex radiance of a bundle under new lighting"};
+    relight.inputs = {{"bundle", FileKind::Bundle, "", ""},
+                      {"env", FileKind::Env, "--env", "", true},
+                      {"sh", FileKind::Sh, "--sh", "", true}};
+    relight.exactlyOneInput = {"env", "sh"};
+    relight.outputs = {{"radiance", FileKind::Radiance, "-o", "npy"}};
+    relight.params = {kRotateY, kWindow};
+    stages.push_back(relight);
+
+    StageSpec compare{"compare", 1, "error metrics of a result against a reference"};
+    compare.inputs = {{"result", FileKind::Radiance, "", ""}, {"reference", FileKind::Radiance, "", ""}};
+    compare.outputs = {{"metrics", FileKind::Metrics, "-o", "json"}};
+    stages.push_back(compare);
+
+    return stages;
+}
+
+} // namespace
+
+const char* fileKindName(FileKind kind) {
+    switch (kind) {
+    case FileKind::Mesh: return "mesh";
+    case FileKind::Bundle: return "bundle";
+    case FileKind::Env: return "env";
+    case FileKind::Sh: return "sh";
+    case FileKind::Radiance: return "radiance";
+    case FileKind::Metrics: return "metrics";
+    case FileKind::Report: return "report";
+    }
+    return "?";
+}
+
+const std::vector<StageSpec>& stageCatalogue() {
+    static const std::vector<StageSpec> catalogue = makeCatalogue();
+    return catalogue;
+}
+
+const StageSpec* findStageSpec(const std::string& name) {
+    for (const StageSpec& spec : stageCatalogue())
+        if (spec.name == name) return &spec;
+    return nullptr;
+}
+
+} // namespace prt

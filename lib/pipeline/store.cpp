@@ -1,0 +1,106 @@
+// Cache keys and the content-addressed store. An entry is a folder named by its key that appears by one rename,
+// complete with manifest.json, so a reader never sees half of one.
+#include "pipeline_internal.h"
+
+#include "core.h"
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace prt {
+
+nlohmann::json keyIngredients(const PipelineStage& stage, const std::map<std::string, std::string>& inputHashes,
+                              int shardIndex, int shardCount) {
+    nlohmann::json ingredients = {{"stage", stage.spec->name},
+                                  {"version", stage.version},
+                                  {"params", stage.params},
+                                  {"inputs", inputHashes}};
+    if (shardCount > 0) ingredients["shard"] = {shardIndex, shardCount};
+    return ingredients;
+}
+
+// nlohmann::json keeps object keys sorted, so dump() is canonical.
+std::string keyOf(const nlohmann::json& ingredients) {
+    std::string text = ingredients.dump();
+    return hashBytes(text.data(), text.size());
+}
+
+std::string keyHex(const std::string& key) {
+    size_t colon = key.find(':');
+    return colon == std::string::npos ? key : key.substr(colon + 1);
+}
+
+std::string hostName() {
+    char name[256] = {};
+    gethostname(name, sizeof(name) - 1);
+    return name;
+}
+
+std::string privateEntryPath(const std::string& store, const std::string& prefix, const std::string& key) {
+    return store + "/" + prefix + keyHex(key) + "-" + hostName() + "-" + std::to_string(getpid());
+}
+
+std::optional<StoreEntry> findStoreEntry(const std::string& store, const std::string& key) {
+    StoreEntry entry;
+    entry.dir = store + "/" + keyHex(key);
+    std::error_code error;
+    if (!fs::is_regular_file(entry.dir + "/manifest.json", error)) return std::nullopt;
+    entry.manifest = nlohmann::json::parse(readFileBytes(entry.dir + "/manifest.json"), nullptr, false);
+    bool intact = entry.manifest.is_object() && entry.manifest.value("key", "") == key &&
+                  entry.manifest.contains("outputs") && entry.manifest["outputs"].is_object();
+    for (auto& [port, output] : intact ? entry.manifest["outputs"].items() : nlohmann::json::object().items()) {
+        uintmax_t bytes = fs::file_size(entry.dir + "/" + output.value("file", ""), error);
+        if (error || bytes != output.value("bytes", uintmax_t(0))) intact = false;
+    }
+    if (!intact) {
+        logWarn("store entry " + entry.dir + " does not match its manifest; it will be rebuilt");
+        return std::nullopt;
+    }
+    return entry;
+}
+
+void commitStoreEntry(const std::string& store, const std::string& key, const std::string& tmpDir, bool replace) {
+    std::string final = store + "/" + keyHex(key);
+    syncFolder(tmpDir);
+    if (std::rename(tmpDir.c_str(), final.c_str()) == 0) {
+        syncFolder(store);
+        return;
+    }
+    if (errno != EEXIST && errno != ENOTEMPTY)
+        throw Error(final, "", std::string("cannot commit store entry: ") + std::strerror(errno), kExitOutput);
+    if (!replace) { // another run stored the same key first; readers may be using its files
+        fs::remove_all(tmpDir);
+        return;
+    }
+    // A forced rerun replaces the entry: between the two renames the key is simply absent, which is consistent.
+    std::string old = privateEntryPath(store, ".old-", key);
+    if (std::rename(final.c_str(), old.c_str()) != 0 || std::rename(tmpDir.c_str(), final.c_str()) != 0)
+        throw Error(final, "", std::string("cannot replace store entry: ") + std::strerror(errno), kExitOutput);
+    syncFolder(store);
+    fs::remove_all(old);
+}
+
+void sweepStore(const std::string& store) {
+    std::error_code error;
+    if (!fs::is_directory(store, error)) return;
+    std::string host = hostName();
+    for (const fs::directory_entry& item : fs::directory_iterator(store, error)) {
+        std::string name = item.path().filename().string();
+        if (name.rfind(".tmp-", 0) != 0 && name.rfind(".old-", 0) != 0) continue;
+        // .tmp-<32 hex>-<host>-<pid>: host names may hold '-', pids may not.
+        size_t dash = name.rfind('-');
+        if (name.size() < 5 + 32 + 2 || dash == std::string::npos) continue;
+        std::string owner = name.substr(5 + 32 + 1, dash - (5 + 32 + 1));
+        pid_t pid = pid_t(std::atol(name.c_str() + dash + 1));
+        // Only this host can tell whether the writer lives; another node's writer may still be at work.
+        if (owner != host || pid <= 0 || kill(pid, 0) == 0 || errno != ESRCH) continue;
+        fs::remove_all(item.path(), error);
+    }
+}
+
+} // namespace prt

@@ -1,0 +1,201 @@
+// Cache invalidation: change an input byte, a parameter or a stage's code version, and exactly the affected
+// subgraph reruns. Also --plan, --only, --from and --force.
+#include "pipeline_test_util.h"
+
+namespace prt {
+namespace {
+
+// Two branches joined at the end:  shape -> prep -> transfer -+-> relight ----+-> compare
+//                                  sky ---------------------- +-> relight-sh -+
+//                                  sky -> envsh ------------------^
+const char* kPipeline = R"(
+[inputs]
+shape = { mesh = "@DIR@/shape.obj" }
+sky = { env = "@DIR@/sky.exr" }
+
+[stages.prep]
+run = "meshprep"
+inputs = { mesh = "shape" }
+
+[stages.transfer]
+run = "transfer"
+inputs = { mesh = "prep" }
+mode = "shadowed"
+order = 3
+samples = 16
+
+[stages.envsh]
+run = "envsh"
+inputs = { env = "sky" }
+order = 3
+
+[stages.relight]
+run = "relight"
+inputs = { bundle = "transfer", env = "sky" }
+
+[stages.relight-sh]
+run = "relight"
+inputs = { bundle = "transfer", sh = "envsh" }
+
+[stages.compare]
+run = "compare"
+inputs = { result = "relight-sh", reference = "relight" }
+
+[outputs]
+bundle = { from = "transfer", path = "@DIR@/out/bundle.glb" }
+metrics = { from = "compare", path = "@DIR@/out/metrics.json" }
+)";
+
+using Names = std::set<std::string>;
+const Names kAll = {"prep", "transfer", "envsh", "relight", "relight-sh", "compare"};
+
+class Cache : public testing::Test {
+protected:
+    test::TempDir dir;
+    RunOptions options = test::testOptions(dir / "cache");
+
+    void SetUp() override {
+        test::writeTwoSpheresObj(dir / "shape.obj");
+        test::writeSkyExr(dir / "sky.exr", 1.0f);
+    }
+    Pipeline pipeline(const std::string& from = "", const std::string& to = "") const {
+        std::string text = test::withDir(kPipeline, dir.path);
+        if (!from.empty()) text.replace(text.find(from), from.size(), to);
+        return parsePipeline(text, dir / "p.toml");
+    }
+    Names run(const Pipeline& p) { return test::ranStages(test::runQuietly(p, options)); }
+};
+
+TEST_F(Cache, RerunsExactlyTheAffectedSubgraph) {
+    nlohmann::json first = test::runQuietly(pipeline(), options);
+    EXPECT_EQ(test::ranStages(first), kAll);
+    std::map<std::string, std::string> outputs = test::outputHashes(first);
+
+    nlohmann::json second = test::runQuietly(pipeline(), options);
+    EXPECT_EQ(test::ranStages(second), Names{});
+    EXPECT_EQ(second["cache_hits"], 6);
+    EXPECT_EQ(test::outputHashes(second), outputs);
+
+    // One byte of the mesh: a coordinate's last digit.
+    std::string obj = readFileBytes(dir / "shape.obj");
+    size_t digit = obj.find('\n') - 1;
+    obj[digit] = obj[digit] == '1' ? '2' : '1';
+    test::writeText(dir / "shape.obj", obj);
+    EXPECT_EQ(run(pipeline()), (Names{"prep", "transfer", "relight", "relight-sh", "compare"}));
+
+    test::writeSkyExr(dir / "sky.exr", 2.0f);
+    EXPECT_EQ(run(pipeline()), (Names{"envsh", "relight", "relight-sh", "compare"}));
+
+    Pipeline moreSamples = pipeline("samples = 16", "samples = 17");
+    EXPECT_EQ(run(moreSamples), (Names{"transfer", "relight", "relight-sh", "compare"}));
+
+    // A parameter of a last stage: only it and what it feeds.
+    Pipeline turned = pipeline("env = \"sky\" }\n\n[stages.relight-sh]", "env = \"sky\" }\nrotate-y = 30\n\n[stages.relight-sh]");
+    EXPECT_EQ(run(turned), (Names{"relight", "compare"}));
+    EXPECT_EQ(run(turned), Names{});
+    EXPECT_EQ(run(pipeline()), Names{}); // the earlier results are still stored
+}
+
+// A code version bump reruns every stage of that kind. Their outputs come out identical (the code did not
+// really change), so the keys downstream, which hash content, stay the same: nothing else reruns.
+TEST_F(Cache, VersionBumpRerunsTheStageAndStopsWhereOutputsAgree) {
+    run(pipeline());
+    Pipeline bumped = pipeline();
+    for (PipelineStage& stage : bumped.stages)
+        if (stage.spec->name == "relight") stage.version += 1;
+    nlohmann::json report = test::runQuietly(bumped, options);
+    EXPECT_EQ(test::ranStages(report), (Names{"relight", "relight-sh"}));
+    for (const nlohmann::json& stage : report["stages"]) {
+        if (stage["stage"] != "relight") continue;
+        EXPECT_NE(stage["reason"].get<std::string>().find("code version 1 -> 2"), std::string::npos) << stage["reason"];
+    }
+    EXPECT_EQ(test::statuses(report)["compare"], "cached");
+
+    Pipeline envshBumped = pipeline();
+    envshBumped.stages[findStage(envshBumped, "envsh")].version += 1;
+    EXPECT_EQ(run(envshBumped), (Names{"envsh"}));
+}
+
+TEST_F(Cache, PlanRunsNothingAndSaysWhy) {
+    run(pipeline());
+    std::string store = options.cacheDir + "/store";
+    size_t entries = std::distance(std::filesystem::directory_iterator(store), std::filesystem::directory_iterator());
+
+    RunOptions plan = options;
+    plan.plan = true;
+    nlohmann::json report = test::runQuietly(pipeline("samples = 16", "samples = 32"), plan);
+    std::map<std::string, nlohmann::json> byId;
+    for (const nlohmann::json& stage : report["plan"]) byId[stage["id"]] = stage;
+    EXPECT_EQ(byId["prep"]["action"], "cached");
+    EXPECT_EQ(byId["envsh"]["action"], "cached");
+    EXPECT_EQ(byId["transfer"]["action"], "run");
+    EXPECT_EQ(byId["transfer"]["reason"], "parameter samples 16 -> 32");
+    EXPECT_EQ(byId["relight"]["action"], "run");
+    EXPECT_EQ(byId["relight"]["reason"], "after transfer: reruns if their output changes");
+    EXPECT_EQ(byId["relight"]["key"], ""); // unknown until transfer has run
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(store), std::filesystem::directory_iterator()),
+              std::ptrdiff_t(entries));
+}
+
+TEST_F(Cache, OnlyFromAndForceRerunWhatTheySay) {
+    std::map<std::string, std::string> outputs = test::outputHashes(test::runQuietly(pipeline(), options));
+
+    RunOptions only = options;
+    only.only = "transfer";
+    EXPECT_EQ(run(pipeline()), Names{});
+    EXPECT_EQ(test::ranStages(test::runQuietly(pipeline(), only)), Names{"transfer"});
+
+    // --only on a changed stage leaves what it feeds alone: their stored results are stale, not served.
+    nlohmann::json changedOnly = test::runQuietly(pipeline("samples = 16", "samples = 24"), only);
+    EXPECT_EQ(test::ranStages(changedOnly), Names{"transfer"});
+    EXPECT_EQ(test::statuses(changedOnly)["relight"], "not run");
+    EXPECT_EQ(test::statuses(changedOnly)["envsh"], "cached");
+    EXPECT_FALSE(changedOnly["outputs"].contains("metrics"));
+
+    RunOptions from = options;
+    from.from = "transfer";
+    EXPECT_EQ(test::ranStages(test::runQuietly(pipeline(), from)), (Names{"transfer", "relight", "relight-sh", "compare"}));
+
+    RunOptions force = options;
+    force.force = true;
+    nlohmann::json forced = test::runQuietly(pipeline(), force);
+    EXPECT_EQ(test::ranStages(forced), kAll);
+    EXPECT_EQ(test::outputHashes(forced), outputs); // deterministic stages: same bytes again
+
+    RunOptions missing = test::testOptions(dir / "empty-cache");
+    missing.only = "relight";
+    try {
+        test::runQuietly(pipeline(), missing);
+        FAIL() << "--only ran with its inputs missing from the store";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("not in the store"), std::string::npos) << e.what();
+    }
+}
+
+TEST_F(Cache, FailingStageNamesItselfQuotesItsLogAndLeavesTheStoreConsistent) {
+    // A mesh without normals makes `prt transfer` fail: wire the raw OBJ straight in.
+    Pipeline broken = parsePipeline(test::withDir(R"(
+[inputs]
+shape = { mesh = "@DIR@/shape.obj" }
+[stages.transfer]
+run = "transfer"
+inputs = { mesh = "shape" }
+[outputs]
+bundle = { from = "transfer", path = "@DIR@/out/broken.glb" }
+)", dir.path), dir / "broken.toml");
+    try {
+        test::runQuietly(broken, options);
+        FAIL() << "the failing stage went unnoticed";
+    } catch (const Error& e) {
+        std::string message = e.what();
+        EXPECT_NE(message.find("transfer: `prt transfer` exited with status"), std::string::npos) << message;
+        EXPECT_NE(message.find("error:"), std::string::npos) << message; // the stage's own message, quoted
+        EXPECT_EQ(e.exitCode(), kExitInput);                                 // and its exit code
+        EXPECT_TRUE(std::filesystem::exists(e.file())) << "the failed stage's log is kept: " << e.file();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "out/broken.glb"));
+    test::expectStoreConsistent(options.cacheDir + "/store");
+}
+
+} // namespace
+} // namespace prt
