@@ -18,6 +18,8 @@ void addReferenceCommand(CLI::App& app);
 void addRelightCommand(CLI::App& app);
 void addCompareCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
+void addRunCommand(CLI::App& app);
+void addMergeCommand(CLI::App& app);
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);

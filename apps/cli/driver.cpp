@@ -42,11 +42,14 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addRelightCommand(app);
     addCompareCommand(app);
     addBenchCommand(app);
+    addRunCommand(app);
+    addMergeCommand(app);
 
     try {
         app.parse(int(args.size()), args.data());
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // CLI11's own codes (106, 109, ...) would collide with ours; help and version are successes.
+        return app.exit(e) == 0 ? kExitOk : kExitUsage;
     } catch (const Error& e) {
         logError(e.what());
         return e.exitCode();

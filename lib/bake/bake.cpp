@@ -1,0 +1,365 @@
+// The `prt bake` stage: validate everything, bake per-texel transfer, fill, stitch, write textures then the bundle.
+#include "bake.h"
+
+#include "core.h"
+#include "sh.h"
+#include "transfer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+namespace prt {
+
+namespace {
+
+Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
+
+void checkOptions(const BakeOptions& options) {
+    if (options.resolution < 1 || options.resolution > kMaxBakeResolution)
+        throw usage("--resolution", std::to_string(options.resolution) + " outside 1.." +
+                                        std::to_string(kMaxBakeResolution));
+    if (options.order < 1 || options.order > sh::kMaxOrder)
+        throw usage("--order", std::to_string(options.order) + " outside 1.." + std::to_string(sh::kMaxOrder));
+    if (options.samples < 1 || options.samples > kMaxTransferSamples)
+        throw usage("--samples", std::to_string(options.samples) + " outside 1.." +
+                                     std::to_string(kMaxTransferSamples));
+    if (options.bounces < 0) throw usage("--bounces", "must be >= 0");
+    if (options.uvSet < 0) throw usage("--uv-set", "must be >= 0");
+    if (!(options.cage > 0.0 && options.cage < 1.0)) throw usage("--cage", "must lie in (0, 1)");
+    if (!(options.maxMissFraction >= 0.0 && options.maxMissFraction <= 1.0))
+        throw usage("--max-miss", "must lie in [0, 1]");
+    if (options.padding < 2) throw usage("--padding", "must be at least 2 texels");
+    if (options.seed > (uint64_t(1) << 53)) throw usage("--seed", "must be at most 2^53");
+    if (options.threads < 0) throw usage("--threads", "must be >= 0 (0: all cores)");
+}
+
+TriMesh readMeshWithNormals(const std::string& path, const char* role) {
+    TriMesh mesh = readBundle(path).mesh;
+    if (mesh.normals.size() != mesh.positions.size())
+        throw Error(path, "mesh", std::string("the ") + role + " mesh has no normals: run `prt meshprep` on it first");
+    for (uint32_t v : mesh.indices)
+        if (v >= mesh.vertexCount()) throw Error(path, "mesh", "index " + std::to_string(v) + " is out of range");
+    return mesh;
+}
+
+double boundingDiagonal(const TriMesh& mesh) {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        lo[i % 3] = std::min(lo[i % 3], double(mesh.positions[i]));
+        hi[i % 3] = std::max(hi[i % 3], double(mesh.positions[i]));
+    }
+    return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+// Per sample: the low mesh's albedo interpolated, or empty when the mesh has none.
+std::vector<float> sampleAlbedo(const TriMesh& mesh, const TexelSamples& samples) {
+    if (mesh.albedo.empty()) return {};
+    std::vector<float> albedo(3 * samples.texel.size());
+    for (size_t i = 0; i < samples.texel.size(); ++i) {
+        const uint32_t* corner = &mesh.indices[3 * size_t(samples.triangle[i])];
+        for (int c = 0; c < 3; ++c) {
+            double sum = 0.0;
+            for (int k = 0; k < 3; ++k) sum += samples.barycentric[3 * i + k] * mesh.albedo[3 * size_t(corner[k]) + c];
+            albedo[3 * i + c] = float(std::clamp(sum, 0.0, 1.0));
+        }
+    }
+    return albedo;
+}
+
+// Spreads per-sample rows over a zeroed atlas: [width * height][channels].
+std::vector<float> scatter(const TexelSamples& samples, const float* rows, int channels) {
+    std::vector<float> atlas(size_t(samples.width) * samples.height * channels, 0.0f);
+    for (size_t i = 0; i < samples.texel.size(); ++i)
+        std::copy(rows + i * channels, rows + (i + 1) * channels, atlas.begin() + size_t(samples.texel[i]) * channels);
+    return atlas;
+}
+
+// Files written so far; removed again unless the stage completes, so a failure leaves no output behind.
+struct WrittenFiles {
+    std::vector<std::string> paths;
+    bool committed = false;
+    ~WrittenFiles() {
+        if (committed) return;
+        for (const std::string& path : paths) std::remove(path.c_str());
+    }
+};
+
+std::string fileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
+
+} // namespace
+
+BakedAtlas bakeAtlas(const BakeOptions& options) {
+    checkOptions(options);
+    const int size = options.resolution;
+    const int channels = 3 * options.order * options.order;
+    BakedAtlas baked;
+    BakeStats& stats = baked.stats;
+
+    TriMesh& mesh = baked.mesh;
+    mesh = readMeshWithNormals(options.input, "low");
+    if (options.uvSet > 0) mesh.texcoords = readTexcoordSet(options.input, options.uvSet);
+    bool generated = mesh.texcoords.empty();
+    nlohmann::json atlasRecord = {{"generated", generated}, {"source_uv_set", options.uvSet}};
+    if (generated) {
+        AtlasOptions atlasOptions;
+        atlasOptions.width = atlasOptions.height = size;
+        atlasOptions.padding = options.padding;
+        GeneratedAtlas atlas = generateAtlas(mesh, atlasOptions);
+        mesh = std::move(atlas.mesh);
+        logWarn("bake: " + options.input + " has no UVs: GENERATED a lightmap atlas of " +
+                std::to_string(atlas.charts) + " charts (" + std::to_string(options.padding) + " texels padding, " +
+                std::to_string(atlas.texelsPerUnit) + " texels per unit); the bundle's TEXCOORD_0 is that atlas");
+        atlasRecord["charts"] = atlas.charts;
+        atlasRecord["texels_per_unit"] = atlas.texelsPerUnit;
+        atlasRecord["padding"] = options.padding;
+    }
+    RasterOptions raster;
+    raster.width = raster.height = size;
+    raster.wrap = options.wrap;
+    raster.allowOverlap = options.allowOverlap;
+    TexelSamples& samples = baked.samples;
+    samples = rasteriseAtlas(mesh, raster, options.input);
+    const size_t count = samples.texel.size();
+    stats.texels = count;
+    if (count == 0) throw Error(options.input, "texcoords", "cover no texel of the atlas");
+    if (samples.overlappingTexels > 0)
+        logWarn("bake: " + std::to_string(samples.overlappingTexels) +
+                " texels lie under overlapping UV triangles; the lowest triangle keeps each");
+    std::vector<float> positions, normals;
+    texelSurface(mesh, samples, positions, normals);
+
+    TriMesh high;
+    std::vector<float> detailNormals = normals;
+    nlohmann::json highRecord;
+    if (!options.high.empty()) {
+        high = readMeshWithNormals(options.high, "high");
+        float cage = float(options.cage * boundingDiagonal(mesh));
+        CageProjection projection = projectOntoHigh(high, positions, normals, cage);
+        stats.cageRays = count;
+        double missed = double(projection.misses) / double(count);
+        if (missed > options.maxMissFraction)
+            throw Error(options.high, "",
+                        "does not cover the low mesh " + options.input + ": " + std::to_string(projection.misses) +
+                            " of " + std::to_string(count) + " texels found no surface within the cage (" +
+                            std::to_string(cage) + " units either side along the low normal); allowed " +
+                            std::to_string(options.maxMissFraction * 100.0) + "% (--max-miss), cage --cage");
+        if (projection.misses > 0)
+            logWarn("bake: " + std::to_string(projection.misses) + " of " + std::to_string(count) +
+                    " texels missed the high mesh; they keep the low surface's point and normal");
+        detailNormals = projection.normals;
+        if (options.highPosition) positions = std::move(projection.positions);
+        normals = std::move(projection.normals);
+        highRecord = {{"mesh", fileName(options.high)}, {"hash", hashFile(options.high)},
+                      {"cage", cage}, {"position", options.highPosition ? "high" : "low"},
+                      {"misses", projection.misses}};
+    }
+    const TriMesh& geometry = options.high.empty() ? mesh : high;
+
+    // Transfer per texel: the per-vertex integrator with texels as receivers.
+    std::vector<float> albedo = sampleAlbedo(mesh, samples);
+    std::vector<uint64_t> keys(samples.texel.begin(), samples.texel.end()); // rotations follow texels, not order
+    Receivers receivers;
+    receivers.positions = positions.data();
+    receivers.normals = normals.data();
+    receivers.albedo = albedo.empty() ? nullptr : albedo.data();
+    receivers.keys = keys.data();
+    receivers.count = count;
+    TransferOptions transferOptions;
+    transferOptions.mode = options.bounces > 0 ? TransferMode::Interreflected : TransferMode::Shadowed;
+    transferOptions.order = options.order;
+    transferOptions.samples = options.samples;
+    transferOptions.bounces = options.bounces;
+    transferOptions.seed = options.seed;
+    transferOptions.threads = options.threads;
+    logInfo("bake: " + std::to_string(count) + " texels of " + std::to_string(size) + "x" + std::to_string(size) +
+            " (" + std::to_string(100.0 * count / (double(size) * size)) + "% covered), order " +
+            std::to_string(options.order) + ", " + std::to_string(options.samples) + " samples" +
+            (options.bounces > 0 ? ", " + std::to_string(options.bounces) + " bounces" : "") + ", rays against " +
+            (options.high.empty() ? "the low mesh"
+                                  : "the high mesh (" + std::to_string(high.triangleCount()) + " triangles)"));
+    double transferStart = nowSeconds();
+    Transfer transfer;
+    try {
+        transfer = computeTransferAt(geometry, receivers, transferOptions);
+    } catch (const Error& e) {
+        if (!e.file().empty() || e.exitCode() != kExitInput) throw;
+        throw Error(options.high.empty() ? options.input : options.high, e.place(), e.problem(), e.exitCode());
+    }
+    stats.transferSeconds = nowSeconds() - transferStart;
+    stats.directSeconds = transfer.stats.directSeconds;
+    stats.rays = transfer.stats.rays;
+    if (options.yardstick) {
+        RayThroughput bare = castBareOcclusionRaysAt(geometry, receivers, transferOptions);
+        stats.bareRaysPerSecond = bare.seconds > 0.0 ? bare.rays / bare.seconds : 0.0;
+    }
+
+    // Atlas images: fill the gutters, then make seams agree (lookups on chart borders read the gutters).
+    baked.transfer = scatter(samples, transfer.coefficients.data(), channels);
+    transfer.coefficients = {};
+    std::vector<uint8_t> covered = coverageMask(samples);
+    double fillStart = nowSeconds();
+    if (options.dilateOnly)
+        dilateOneRing(baked.transfer.data(), size, size, channels, covered.data());
+    else
+        pushPull(baked.transfer.data(), size, size, channels, covered.data());
+    stats.fillSeconds = nowSeconds() - fillStart;
+    std::vector<SeamEdge> seams = findSeams(mesh);
+    stats.seamEdges = seams.size();
+    if (options.seamStitch)
+        stats.stitchedTexels = stitchSeams(mesh, seams, size, size, baked.transfer.data(), channels);
+
+    std::vector<float> tangentNormals = tangentSpaceNormals(mesh, vertexTangents(mesh), samples, detailNormals);
+    baked.normals = scatter(samples, tangentNormals.data(), 3);
+    pushPull(baked.normals.data(), size, size, 3, covered.data());
+    for (size_t t = 0; t < baked.normals.size() / 3; ++t) {
+        float* n = &baked.normals[3 * t];
+        double length = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+        if (length > 1e-6)
+            for (int a = 0; a < 3; ++a) n[a] = float(n[a] / length);
+        else
+            n[0] = n[1] = 0.0f, n[2] = 1.0f; // far from every chart: flat
+    }
+
+    baked.params = {{"width", size},
+                    {"height", size},
+                    {"uv_set", 0},
+                    {"atlas", atlasRecord},
+                    {"order", options.order},
+                    {"mode", transferModeName(transferOptions.mode)},
+                    {"samples", options.samples},
+                    {"bounces", options.bounces},
+                    {"albedo", mesh.albedo.empty() ? nlohmann::json({1.0, 1.0, 1.0}) : nlohmann::json("per-vertex")},
+                    {"seed", options.seed},
+                    {"direction_set", kTransferDirectionSet},
+                    {"rotation_key", "texel index y * width + x"},
+                    {"ray_offset", transfer.stats.rayOffset},
+                    {"covered_texels", count},
+                    {"sample_point", "texel centre, or the triangle's point nearest to it for partly covered texels"},
+                    {"fill", options.dilateOnly ? "dilate-one-ring" : "push-pull"},
+                    {"seam_stitch", options.seamStitch},
+                    {"wrap", options.wrap == UvWrap::Repeat ? "repeat" : "none"}};
+    if (!highRecord.is_null()) baked.params["high"] = highRecord;
+    return baked;
+}
+
+void runBake(const BakeOptions& options) {
+    double start = nowSeconds();
+    if (fileExtension(options.output) != "glb") throw usage("-o", "the output bundle must end in .glb");
+    BakedAtlas baked = bakeAtlas(options);
+    const BakeStats& stats = baked.stats;
+    const int size = options.resolution;
+    const int coefficients = options.order * options.order;
+    const int channels = 3 * coefficients;
+    const size_t texelCount = size_t(size) * size;
+
+    // Textures first, the bundle that references them last.
+    std::string base = options.output.substr(0, options.output.size() - 4);
+    WrittenFiles written;
+    Layer layer;
+    layer.name = "texel_transfer";
+    layer.domain = "texel";
+    layer.semantic = "sh_transfer_rgb";
+    layer.shape = {texelCount, uint64_t(coefficients), 3};
+    layer.params = baked.params;
+    layer.params["format"] = texelFormatName(options.format);
+    uint64_t storedBytes = 0;
+    std::string transferPath;
+    if (options.format == TexelFormat::U8) {
+        RangeCompressed compressed = rangeCompress(baked.transfer.data(), texelCount, coefficients, 3);
+        nlohmann::json layers = nlohmann::json::array();
+        std::vector<uint8_t> plane(texelCount * 3);
+        for (int j = 0; j < coefficients; ++j) {
+            for (size_t t = 0; t < texelCount; ++t)
+                for (int c = 0; c < 3; ++c) plane[3 * t + c] = compressed.values[t * channels + 3 * j + c];
+            char suffix[32];
+            std::snprintf(suffix, sizeof suffix, ".transfer.T%03d.png", j);
+            std::string path = base + suffix;
+            written.paths.push_back(path);
+            writeImage8(path, plane.data(), size, size, 3);
+            storedBytes += std::filesystem::file_size(path);
+            layers.push_back({{"coefficient", j}, {"uri", fileName(path)}, {"hash", hashFile(path)},
+                              {"min", compressed.range[2 * j]}, {"max", compressed.range[2 * j + 1]}});
+        }
+        nlohmann::json sidecar = {{"format", "prt-texel-u8"}, {"version", 1}, {"width", size}, {"height", size},
+                                  {"order", options.order},
+                                  {"decode", "value = min + q * (max - min) / 255, per coefficient layer"},
+                                  {"layers", layers}};
+        transferPath = base + ".transfer.json";
+        written.paths.push_back(transferPath);
+        writeBytesAtomic(transferPath, sidecar.dump(2) + "\n");
+    } else {
+        transferPath = base + ".transfer.exr";
+        written.paths.push_back(transferPath);
+        writeCoefficientExr(transferPath, baked.transfer.data(), size, size, coefficients,
+                            options.format == TexelFormat::Half);
+        layer.params["channels"] = "T{j:03d}.{R,G,B} for coefficient j";
+    }
+    storedBytes += std::filesystem::file_size(transferPath);
+    layer.params["uri"] = fileName(transferPath);
+    layer.params["hash"] = hashFile(transferPath);
+
+    std::vector<uint8_t> normalBytes(baked.normals.size());
+    for (size_t i = 0; i < normalBytes.size(); ++i)
+        normalBytes[i] = uint8_t(std::lround(std::clamp((double(baked.normals[i]) + 1.0) * 127.5, 0.0, 255.0)));
+    std::string normalPath = base + ".normal.png";
+    written.paths.push_back(normalPath);
+    writeImage8(normalPath, normalBytes.data(), size, size, 3);
+    Layer normalLayer;
+    normalLayer.name = "normal_map";
+    normalLayer.domain = "texel";
+    normalLayer.semantic = "tangent_normal";
+    normalLayer.shape = {texelCount, 3};
+    normalLayer.params = {{"uri", fileName(normalPath)},
+                          {"hash", hashFile(normalPath)},
+                          {"width", size},
+                          {"height", size},
+                          {"uv_set", 0},
+                          {"encoding", "rgb8 = round((n + 1) * 127.5)"},
+                          {"frame", "x along +u, y along -v (image up), z the interpolated vertex normal"},
+                          {"source", options.high.empty() ? "low mesh normals" : "high mesh normals"}};
+
+    Bundle bundle;
+    bundle.mesh = std::move(baked.mesh);
+    bundle.layers.push_back(std::move(layer));
+    bundle.layers.push_back(std::move(normalLayer));
+    bundle.producer = {{"tool", "prt"}, {"version", options.toolVersion}, {"stage", "bake"}};
+    bundle.inputs = {{"mesh", hashFile(options.input)}};
+    if (!options.high.empty()) bundle.inputs["high"] = hashFile(options.high);
+    bundle.convention = conventionRecord();
+    writeBundle(options.output, bundle); // atomic: on failure neither it nor (below) the textures remain
+    written.committed = true;
+
+    double texelsPerSecond = stats.transferSeconds > 0.0 ? stats.texels / stats.transferSeconds : 0.0;
+    double raysPerSecond = stats.directSeconds > 0.0 ? stats.rays / stats.directSeconds : 0.0;
+    logInfo("bake: wrote " + options.output + " and " + std::to_string(written.paths.size()) + " texture files (" +
+            std::to_string(storedBytes) + " bytes of " + texelFormatName(options.format) + " coefficients); " +
+            std::to_string(texelsPerSecond) + " texels/s, " + std::to_string(raysPerSecond / 1e6) +
+            " Mrays/s, fill " + std::to_string(stats.fillSeconds) + " s, " + std::to_string(stats.seamEdges) +
+            " seam edges, " + std::to_string(stats.stitchedTexels) + " texels stitched");
+    if (options.yardstick)
+        logInfo("bake: bare Embree over the same rays: " + std::to_string(stats.bareRaysPerSecond / 1e6) +
+                " Mrays/s; the bake reached " + std::to_string(raysPerSecond / stats.bareRaysPerSecond) + " of it");
+    nlohmann::json record = {{"texels", stats.texels},
+                             {"texels_per_second", texelsPerSecond},
+                             {"rays", stats.rays},
+                             {"rays_per_second", raysPerSecond},
+                             {"transfer_seconds", stats.transferSeconds},
+                             {"fill_seconds", stats.fillSeconds},
+                             {"seam_edges", stats.seamEdges},
+                             {"stitched_texels", stats.stitchedTexels},
+                             {"stored_bytes", storedBytes}};
+    if (options.yardstick) record["bare_rays_per_second"] = stats.bareRaysPerSecond;
+    logEvent("bake_stats", record.dump());
+
+    StageCost cost;
+    cost.stage = "bake";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = stats.rays + stats.cageRays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
+} // namespace prt

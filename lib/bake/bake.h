@@ -1,0 +1,284 @@
+// Texture-space bake: diffuse SH transfer per atlas texel, optionally with detail (normals, positions and shadows)
+// from a high-resolution mesh, gutters filled by push-pull, written as multi-channel OpenEXR or range-compressed
+// 8-bit layers next to a bundle that references them. `prt bake` is runBake().
+//
+// Texel space (docs/conventions.md, glTF): texel (x, y) of a W x H atlas, row 0 at the top, has its centre at
+// uv = ((x + 0.5) / W, (y + 0.5) / H) in TEXCOORD_0's v-down convention, so no flip happens anywhere.
+// Texel arrays are row-major, linear index y * W + x, with `channels` interleaved floats per texel.
+// A coefficient texture holds the per-texel transfer [order^2][3] as channels "T000.R", "T000.G", "T000.B",
+// "T001.R", ... (coefficient j as three decimal digits, docs/bundle.md "Texel layers").
+#pragma once
+
+#include "bundle.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+// Largest atlas side: a 16384^2 atlas of order-3 float transfer already takes 29 GB.
+inline constexpr int kMaxBakeResolution = 16384;
+
+// TEXCOORD_<set> of a .glb / .gltf file, per vertex in the order readBundle gives the merged mesh.
+// Throws prt::Error naming the file and the primitive that lacks the set.
+std::vector<float> readTexcoordSet(const std::string& path, int set);
+
+// ---- rasterisation ----------------------------------------------------------------------------------------------
+
+// How texcoords outside [0, 1] are treated: refused, or wrapped onto the atlas (texel coordinates modulo size).
+enum class UvWrap { None, Repeat };
+// Parses "none" | "repeat"; throws prt::Error(kExitUsage) otherwise.
+UvWrap parseUvWrap(const std::string& name);
+
+// The covered texels of an atlas and where on the surface each one samples.
+struct TexelSamples {
+    int width = 0, height = 0;
+    std::vector<uint32_t> texel;       // covered texels in ascending linear index y * width + x
+    std::vector<uint32_t> triangle;    // per covered texel: the triangle its sample point lies on
+    std::vector<float> barycentric;    // per covered texel: weights of that triangle's corners, >= 0, summing to 1
+    std::vector<uint8_t> centreInside; // per covered texel: 1 if its centre lies in the triangle, else 0
+    size_t degenerateTriangles = 0;    // triangles of zero UV area: they cover no texel
+    size_t overlappingTexels = 0;      // texel centres strictly inside two triangles (only with allowOverlap)
+};
+
+struct RasterOptions {
+    int width = 0, height = 0;
+    UvWrap wrap = UvWrap::None;
+    bool allowOverlap = false; // otherwise overlapping UVs are an error: transfer needs a unique atlas
+};
+
+// Rasterises every UV triangle conservatively: a texel is covered when its square overlaps the triangle with
+// positive area. Its sample point is the texel centre when the centre lies in the triangle, else the point of
+// the triangle nearest to the centre (in UV space). A texel several triangles cover takes, in this order, a
+// triangle containing its centre, the nearest triangle, the lowest triangle index; so edges shared inside a chart
+// never disagree and the result does not depend on triangle order beyond that last tie.
+// Needs: mesh.texcoords per vertex, indices in range, 1 <= width, height <= kMaxBakeResolution.
+// Throws prt::Error(source, ...) naming the vertex for a non-finite texcoord or, without wrap, one outside
+// [0, 1]; naming both triangles and the texel when two triangles contain one texel centre strictly inside (UVs
+// overlap) unless options.allowOverlap, in which case the lower triangle keeps the texel and it is counted.
+TexelSamples rasteriseAtlas(const TriMesh& mesh, const RasterOptions& options, const std::string& source);
+
+// The atlas's coverage: 1 for covered texels, 0 elsewhere; width * height bytes.
+std::vector<uint8_t> coverageMask(const TexelSamples& samples);
+
+// Object-space sample points and unit normals (the interpolated vertex normal, or the face normal where the
+// interpolation vanishes), [sample][3] each. Needs mesh.normals and samples from this mesh.
+void texelSurface(const TriMesh& mesh, const TexelSamples& samples, std::vector<float>& positions,
+                  std::vector<float>& normals);
+
+// ---- detail from a high-resolution mesh (the cage approach) ----------------------------------------------------
+
+struct CageProjection {
+    std::vector<float> positions; // [sample][3]: the high mesh's surface point, or the low point on a miss
+    std::vector<float> normals;   // [sample][3]: the high mesh's interpolated unit normal, or the low one on a miss
+    std::vector<uint8_t> hit;     // [sample]
+    std::vector<uint32_t> triangle; // [sample]: the high triangle hit (UINT32_MAX on a miss)
+    std::vector<float> barycentric; // [sample][3]: where on it, weights of its corners
+    size_t misses = 0;
+};
+
+// For every low-mesh sample (point p, unit normal n) casts a ray from the cage point p + cage * n along -n and
+// takes the first surface of `high` within 2 * cage: the high-resolution surface the low one stands in for.
+// Needs: high with normals per vertex, cage > 0 and finite. Deterministic and independent of thread count.
+CageProjection projectOntoHigh(const TriMesh& high, const std::vector<float>& positions,
+                               const std::vector<float>& normals, float cage);
+
+// ---- gutters ----------------------------------------------------------------------------------------------------
+
+// Push-pull hole filling. Pull: a pyramid down to 1 x 1 whose texels average their 2 x 2 children over those that
+// hold a value (binary coverage weights). Push: from the coarsest level back to the finest, every empty texel takes
+// the bilinear interpolation of its parent level, already filled. Covered texels keep their bits; with any texel
+// covered, every texel ends with a value, a convex combination of covered ones, and a constant image stays exactly
+// constant. Works on 16 channels at a time, so its memory beyond the image is about 1.4 floats per texel and channel
+// chunk. Needs covered of width * height bytes; texels [width * height][channels].
+void pushPull(float* texels, int width, int height, int channels, const uint8_t* covered);
+
+// The thesis's fill, kept for comparison: one pass in which every empty texel with covered 8-neighbours takes
+// their average (from a snapshot, so scan order does not matter). Texels further out keep their values.
+void dilateOneRing(float* texels, int width, int height, int channels, const uint8_t* covered);
+
+// ---- 8-bit range compression (the thesis's storage) ------------------------------------------------------------
+
+// Per layer (a group of channelsPerLayer consecutive channels, e.g. one SH coefficient's RGB), its [min, max]
+// over all texels and q = round(255 * (value - min) / (max - min)); a constant layer stores q = 0.
+struct RangeCompressed {
+    std::vector<uint8_t> values; // [texel][layers * channelsPerLayer], like the input
+    std::vector<float> range;    // [layer][2]: min, max
+};
+// Needs finite texels. Guarantees: rangeExpand(...) differs from the input by at most (max - min) / 510 per
+// layer, plus float rounding.
+RangeCompressed rangeCompress(const float* texels, size_t texelCount, int layers, int channelsPerLayer);
+// value = min + q * (max - min) / 255.
+std::vector<float> rangeExpand(const RangeCompressed& compressed, size_t texelCount, int layers,
+                               int channelsPerLayer);
+
+// ---- tangent-space normal maps ----------------------------------------------------------------------------------
+
+// Per-vertex tangent frames from the UV parameterisation: xyz the unit tangent along +u, orthogonal to the vertex
+// normal, w = +1 or -1 the handedness, so the bitangent is w * cross(normal, tangent) and points along -v (up in
+// the image, glTF's convention for normal textures). Area-weighted over the triangles around each vertex; a vertex
+// with no usable UV gradient gets any tangent orthogonal to its normal, w = +1. Needs normals and texcoords.
+std::vector<float> vertexTangents(const TriMesh& mesh);
+
+// Each sample's normal `objectNormals` ([sample][3], unit) in the tangent frame interpolated at the sample
+// (tangent, bitangent, interpolated normal, re-orthonormalised): [sample][3], unit. A normal equal to the low
+// mesh's own interpolated normal gives (0, 0, 1).
+std::vector<float> tangentSpaceNormals(const TriMesh& mesh, const std::vector<float>& tangents,
+                                       const TexelSamples& samples, const std::vector<float>& objectNormals);
+
+// ---- lightmap atlas generation ----------------------------------------------------------------------------------
+
+struct AtlasOptions {
+    int width = 0, height = 0;
+    int padding = 4;            // texels between charts' covered texels (and half of it at the atlas border)
+    double chartAngle = 60.0;   // degrees: a face joins a chart when its normal is this close to the chart's seed
+};
+
+struct GeneratedAtlas {
+    TriMesh mesh;                      // the input with texcoords; vertices split where charts meet
+    std::vector<uint32_t> sourceVertex; // output vertex -> input vertex
+    std::vector<uint32_t> chart;        // per triangle: its chart
+    size_t charts = 0;
+    double texelsPerUnit = 0.0;         // atlas texels per mesh unit of length, the same for every chart
+};
+
+// A unique UV atlas for a mesh without one. Charts grow over OpenMesh's face adjacency from seed faces (lowest
+// unassigned index first, nearest normals first) while face normals stay within chartAngle of the seed's; a chart
+// whose projection onto its seed's plane folds over itself is grown again from its own faces with half the cone,
+// down to single faces. Each chart is projected onto the plane of its seed normal and turned to its minimal-area
+// bounding rectangle; all are packed (skyline, bottom-left) at one common texel density, the largest that fits,
+// with `padding` texels between charts.
+// Needs: indices in range, at least one triangle; 8 <= width, height <= kMaxBakeResolution; padding >= 2;
+// 0 < chartAngle < 90. Guarantees: texcoords in [0, 1]; rasteriseAtlas on the result finds no overlap; every face
+// within chartAngle of its chart's projection direction; same input, same output.
+// Throws prt::Error(kExitInput) when the charts do not fit at any density (too many for the padding).
+GeneratedAtlas generateAtlas(const TriMesh& mesh, const AtlasOptions& options);
+
+// ---- seams ------------------------------------------------------------------------------------------------------
+
+// An edge of the surface (vertices at equal positions count as one) whose two triangles map it to different
+// places in the atlas. Corners a, b of `first` and c, d of `second` lie at the same two positions: a with c,
+// b with d.
+struct SeamEdge {
+    uint32_t first = 0, second = 0; // triangles
+    uint32_t a = 0, b = 0, c = 0, d = 0;
+};
+// Needs texcoords and indices in range. Deterministic order (by first triangle, then edge).
+std::vector<SeamEdge> findSeams(const TriMesh& mesh);
+
+// Makes the two sides of every seam agree under bilinear filtering (after the gutters are filled, since lookups
+// on a chart's border read them): the texels that lookups along seams touch move to the x minimising
+// |x - x0|^2 + weight * sum over seam points p of |bilinear_first(p) - bilinear_second(p)|^2, with points a third of
+// a texel apart along each edge (sparse Cholesky, Eigen). Larger weights close the jump further and move texels
+// more; all other texels keep their bits. texels [width * height][channels].
+// Returns the number of texels changed. Deterministic.
+size_t stitchSeams(const TriMesh& mesh, const std::vector<SeamEdge>& seams, int width, int height, float* texels,
+                   int channels, double weight = 16.0);
+
+// Radiance jump across seams: at `pointsPerEdge` points along each seam edge, the bilinear lookups of `radiance`
+// (an RGB atlas, [width * height][3]) through either side's texcoords, and their difference.
+struct SeamJump {
+    double rms = 0.0;       // RMS over points and channels of the difference
+    double meanRadiance = 0.0; // mean over the same points and channels of the two sides' average
+    size_t points = 0;
+};
+SeamJump texelSeamJump(const TriMesh& mesh, const std::vector<SeamEdge>& seams, const float* radiance,
+                       int width, int height, int pointsPerEdge);
+// The same for per-vertex radiance ([vertex][3]) linearly interpolated along the edges.
+SeamJump vertexSeamJump(const TriMesh& mesh, const std::vector<SeamEdge>& seams, const float* radiance,
+                        int pointsPerEdge);
+
+// Bilinear lookup of an atlas at uv (texel centres at (x + 0.5) / W; clamped at the borders): channels floats.
+void sampleBilinear(const float* texels, int width, int height, int channels, float u, float v, float* out);
+
+// ---- texture files ----------------------------------------------------------------------------------------------
+
+// Storage of coefficient textures: one multi-channel OpenEXR (half or float), or one 8-bit RGB PNG per
+// coefficient with the per-layer [min, max] in a JSON sidecar.
+enum class TexelFormat { Half, Float, U8 };
+// Parses "half" | "float" | "u8"; throws prt::Error(kExitUsage) otherwise.
+TexelFormat parseTexelFormat(const std::string& name);
+const char* texelFormatName(TexelFormat format);
+
+// Channel name of coefficient j, colour c (0..2): "T000.R".
+std::string coefficientChannel(int coefficient, int colour);
+
+// Writes [width * height][coefficients][3] transfer atomically as one OpenEXR with ZIP compression and channels
+// named by coefficientChannel. Throws prt::Error(path, ..., kExitOutput) when it cannot be written.
+void writeCoefficientExr(const std::string& path, const float* texels, int width, int height, int coefficients,
+                         bool half);
+
+// Reads a coefficient EXR back, finding channels by name: [width * height][coefficients][3].
+// Throws prt::Error naming the file for a missing file, a missing channel or a size other than expected
+// (expected sizes of 0 accept any).
+std::vector<float> readCoefficientExr(const std::string& path, int& width, int& height, int& coefficients);
+
+// Writes an 8-bit image atomically, format by extension (PNG for prt's layers): [width * height][channels].
+void writeImage8(const std::string& path, const uint8_t* bytes, int width, int height, int channels);
+// Reads the first `channels` channels of an 8-bit image (expected sizes of 0 accept any).
+std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int channels);
+
+// ---- the stage --------------------------------------------------------------------------------------------------
+
+struct BakeOptions {
+    std::string input;        // the low mesh: .glb / .gltf with normals
+    std::string output;       // .glb bundle; textures go next to it, named after it
+    std::string high;         // optional high-resolution mesh (.glb / .gltf with normals)
+    int resolution = 512;     // atlas side, 1..kMaxBakeResolution
+    int order = 3;
+    int samples = 1024;
+    int bounces = 0;          // > 0: interreflected
+    int uvSet = 0;            // TEXCOORD_<uvSet> of the input
+    TexelFormat format = TexelFormat::Half;
+    UvWrap wrap = UvWrap::None;
+    bool allowOverlap = false;
+    bool dilateOnly = false;  // the thesis's one-ring dilation instead of push-pull
+    bool seamStitch = true;
+    bool highPosition = true; // with a high mesh: sample (and shade) at the projected high-mesh point
+    double cage = 0.02;       // cage distance, relative to the low mesh's bounding-box diagonal
+    double maxMissFraction = 0.01; // more texels than this missing the high mesh is an error
+    int padding = 4;          // generated atlases
+    uint64_t seed = 0;
+    int threads = 0;
+    bool yardstick = false;   // also cast the direct pass's rays with bare Embree, to compare rays/s in one run
+    std::string toolVersion;
+};
+
+struct BakeStats {
+    size_t texels = 0;              // covered texels, each one receiver
+    uint64_t rays = 0;              // transfer rays (all in the direct pass)
+    uint64_t cageRays = 0;          // rays of the cage projection onto the high mesh
+    double transferSeconds = 0.0;   // per-texel transfer, wall clock
+    double directSeconds = 0.0;     // its direct pass: rays plus accumulation
+    double fillSeconds = 0.0;       // push-pull or dilation of the coefficient atlas
+    size_t seamEdges = 0;
+    size_t stitchedTexels = 0;
+    double bareRaysPerSecond = 0.0; // with options.yardstick: bare rtcOccluded1 over the same rays
+};
+
+// What a bake computed, before anything is written.
+struct BakedAtlas {
+    TriMesh mesh;                    // the low mesh with the atlas as texcoords (generated when it had none)
+    TexelSamples samples;
+    std::vector<float> transfer;     // [width * height][order^2][3]: filled and stitched
+    std::vector<float> normals;      // [width * height][3]: tangent-space unit normals, filled
+    nlohmann::json params;           // what the texel layer records about the bake (docs/bundle.md)
+    BakeStats stats;
+};
+
+// Reads the inputs and validates everything (options, UVs, high-mesh coverage), then bakes: rasterise, cage
+// projection, the per-vertex transfer integrator with texels as receivers (rays against the high mesh when given),
+// gutter fill, seam stitching, tangent-space normals. Writes nothing; logs progress.
+// Throws prt::Error (kExitUsage for bad options, kExitInput for bad inputs).
+BakedAtlas bakeAtlas(const BakeOptions& options);
+
+// The stage: bakeAtlas, then the textures and last the bundle that references them, each atomically; when a later
+// write fails the earlier files are removed, so an error leaves no output. Logs a summary and the stage cost.
+// Throws prt::Error (kExitUsage, kExitInput as bakeAtlas; kExitOutput for write failures).
+void runBake(const BakeOptions& options);
+
+} // namespace prt

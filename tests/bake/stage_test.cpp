@@ -1,0 +1,157 @@
+// The `prt bake` stage end to end on small inputs: outputs and their references, and bad input that must leave
+// nothing behind.
+#include "bake.h"
+
+#include "core.h"
+#include "scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace prt {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh folder per test; its files are the stage's outputs.
+struct Folder {
+    fs::path path;
+    explicit Folder(const std::string& name)
+        : path(fs::temp_directory_path() / ("prt_bake_stage_" + std::to_string(::getpid()) + "_" + name)) {
+        fs::remove_all(path);
+        fs::create_directories(path);
+    }
+    ~Folder() { fs::remove_all(path); }
+    std::string operator/(const std::string& file) const { return (path / file).string(); }
+    size_t files() const { return size_t(std::distance(fs::directory_iterator(path), fs::directory_iterator())); }
+};
+
+std::string writeMesh(const Folder& folder, const std::string& name, const TriMesh& mesh) {
+    Bundle bundle;
+    bundle.mesh = mesh;
+    std::string path = folder / name;
+    writeBundle(path, bundle);
+    return path;
+}
+
+BakeOptions smallBake(const std::string& input, const std::string& output) {
+    BakeOptions options;
+    options.input = input;
+    options.output = output;
+    options.resolution = 32;
+    options.order = 2;
+    options.samples = 32;
+    options.toolVersion = "test";
+    return options;
+}
+
+// Runs the bake expecting prt::Error; returns it after checking that only the inputs remain in the folder.
+Error expectFailureWithoutOutput(const BakeOptions& options, const Folder& folder, size_t inputs) {
+    try {
+        runBake(options);
+    } catch (const Error& e) {
+        EXPECT_EQ(folder.files(), inputs) << "the failed bake left files behind: " << e.what();
+        return e;
+    }
+    ADD_FAILURE() << "expected an error";
+    return Error("", "", "");
+}
+
+TEST(BakeStage, UvsOutsideTheUnitSquareWithoutAWrapMode) {
+    Folder folder("outside");
+    TriMesh plane = makePlane(1.0f, 2);
+    plane.texcoords[0] = 1.5f;
+    BakeOptions options = smallBake(writeMesh(folder, "low.glb", plane), folder / "out.glb");
+    Error e = expectFailureWithoutOutput(options, folder, 1);
+    EXPECT_NE(e.problem().find("outside [0, 1]"), std::string::npos) << e.what();
+    EXPECT_EQ(e.file(), options.input);
+}
+
+TEST(BakeStage, OverlappingUvs) {
+    Folder folder("overlap");
+    TriMesh plane = makePlane(1.0f, 2);
+    for (size_t v = 0; v < plane.vertexCount(); ++v) plane.texcoords[2 * v] = 0.5f * plane.texcoords[2 * v] + 0.25f;
+    TriMesh twice = mergeMeshes({plane, makePlane(1.0f, 2, 1.0f)}); // the second copy keeps UVs [0, 1]^2
+    Error e = expectFailureWithoutOutput(smallBake(writeMesh(folder, "low.glb", twice), folder / "out.glb"), folder, 1);
+    EXPECT_NE(e.problem().find("overlap"), std::string::npos) << e.what();
+}
+
+TEST(BakeStage, ResolutionOutOfRange) {
+    Folder folder("resolution");
+    std::string input = writeMesh(folder, "low.glb", makePlane(1.0f, 2));
+    for (int resolution : {0, kMaxBakeResolution + 1}) {
+        BakeOptions options = smallBake(input, folder / "out.glb");
+        options.resolution = resolution;
+        Error e = expectFailureWithoutOutput(options, folder, 1);
+        EXPECT_EQ(e.exitCode(), kExitUsage);
+        EXPECT_EQ(e.place(), "--resolution");
+    }
+}
+
+TEST(BakeStage, HighMeshThatDoesNotCoverTheLowOne) {
+    Folder folder("cover");
+    BakeOptions options = smallBake(writeMesh(folder, "low.glb", makePlane(1.0f, 2)), folder / "out.glb");
+    options.high = writeMesh(folder, "high.glb", makePlane(0.4f, 8, 0.001f)); // covers the middle only
+    Error e = expectFailureWithoutOutput(options, folder, 2);
+    EXPECT_EQ(e.file(), options.high);
+    EXPECT_NE(e.problem().find("does not cover"), std::string::npos) << e.what();
+}
+
+TEST(BakeStage, PlaneUnderAHighPlaneWritesReferencedTexturesAndAFlatNormalMap) {
+    Folder folder("plane");
+    BakeOptions options = smallBake(writeMesh(folder, "low.glb", makePlane(1.0f, 2)), folder / "out.glb");
+    options.high = writeMesh(folder, "high.glb", makePlane(1.2f, 10, 0.002f));
+    options.format = TexelFormat::Float;
+    runBake(options);
+    Bundle bundle = readBundle(options.output);
+    const Layer* transfer = findLayer(bundle, "texel_transfer");
+    const Layer* normal = findLayer(bundle, "normal_map");
+    ASSERT_TRUE(transfer && normal);
+    EXPECT_EQ(transfer->domain, "texel");
+    EXPECT_EQ(transfer->shape, (std::vector<uint64_t>{32 * 32, 4, 3}));
+    std::string exr = folder / transfer->params["uri"].get<std::string>();
+    EXPECT_EQ(transfer->params["hash"], hashFile(exr));
+    int width = 32, height = 32, coefficients = 4;
+    std::vector<float> texels = readCoefficientExr(exr, width, height, coefficients);
+    // An open plane sees the whole upper hemisphere: every texel is the clamped-cosine transfer about +Y,
+    // T_00 = A_0 Y_00 / pi = 0.5 / sqrt(pi) (gutters too, as push-pull fills them from covered texels).
+    for (size_t t = 0; t < size_t(width) * height; ++t)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(texels[t * 12 + c], 0.5 / std::sqrt(M_PI), 1e-5) << "texel " << t;
+    std::vector<uint8_t> normals = readImage8(folder / normal->params["uri"].get<std::string>(), width, height, 3);
+    for (size_t t = 0; t < normals.size() / 3; ++t) {
+        EXPECT_NEAR(normals[3 * t], 127.5, 0.5);
+        EXPECT_NEAR(normals[3 * t + 1], 127.5, 0.5);
+        EXPECT_EQ(normals[3 * t + 2], 255);
+    }
+    EXPECT_EQ(folder.files(), 5u); // low, high, bundle, EXR, normal map
+}
+
+TEST(BakeStage, BoxRoomWithoutUvsGetsAGeneratedAtlasAndU8Layers) {
+    Folder folder("room");
+    TriMesh room = makeBoxRoom(2.0f, 2);
+    BakeOptions options = smallBake(writeMesh(folder, "room.glb", room), folder / "room_baked.glb");
+    options.format = TexelFormat::U8;
+    runBake(options);
+    Bundle bundle = readBundle(options.output);
+    ASSERT_EQ(bundle.mesh.texcoords.size(), 2 * bundle.mesh.vertexCount());
+    const Layer* transfer = findLayer(bundle, "texel_transfer");
+    ASSERT_TRUE(transfer);
+    EXPECT_EQ(transfer->params["atlas"]["generated"], true);
+    EXPECT_EQ(transfer->params["atlas"]["charts"], 6);
+    std::ifstream in(folder / transfer->params["uri"].get<std::string>());
+    nlohmann::json sidecar = nlohmann::json::parse(in);
+    ASSERT_EQ(sidecar["layers"].size(), 4u);
+    for (const auto& layer : sidecar["layers"]) {
+        EXPECT_TRUE(fs::exists(folder / layer["uri"].get<std::string>()));
+        // A closed room admits no distant light: transfer is the exact unshadowed part minus an estimate of all
+        // of it, zero up to the quadrature error of 32 directions.
+        EXPECT_LT(std::abs(layer["min"].get<double>()), 0.01);
+        EXPECT_LT(std::abs(layer["max"].get<double>()), 0.01);
+    }
+}
+
+} // namespace
+} // namespace prt
