@@ -82,10 +82,10 @@ static uint64_t mix64(uint64_t key) {
     return key ^ (key >> 31);
 }
 
-Fan fan(const TriMesh& mesh, size_t vertex, uint64_t seed, float offset) {
+Fan fan(const float position[3], const float normal[3], uint64_t key, uint64_t seed, float offset) {
     Fan f;
-    const float* p = &mesh.positions[3 * vertex];
-    const float* m = &mesh.normals[3 * vertex];
+    const float* p = position;
+    const float* m = normal;
     double length = std::sqrt(double(m[0]) * m[0] + double(m[1]) * m[1] + double(m[2]) * m[2]);
     double n[3] = {m[0] / length, m[1] / length, m[2] / length};
 
@@ -96,7 +96,7 @@ Fan fan(const TriMesh& mesh, size_t vertex, uint64_t seed, float offset) {
     double t0[3] = {1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]};
     double b0[3] = {b, sign + n[1] * n[1] * a, -n[1]};
 
-    double angle = 2.0 * std::numbers::pi * double(mix64(seed ^ mix64(vertex)) >> 11) * 0x1p-53;
+    double angle = 2.0 * std::numbers::pi * double(mix64(seed ^ mix64(key)) >> 11) * 0x1p-53;
     double c = std::cos(angle), s = std::sin(angle);
     for (int i = 0; i < 3; ++i) {
         f.tangent[i] = c * t0[i] + s * b0[i];
@@ -131,6 +131,45 @@ void validateMesh(const TriMesh& mesh) {
         if (mesh.indices[i] >= count)
             throw Error("", "triangle " + std::to_string(i / 3),
                         "index " + std::to_string(mesh.indices[i]) + " >= vertex count " + std::to_string(count));
+}
+
+Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end) {
+    Receivers receivers;
+    receivers.positions = mesh.positions.data() + 3 * begin;
+    receivers.normals = mesh.normals.data() + 3 * begin;
+    if (!mesh.albedo.empty() && !options.albedoOverride) receivers.albedo = mesh.albedo.data() + 3 * begin;
+    receivers.firstKey = begin;
+    receivers.count = end - begin;
+    return receivers;
+}
+
+Receivers receiverSlice(const Receivers& receivers, size_t first, size_t count) {
+    Receivers slice = receivers;
+    slice.positions += 3 * first;
+    slice.normals += 3 * first;
+    if (slice.albedo) slice.albedo += 3 * first;
+    if (slice.keys) slice.keys += first;
+    else slice.firstKey += first;
+    slice.count = count;
+    return slice;
+}
+
+void validateReceivers(const Receivers& receivers) {
+    if (receivers.count > 0 && (!receivers.positions || !receivers.normals))
+        throw Error("", "receivers", "positions and normals are required");
+    for (size_t i = 0; i < receivers.count; ++i) {
+        const float* p = &receivers.positions[3 * i];
+        const float* n = &receivers.normals[3 * i];
+        std::string place = "receiver " + std::to_string(i);
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+            throw Error("", place, "position is not finite");
+        double length2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
+        if (!(length2 > 1e-12) || !std::isfinite(length2)) throw Error("", place, "normal is zero or not finite");
+        if (receivers.albedo)
+            for (int c = 0; c < 3; ++c)
+                if (!(receivers.albedo[3 * i + c] >= 0.0f && receivers.albedo[3 * i + c] <= 1.0f))
+                    throw Error("", place, "albedo outside [0, 1]");
+    }
 }
 
 void clipRange(const TriMesh& mesh, const TransferOptions& options, size_t& begin, size_t& end) {

@@ -34,14 +34,36 @@ struct Hemisphere {
 };
 Hemisphere hemisphere(int samples);
 
-// Where vertex v's rays start and the frame they are turned into: columns tangent, bitangent, normal.
-// The frame turns about the normal by an angle hashed from (seed, v).
+// Where a receiver's rays start and the frame they are turned into: columns tangent, bitangent, normal.
+// The frame turns about the normal by an angle hashed from (seed, key); a mesh vertex's key is its index.
 struct Fan {
     double tangent[3], bitangent[3], normal[3];
     float origin[3];
     float axes[9]; // tangent, bitangent, normal as floats, for the ray directions
 };
-Fan fan(const TriMesh& mesh, size_t vertex, uint64_t seed, float offset);
+// Needs a nonzero normal (normalised here) and finite position.
+Fan fan(const float position[3], const float normal[3], uint64_t key, uint64_t seed, float offset);
+
+// The receivers a per-vertex pass works on: vertices [begin, end) of the mesh, keys their indices, albedo the
+// mesh's per-vertex albedo unless it has none or options.albedoOverride (then null: options.albedo).
+Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end);
+
+// Receiver i's rotation key.
+inline uint64_t receiverKey(const Receivers& receivers, size_t i) {
+    return receivers.keys ? receivers.keys[i] : receivers.firstKey + i;
+}
+
+// Receivers [first, first + count) of `receivers` as a view of their own, keys kept.
+Receivers receiverSlice(const Receivers& receivers, size_t first, size_t count);
+
+// Receiver i's fan.
+inline Fan fan(const Receivers& receivers, size_t i, uint64_t seed, float offset) {
+    return fan(&receivers.positions[3 * i], &receivers.normals[3 * i], receiverKey(receivers, i), seed, offset);
+}
+
+// Checks receivers as computeTransferAt needs them: positions finite, normals nonzero and finite, albedo in
+// [0, 1]. Throws prt::Error(kExitInput) naming "receiver i".
+void validateReceivers(const Receivers& receivers);
 
 // The ray of sample k of a fan, ready for rtcOccluded1 / rtcIntersect1.
 inline void setRay(const Fan& fan, const Hemisphere& set, int k, float offset, RTCRay& ray) {

@@ -1,4 +1,4 @@
-// Per-vertex diffuse SH transfer: a direct pass of rays, then Jacobi Neumann bounces (thesis Fig. 4.2) that
+// Diffuse SH transfer per vertex or per receiver (texel): one direct pass of rays, then Jacobi Neumann bounces (thesis Fig. 4.2) that
 // gather the previous bounce at the direct pass's recorded hits instead of casting new rays.
 #include "transfer.h"
 
@@ -47,9 +47,9 @@ struct HitBlock {
 
 // What every pass reads.
 struct Context {
-    const TriMesh& mesh;
+    const TriMesh& mesh;    // the geometry rays hit and bounces gather from
     const TransferOptions& options;
-    size_t begin, end;      // vertex range written by the direct pass
+    Receivers receivers;    // the rows the direct pass writes, in order: mesh vertices or other points
     int coefficients;       // order^2
     int stride;             // floats per vertex row: order^2 * 3
     float offset;
@@ -58,14 +58,15 @@ struct Context {
     std::vector<float> cosines;       // [sample]
     std::vector<double> lambert;      // [coefficient]: A_l / pi, the unshadowed transfer's band factor
 
-    std::array<float, 3> albedo(size_t vertex) const {
-        if (mesh.albedo.empty() || options.albedoOverride) return options.albedo;
-        const float* a = &mesh.albedo[3 * vertex];
+    std::array<float, 3> albedo(size_t receiver) const {
+        if (!receivers.albedo || options.albedoOverride) return options.albedo;
+        const float* a = &receivers.albedo[3 * receiver];
         return {a[0], a[1], a[2]};
     }
 };
 
-void checkOptions(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end) {
+// Checks the options and the mesh's own albedo (the vertex range is the caller's business).
+void checkOptions(const TriMesh& mesh, const TransferOptions& options) {
     auto usage = [](const std::string& place, const std::string& problem) {
         return Error("", place, problem, kExitUsage);
     };
@@ -80,16 +81,14 @@ void checkOptions(const TriMesh& mesh, const TransferOptions& options, size_t be
         throw usage("bounces", "need mode interreflected");
     for (float a : options.albedo)
         if (!(a >= 0.0f && a <= 1.0f)) throw usage("albedo", "components must lie in [0, 1]");
-    if (options.bounces > 0 && (begin != 0 || end != mesh.vertexCount()))
-        throw usage("vertex range", "interreflected bounces gather from every vertex, so they need the whole mesh");
     if (!mesh.albedo.empty() && !options.albedoOverride)
         for (size_t i = 0; i < mesh.albedo.size(); ++i)
             if (!(mesh.albedo[i] >= 0.0f && mesh.albedo[i] <= 1.0f))
                 throw Error("", "vertex " + std::to_string(i / 3), "albedo outside [0, 1]");
 }
 
-Context makeContext(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end) {
-    Context context{mesh, options, begin, end, options.order * options.order, 3 * options.order * options.order,
+Context makeContext(const TriMesh& mesh, const TransferOptions& options, const Receivers& receivers) {
+    Context context{mesh, options, receivers, options.order * options.order, 3 * options.order * options.order,
                     rayOffset(mesh), {}, {}, {}, {}};
     int n = options.order * options.order;
     context.lambert.resize(n);
@@ -112,12 +111,12 @@ Context makeContext(const TriMesh& mesh, const TransferOptions& options, size_t 
     return context;
 }
 
-// Per-unit-albedo direct transfer of one vertex in world coordinates, t_j = (1/pi) integral V cos Y_j:
+// Per-unit-albedo direct transfer of one receiver in world coordinates, t_j = (1/pi) integral V cos Y_j:
 // the exact unshadowed part A_l/pi Y_j(n) minus (2/N) times the occluded samples' sum rotated out of the local
 // frame. `occluded` is that sum in the local frame; `anyOccluded` false skips the rotation (the sum is zero).
 // Writes albedo * t to `row` ([order^2][3]) and, when `unitRow` is not null, t itself ([order^2]).
 void directRow(const Context& context, const rays::Fan& fan, const std::vector<double>& occluded, bool anyOccluded,
-               size_t vertex, std::vector<double>& scratch, float* row, float* unitRow) {
+               size_t receiver, std::vector<double>& scratch, float* row, float* unitRow) {
     int n = context.coefficients, order = context.options.order;
     scratch.resize(2 * size_t(n));
     double* normalBasis = scratch.data();
@@ -132,7 +131,7 @@ void directRow(const Context& context, const rays::Fan& fan, const std::vector<d
         sh::rotate(sh::rotation(order, frame), occluded.data(), rotated, 1);
     }
     double weight = 2.0 / context.options.samples;
-    std::array<float, 3> albedo = context.albedo(vertex);
+    std::array<float, 3> albedo = context.albedo(receiver);
     for (int j = 0; j < n; ++j) {
         double transfer = context.lambert[j] * normalBasis[j] - weight * rotated[j];
         for (int c = 0; c < 3; ++c) row[3 * j + c] = float(albedo[c] * transfer);
@@ -146,7 +145,7 @@ struct DirectCounts {
 
 uint32_t quantiseBarycentric(float w) { return uint32_t(std::lround(std::clamp(w, 0.0f, 1.0f) * 65535.0f)); }
 
-// Casts one vertex's rays: occlusion rays, or nearest-hit rays when `hits` is not null, whose front-face hits are
+// Casts one receiver's rays: occlusion rays, or nearest-hit rays when `hits` is not null, whose front-face hits are
 // appended to `hits` and back-face hits counted in `backFaceHits`. Adds the weighted local basis of every
 // occluded sample to `occluded`; returns whether there was any.
 bool traceVertex(const Context& context, const rays::Scene& scene, const rays::Fan& fan,
@@ -185,35 +184,31 @@ bool traceVertex(const Context& context, const rays::Scene& scene, const rays::F
     return anyOccluded;
 }
 
-// Shadowed and interreflected direct pass over the context's range into `out` (rows from context.begin) and,
-// when not null, unit-albedo single-channel rows into `unitOut`. Interreflected records front-face hits into
-// `hitBlocks` (one per block of the whole range).
+// Shadowed and interreflected direct pass over the context's receivers into `out` (row i for receiver i) and,
+// when not null, unit-albedo single-channel rows into `unitOut`. With `hitBlocks` (one per block of receivers)
+// rays find their nearest hits and front-face hits are recorded there; otherwise they are occlusion rays.
 void directPass(const Context& context, const rays::Scene& scene, float* out, float* unitOut,
-                std::vector<HitBlock>* hitBlocks, DirectCounts& counts) {
+                std::vector<HitBlock>* hitBlocks, DirectCounts& counts, Progress* progress) {
     int n = context.coefficients;
-    size_t blockCount = (context.end - context.begin + rays::kBlockVertices - 1) / rays::kBlockVertices;
-    std::optional<Progress> progress;
-    if (context.options.progress)
-        progress.emplace(hitBlocks ? "transfer direct pass (hits recorded)" : "transfer direct pass",
-                         context.end - context.begin);
+    const size_t receiverCount = context.receivers.count;
+    size_t blockCount = (receiverCount + rays::kBlockVertices - 1) / rays::kBlockVertices;
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blockCount, 1), [&](const tbb::blocked_range<size_t>& blocks) {
         std::vector<double> occluded(n), scratch;
         RTCIntersectContext intersectContext;
         rtcInitIntersectContext(&intersectContext);
         for (size_t block = blocks.begin(); block != blocks.end(); ++block) {
-            size_t first = context.begin + block * rays::kBlockVertices;
-            size_t last = std::min(first + rays::kBlockVertices, context.end);
+            size_t first = block * rays::kBlockVertices;
+            size_t last = std::min(first + rays::kBlockVertices, receiverCount);
             HitBlock* hits = hitBlocks ? &(*hitBlocks)[block] : nullptr;
             uint64_t backFaceHits = 0;
             for (size_t v = first; v < last; ++v) {
-                rays::Fan fan = rays::fan(context.mesh, v, context.options.seed, context.offset);
+                rays::Fan fan = rays::fan(context.receivers, v, context.options.seed, context.offset);
                 std::fill(occluded.begin(), occluded.end(), 0.0);
                 bool anyOccluded = traceVertex(context, scene, fan, intersectContext, occluded, hits, backFaceHits);
                 if (hits) hits->end.push_back(uint32_t(hits->triangle.size()));
-                size_t row = v - context.begin;
-                directRow(context, fan, occluded, anyOccluded, v, scratch, out + row * context.stride,
-                          unitOut ? unitOut + row * n : nullptr);
+                directRow(context, fan, occluded, anyOccluded, v, scratch, out + v * context.stride,
+                          unitOut ? unitOut + v * n : nullptr);
             }
             if (hits) {
                 hits->triangle.shrink_to_fit();
@@ -226,26 +221,23 @@ void directPass(const Context& context, const rays::Scene& scene, float* out, fl
             if (progress) progress->add(last - first);
         }
     });
-    if (progress) progress->finish();
 }
 
-// One Jacobi bounce, number `number` (1-based). Every vertex gathers `previous` at its recorded hits, each hit
-// weighted by its cosine and interpolated with its barycentrics, and scales the sum by 2/N; the result goes to
-// `next` (when not null) and is added to `total` ([order^2][3] rows).
+// One Jacobi bounce, number `number` (1-based). Every receiver gathers `previous` (rows of the mesh's vertices) at
+// its recorded hits, each hit weighted by its cosine and interpolated with its barycentrics, and scales the sum by
+// 2/N; the result goes to `next` (when not null) and is added to `total` ([order^2][3] rows, one per receiver).
 // With `channels` 3 the rows are RGB and the scale includes the vertex's albedo. With `channels` 1 (one albedo
 // for the whole mesh) the rows are unit-albedo G_b, a third of the bytes to gather, and `total` receives
 // albedo^(number+1) * G_b per channel, since bounce b of uniform albedo rho is rho^(b+1) G_b.
 // `previous` is only read, so each vertex's gather order (its hits in sample order) fixes every bit.
 void bounce(const Context& context, const std::vector<HitBlock>& hitBlocks, int channels, const float* previous,
-            float* next, float* total, int number) {
+            float* next, float* total, int number, Progress* progress) {
     const TriMesh& mesh = context.mesh;
     const size_t rowFloats = size_t(context.coefficients) * channels, rowBytes = rowFloats * sizeof(float);
     const float weight = 2.0f / float(context.options.samples);
     float power[3] = {1.0f, 1.0f, 1.0f};
     for (int c = 0; c < 3; ++c)
         for (int b = 0; b <= number; ++b) power[c] *= context.options.albedo[c];
-    std::optional<Progress> progress;
-    if (context.options.progress) progress.emplace("transfer bounce " + std::to_string(number), mesh.vertexCount());
 
     // Rows of hit triangles are scattered over the mesh: fetch them a few hits ahead (and their corner indices
     // further ahead) so the memory latency overlaps the arithmetic.
@@ -305,19 +297,28 @@ void bounce(const Context& context, const std::vector<HitBlock>& hitBlocks, int 
             if (progress) progress->add(hits.end.size());
         }
     });
-    if (progress) progress->finish();
 }
 
-// The closed form (albedo/pi) A_l Y_lm(n) for every vertex of the range: directRow with nothing occluded.
+// The closed form (albedo/pi) A_l Y_lm(n) for every receiver: directRow with nothing occluded.
 void unshadowedPass(const Context& context, float* out) {
-    tbb::blocked_range<size_t> vertices(context.begin, context.end, rays::kBlockVertices);
-    tbb::parallel_for(vertices, [&](const tbb::blocked_range<size_t>& range) {
+    tbb::blocked_range<size_t> receivers(0, context.receivers.count, rays::kBlockVertices);
+    tbb::parallel_for(receivers, [&](const tbb::blocked_range<size_t>& range) {
         std::vector<double> none(context.coefficients, 0.0), scratch;
         for (size_t v = range.begin(); v != range.end(); ++v) {
-            rays::Fan fan = rays::fan(context.mesh, v, context.options.seed, context.offset);
-            directRow(context, fan, none, false, v, scratch, out + (v - context.begin) * context.stride, nullptr);
+            rays::Fan fan = rays::fan(context.receivers, v, context.options.seed, context.offset);
+            directRow(context, fan, none, false, v, scratch, out + v * context.stride, nullptr);
         }
     });
+}
+
+std::optional<Progress> maybeProgress(const TransferOptions& options, const std::string& label, size_t total) {
+    std::optional<Progress> progress;
+    if (options.progress) progress.emplace(label, total);
+    return progress;
+}
+
+void finish(std::optional<Progress>& progress) {
+    if (progress) progress->finish();
 }
 
 } // namespace
@@ -326,8 +327,11 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
     rays::validateMesh(mesh);
     size_t begin, end;
     rays::clipRange(mesh, options, begin, end);
-    checkOptions(mesh, options, begin, end);
-    Context context = makeContext(mesh, options, begin, end);
+    checkOptions(mesh, options);
+    if (options.bounces > 0 && (begin != 0 || end != mesh.vertexCount()))
+        throw Error("", "vertex range", "interreflected bounces gather from every vertex, so they need the whole mesh",
+                    kExitUsage);
+    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, begin, end));
 
     Transfer result;
     result.order = options.order;
@@ -362,8 +366,11 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
             stats.buildSeconds = nowSeconds() - start;
             start = nowSeconds();
             std::clock_t cpuStart = std::clock();
+            std::optional<Progress> progress = maybeProgress(
+                options, interreflected ? "transfer direct pass (hits recorded)" : "transfer direct pass", end - begin);
             directPass(context, scene, total.data(), unitRows ? previous.data() : nullptr,
-                       interreflected ? &hitBlocks : nullptr, counts);
+                       interreflected ? &hitBlocks : nullptr, counts, progress ? &*progress : nullptr);
+            finish(progress);
             stats.directCpuSeconds = double(std::clock() - cpuStart) / CLOCKS_PER_SEC;
             stats.directSeconds = nowSeconds() - start;
         }
@@ -381,10 +388,89 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
         for (int b = 1; b <= options.bounces; ++b) {
             start = nowSeconds();
             bool last = b == options.bounces;
-            bounce(context, hitBlocks, channels, previous.data(), last ? nullptr : next.data(), total.data(), b);
+            std::optional<Progress> progress =
+                maybeProgress(options, "transfer bounce " + std::to_string(b), mesh.vertexCount());
+            bounce(context, hitBlocks, channels, previous.data(), last ? nullptr : next.data(), total.data(), b,
+                   progress ? &*progress : nullptr);
+            finish(progress);
             if (!last) previous.swap(next);
             stats.bounceSeconds.push_back(nowSeconds() - start);
         }
+    });
+    stats.peakMemoryBytes = peakMemoryBytes();
+    return result;
+}
+
+Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, const TransferOptions& options) {
+    rays::validateMesh(geometry);
+    rays::validateReceivers(receivers);
+    checkOptions(geometry, options);
+    const bool gather = options.mode == TransferMode::Interreflected && options.bounces > 0;
+
+    Transfer result;
+    result.order = options.order;
+    result.vertexBegin = 0;
+    result.vertexEnd = receivers.count;
+    TransferStats& stats = result.stats;
+
+    // Bounces 1..B reach a receiver as one gather of the geometry's (B - 1)-bounce vertex transfer, which already
+    // holds the direct light and bounces 1..B-1 leaving each hit point.
+    std::vector<float> outgoing;
+    if (gather) {
+        TransferOptions vertexOptions = options;
+        vertexOptions.bounces = options.bounces - 1;
+        if (vertexOptions.bounces == 0) vertexOptions.mode = TransferMode::Shadowed; // the same direct estimate
+        vertexOptions.vertexBegin = 0;
+        vertexOptions.vertexEnd = SIZE_MAX;
+        Transfer vertex = computeTransfer(geometry, vertexOptions);
+        outgoing = std::move(vertex.coefficients);
+        stats.bounceSeconds.push_back(vertex.stats.directSeconds);
+        for (double seconds : vertex.stats.bounceSeconds) stats.bounceSeconds.push_back(seconds);
+        stats.rays += vertex.stats.rays;
+    }
+
+    Context context = makeContext(geometry, options, receivers);
+    stats.rayOffset = context.offset;
+    std::vector<float>& total = result.coefficients;
+    total.resize(receivers.count * context.stride);
+    stats.transferBytes = (total.size() + outgoing.size()) * sizeof(float);
+
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+        if (options.mode == TransferMode::Unshadowed) {
+            double start = nowSeconds();
+            unshadowedPass(context, total.data());
+            stats.directSeconds = nowSeconds() - start;
+            return;
+        }
+        double start = nowSeconds();
+        rays::Scene scene(geometry);
+        stats.buildSeconds = nowSeconds() - start;
+        start = nowSeconds();
+        std::clock_t cpuStart = std::clock();
+        DirectCounts counts;
+        std::optional<Progress> progress = maybeProgress(options, "transfer at receivers", receivers.count);
+        // Chunks of whole blocks: the hit records of one chunk at a time, gathered at once and dropped.
+        constexpr size_t kChunk = 32 * rays::kBlockVertices;
+        for (size_t first = 0; first < receivers.count; first += kChunk) {
+            size_t count = std::min(kChunk, receivers.count - first);
+            context.receivers = rays::receiverSlice(receivers, first, count);
+            float* rows = total.data() + first * context.stride;
+            std::vector<HitBlock> hitBlocks(gather ? (count + rays::kBlockVertices - 1) / rays::kBlockVertices : 0);
+            directPass(context, scene, rows, nullptr, gather ? &hitBlocks : nullptr, counts,
+                       progress ? &*progress : nullptr);
+            if (!gather) continue;
+            uint64_t hitBytes = 0;
+            for (const HitBlock& block : hitBlocks) hitBytes += block.end.size() * 4 + block.triangle.size() * 10;
+            stats.hitRecordBytes = std::max(stats.hitRecordBytes, hitBytes);
+            bounce(context, hitBlocks, 3, outgoing.data(), nullptr, rows, 1, nullptr);
+        }
+        finish(progress);
+        stats.directCpuSeconds = double(std::clock() - cpuStart) / CLOCKS_PER_SEC;
+        stats.directSeconds = nowSeconds() - start;
+        stats.rays += counts.rays;
+        stats.hits = counts.hits;
+        stats.backFaceHits = counts.backFaceHits;
     });
     stats.peakMemoryBytes = peakMemoryBytes();
     return result;

@@ -92,6 +92,32 @@ struct Transfer {
 // rows equal the same rows of the whole-mesh result.
 Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options);
 
+// Receivers of transfer that are not the mesh's own vertices (atlas texels, probe points): each a point with a
+// normal and a rotation key, the role the vertex index plays in the per-vertex direction-set rotation.
+// Arrays are borrowed, not copied, and must outlive the call.
+struct Receivers {
+    const float* positions = nullptr; // [count][3], finite
+    const float* normals = nullptr;   // [count][3], nonzero and finite (normalised inside)
+    const float* albedo = nullptr;    // [count][3] linear RGB in [0, 1], or null: options.albedo for every receiver
+    const uint64_t* keys = nullptr;   // [count] rotation keys, or null: receiver i has key firstKey + i
+    uint64_t firstKey = 0;
+    size_t count = 0;
+};
+
+// Transfer at `receivers` with rays against `geometry`: the per-vertex integrator of computeTransfer (same
+// direction set, frames, ray offset rayOffset(geometry), estimator and blocks), with receiver i standing where a
+// vertex with index keys[i] would. Rows follow the receivers: coefficients [count][order^2][3]; vertexBegin 0,
+// vertexEnd count. options.vertexBegin / vertexEnd are ignored; options.albedoOverride applies to receivers too.
+// Unshadowed and shadowed: bit-identical to the row of a vertex of `geometry` with that index at (p, n) (a
+// vertex on no triangle), whatever `threads`. Interreflected with B > 0 bounces: computes the (B - 1)-bounce
+// per-vertex transfer of `geometry` first, then each receiver's direct pass gathers it once at its front-face
+// hits (barycentric interpolation, cosine weighted, times the receiver's albedo): the same truncated series as
+// the vertex result, summed in another order (equal to float rounding). Receivers are traced in chunks of fixed
+// size so the hit records stay small; results do not depend on the chunking or the thread count.
+// Needs: geometry as computeTransfer needs it; receivers as above (throws prt::Error(kExitInput) naming
+// "receiver i" otherwise); options as for computeTransfer.
+Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, const TransferOptions& options);
+
 // The yardstick for the stage's ray throughput: casts exactly the occlusion rays that computeTransfer casts in
 // shadowed mode (same origins, directions, blocks and threads) with rtcOccluded1 and nothing else.
 struct RayThroughput {
@@ -101,6 +127,9 @@ struct RayThroughput {
     double cpuSeconds = 0.0; // the same in process CPU time
 };
 RayThroughput castBareOcclusionRays(const TriMesh& mesh, const TransferOptions& options);
+// The same for receivers: exactly the occlusion rays computeTransferAt casts in shadowed mode.
+RayThroughput castBareOcclusionRaysAt(const TriMesh& geometry, const Receivers& receivers,
+                                      const TransferOptions& options);
 
 // The ray origin offset for a mesh: 1e-4 times its bounding-box diagonal.
 float rayOffset(const TriMesh& mesh);
