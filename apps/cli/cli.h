@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <array>
 #include <string>
 
 namespace prt::cli {
@@ -20,9 +21,14 @@ void addCompareCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
+void addBakeCommand(CLI::App& app);
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
+
+// Parses --albedo: "R,G,B" or a single grey value, each in [0, 1], kept in double so bundles record what was
+// typed. Throws prt::Error(kExitUsage) naming --albedo otherwise.
+std::array<double, 3> parseAlbedo(const std::string& text);
 
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);

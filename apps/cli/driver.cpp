@@ -38,6 +38,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addMeshprepCommand(app);
     addEnvshCommand(app);
     addTransferCommand(app);
+    addBakeCommand(app);
     addReferenceCommand(app);
     addRelightCommand(app);
     addCompareCommand(app);

@@ -34,28 +34,6 @@ struct TransferArgs {
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
 
-// "R,G,B" or a single grey value, each in [0, 1]; kept in double so the bundle records what was typed.
-std::array<double, 3> parseAlbedo(const std::string& text) {
-    std::vector<double> values;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        size_t used = 0;
-        double value = 0.0;
-        try {
-            value = std::stod(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == 0 || used != item.size()) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
-        if (!(value >= 0.0 && value <= 1.0)) throw usage("--albedo", "components must lie in [0, 1]");
-        values.push_back(value);
-    }
-    if (values.size() == 1) return {values[0], values[0], values[0]};
-    if (values.size() != 3) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
-    return {values[0], values[1], values[2]};
-}
-
 // "I/N" with 0 <= I < N.
 void parseShard(const std::string& text, int& index, int& count) {
     char slash = 0, rest = 0;
@@ -183,6 +161,27 @@ void runTransfer(const TransferArgs& args) {
 }
 
 } // namespace
+
+std::array<double, 3> parseAlbedo(const std::string& text) {
+    std::vector<double> values;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        size_t used = 0;
+        double value = 0.0;
+        try {
+            value = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size()) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
+        if (!(value >= 0.0 && value <= 1.0)) throw usage("--albedo", "components must lie in [0, 1]");
+        values.push_back(value);
+    }
+    if (values.size() == 1) return {values[0], values[0], values[0]};
+    if (values.size() != 3) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
+    return {values[0], values[1], values[2]};
+}
 
 void addTransferCommand(CLI::App& app) {
     auto args = std::make_shared<TransferArgs>();

@@ -54,9 +54,9 @@ double boundingDiagonal(const TriMesh& mesh) {
                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
 }
 
-// Per sample: the low mesh's albedo interpolated, or empty when the mesh has none.
-std::vector<float> sampleAlbedo(const TriMesh& mesh, const TexelSamples& samples) {
-    if (mesh.albedo.empty()) return {};
+// Per sample: the low mesh's albedo interpolated, or empty when the mesh has none or `skip` is set.
+std::vector<float> sampleAlbedo(const TriMesh& mesh, const TexelSamples& samples, bool skip) {
+    if (mesh.albedo.empty() || skip) return {};
     std::vector<float> albedo(3 * samples.texel.size());
     for (size_t i = 0; i < samples.texel.size(); ++i) {
         const uint32_t* corner = &mesh.indices[3 * size_t(samples.triangle[i])];
@@ -159,7 +159,7 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
     const TriMesh& geometry = options.high.empty() ? mesh : high;
 
     // Transfer per texel: the per-vertex integrator with texels as receivers.
-    std::vector<float> albedo = sampleAlbedo(mesh, samples);
+    std::vector<float> albedo = sampleAlbedo(mesh, samples, options.albedoOverride);
     std::vector<uint64_t> keys(samples.texel.begin(), samples.texel.end()); // rotations follow texels, not order
     Receivers receivers;
     receivers.positions = positions.data();
@@ -172,6 +172,8 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
     transferOptions.order = options.order;
     transferOptions.samples = options.samples;
     transferOptions.bounces = options.bounces;
+    transferOptions.albedo = options.albedo;
+    transferOptions.albedoOverride = options.albedoOverride;
     transferOptions.seed = options.seed;
     transferOptions.threads = options.threads;
     logInfo("bake: " + std::to_string(count) + " texels of " + std::to_string(size) + "x" + std::to_string(size) +
@@ -231,7 +233,9 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
                     {"mode", transferModeName(transferOptions.mode)},
                     {"samples", options.samples},
                     {"bounces", options.bounces},
-                    {"albedo", mesh.albedo.empty() ? nlohmann::json({1.0, 1.0, 1.0}) : nlohmann::json("per-vertex")},
+                    {"albedo", mesh.albedo.empty() || options.albedoOverride
+                                   ? nlohmann::json(options.albedo)
+                                   : nlohmann::json("per-vertex")},
                     {"seed", options.seed},
                     {"direction_set", kTransferDirectionSet},
                     {"rotation_key", "texel index y * width + x"},

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -233,6 +234,8 @@ struct BakeOptions {
     int samples = 1024;
     int bounces = 0;          // > 0: interreflected
     int uvSet = 0;            // TEXCOORD_<uvSet> of the input
+    std::array<float, 3> albedo = {1.0f, 1.0f, 1.0f}; // used where the low mesh has no albedo, or always with
+    bool albedoOverride = false;                      // albedoOverride (linear RGB in [0, 1])
     TexelFormat format = TexelFormat::Half;
     UvWrap wrap = UvWrap::None;
     bool allowOverlap = false;

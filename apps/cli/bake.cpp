@@ -1,0 +1,96 @@
+// prt bake: per-texel diffuse SH transfer of a mesh's atlas, written as textures next to a bundle that references
+// them (lib/bake runBake).
+#include "cli.h"
+
+#include "bake.h"
+#include "core.h"
+#include "sh.h"
+#include "transfer.h"
+
+#include <memory>
+
+#ifndef PRT_VERSION
+#define PRT_VERSION "0.0.0"
+#endif
+
+namespace prt::cli {
+
+namespace {
+
+struct BakeArgs {
+    BakeOptions options;
+    std::string format = "half";
+    std::string wrap = "none";
+    std::string albedo;
+    bool noSeamStitch = false;
+    bool lowPosition = false;
+};
+
+void runBakeCommand(BakeArgs args) {
+    BakeOptions& options = args.options;
+    options.format = parseTexelFormat(args.format);
+    options.wrap = parseUvWrap(args.wrap);
+    options.seamStitch = !args.noSeamStitch;
+    options.highPosition = !args.lowPosition;
+    if (!args.albedo.empty()) {
+        std::array<double, 3> albedo = parseAlbedo(args.albedo);
+        options.albedo = {float(albedo[0]), float(albedo[1]), float(albedo[2])};
+        options.albedoOverride = true;
+    }
+    if (options.threads < 0) throw Error("", "--threads", "must be >= 0 (0: all cores)", kExitUsage);
+    options.threads = resolveThreads(options.threads);
+    options.toolVersion = PRT_VERSION;
+    runBake(options);
+}
+
+} // namespace
+
+void addBakeCommand(CLI::App& app) {
+    auto args = std::make_shared<BakeArgs>();
+    BakeOptions& o = args->options;
+    CLI::App* command = app.add_subcommand(
+        "bake", "Per-texel SH transfer into atlas textures (optionally with detail from a high-resolution mesh)");
+    command->add_option("mesh", o.input, "Low mesh with normals (.glb from `prt meshprep`); its UVs, or a generated "
+                                         "lightmap atlas when it has none")
+        ->required();
+    command->add_option("-o,--output", o.output,
+                        "Output bundle (.glb); the textures go next to it as NAME.transfer.exr (or NAME.transfer.json "
+                        "and NAME.transfer.TJJJ.png with --format u8) and NAME.normal.png")
+        ->required();
+    command->add_option("--high", o.high, "High-resolution mesh with normals: normals, positions and shadows come "
+                                          "from it (cage projection along the low normals)");
+    command->add_option("--resolution", o.resolution,
+                        "Atlas side in texels, 1.." + std::to_string(kMaxBakeResolution) + " (default 512)");
+    command->add_option("--order", o.order, "Number of SH bands L (L*L coefficients), 1.." +
+                                                std::to_string(sh::kMaxOrder) + " (default 3)");
+    command->add_option("--samples", o.samples,
+                        "Hemisphere directions per texel, 1.." + std::to_string(kMaxTransferSamples) + " (default 1024)");
+    command->add_option("--bounces", o.bounces, "Interreflection bounces (default 0: shadowed)");
+    command->add_option("--albedo", args->albedo,
+                        "Diffuse albedo R,G,B (or one grey value) in [0,1]; overrides the mesh's per-vertex albedo "
+                        "(default: the mesh's, else 1)");
+    command->add_option("--uv-set", o.uvSet, "Bake into TEXCOORD_K of the input (default 0)");
+    command->add_option("--format", args->format,
+                        "Coefficient storage: half or float (one multi-channel OpenEXR) or u8 (8-bit PNG per "
+                        "coefficient with a per-layer [min, max] JSON sidecar); default half");
+    command->add_option("--wrap", args->wrap, "UVs outside [0, 1]: none (an error, default) or repeat");
+    command->add_flag("--allow-overlap", o.allowOverlap,
+                      "Accept overlapping UVs (the lowest triangle keeps a shared texel) instead of failing");
+    command->add_flag("--dilate-only", o.dilateOnly,
+                      "Fill gutters by one ring of dilation (the thesis's fill) instead of push-pull");
+    command->add_flag("--no-seam-stitch", args->noSeamStitch, "Leave the two sides of UV seams as baked");
+    command->add_flag("--low-position", args->lowPosition,
+                      "With --high: shade at the low surface's point (normals and shadows still from the high mesh)");
+    command->add_option("--cage", o.cage, "Cage distance for --high, relative to the low mesh's bounding-box "
+                                          "diagonal (default 0.02)");
+    command->add_option("--max-miss", o.maxMissFraction,
+                        "With --high: the largest fraction of texels allowed to miss the high mesh (default 0.01)");
+    command->add_option("--padding", o.padding, "Texels between charts of a generated atlas (default 4)");
+    command->add_option("--seed", o.seed, "Seed of the per-texel direction rotations (default 0)");
+    command->add_option("--threads", o.threads, "Worker threads (default 0: all cores)");
+    command->add_flag("--yardstick", o.yardstick,
+                      "Also cast the direct pass's rays with bare Embree and log both throughputs");
+    command->callback([args] { runBakeCommand(*args); });
+}
+
+} // namespace prt::cli
