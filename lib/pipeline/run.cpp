@@ -5,6 +5,7 @@
 #include "core.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <set>
@@ -263,6 +264,20 @@ nlohmann::json stageRecord(const PipelineStage& stage, const StagePlan& plan, co
     return record;
 }
 
+// One line of the run's cost table: "  transfer   ran      3.21 s   12.3 M rays   peak 120 MiB".
+std::string costLine(const nlohmann::json& record) {
+    char line[160];
+    std::string status = record["status"];
+    if (status != "ran") {
+        std::snprintf(line, sizeof line, "  %-12s %-8s", record["id"].get<std::string>().c_str(), status.c_str());
+        return line;
+    }
+    std::snprintf(line, sizeof line, "  %-12s %-8s %8.2f s %9.1f M rays   peak %6.0f MiB",
+                  record["id"].get<std::string>().c_str(), status.c_str(), record["seconds"].get<double>(),
+                  record["rays"].get<uint64_t>() * 1e-6, record["peak_memory_bytes"].get<uint64_t>() / 1048576.0);
+    return line;
+}
+
 // Copies each declared output whose stage has a result atomically into place, unless it already holds it.
 nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string, StoreEntry>& entries) {
     nlohmann::json copied = nlohmann::json::object();
@@ -351,6 +366,7 @@ nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options) 
     if (!options.reportPath.empty()) writeJson(options.reportPath, report);
     logInfo("run " + pipeline.name + ": " + std::to_string(ran) + " stages ran, " + std::to_string(hits) + " cached, " +
             std::to_string(report["seconds"].get<double>()) + " s; report " + runDir + "/report.json");
+    for (const nlohmann::json& record : report["stages"]) logInfo(costLine(record));
     if (failure) throw *failure;
     return report;
 }
