@@ -1,4 +1,5 @@
-// prt relight: per-vertex outgoing radiance of a bundle's transfer under an environment map or SH lighting.
+// prt relight: per-vertex (or, with --texels, per-texel) outgoing radiance of a bundle's transfer under an
+// environment map or SH lighting.
 #include "cli.h"
 
 #include "compare.h"
@@ -20,6 +21,7 @@ struct RelightOptions {
     double rotateYDegrees = 0.0;
     std::string window = "none";
     std::string output;
+    bool texels = false;
 };
 
 void runRelight(const RelightOptions& options) {
@@ -27,10 +29,14 @@ void runRelight(const RelightOptions& options) {
     sh::Window window = sh::parseWindow(options.window);
     // writeVertexRadiance checks this too, but only after the work; a typo should fail at once.
     std::string outputExtension = fileExtension(options.output);
-    if (outputExtension != "npy" && outputExtension != "csv")
+    if (options.texels && outputExtension != "exr")
+        throw Error(options.output, "-o", "with --texels the output is an atlas image and must end in .exr", kExitUsage);
+    if (!options.texels && outputExtension != "npy" && outputExtension != "csv")
         throw Error(options.output, "-o", "output must end in .npy or .csv", kExitUsage);
 
-    RelightModel model = loadRelightModel(options.bundle);
+    TexelRelightModel texelModel;
+    if (options.texels) texelModel = loadTexelRelightModel(options.bundle);
+    RelightModel model = options.texels ? std::move(texelModel.rows) : loadRelightModel(options.bundle);
     const int coefficients = sh::coefficientCount(model.order);
     double R[9];
     sh::rotationY(options.rotateYDegrees, R);
@@ -57,12 +63,21 @@ void runRelight(const RelightOptions& options) {
     relight(model, lighting.data(), 0, model.vertexCount, radiance.data());
     double relightSeconds = nowSeconds() - relightStart;
     char rate[160];
-    std::snprintf(rate, sizeof rate, "relight: %u vertices at order %d in %.3f ms (%.1f Mvertices/s)",
-                  model.vertexCount, model.order, relightSeconds * 1e3,
-                  relightSeconds > 0.0 ? model.vertexCount / relightSeconds / 1e6 : 0.0);
+    const char* rows = options.texels ? "texels" : "vertices";
+    std::snprintf(rate, sizeof rate, "relight: %u %s at order %d in %.3f ms (%.1f M%s/s)", model.vertexCount, rows,
+                  model.order, relightSeconds * 1e3,
+                  relightSeconds > 0.0 ? model.vertexCount / relightSeconds / 1e6 : 0.0, rows);
     logInfo(rate);
 
-    writeVertexRadiance(options.output, radiance);
+    if (options.texels) {
+        Image image;
+        image.width = texelModel.width;
+        image.height = texelModel.height;
+        image.rgb = std::move(radiance);
+        writeImage(options.output, image); // float EXR, atomic
+    } else {
+        writeVertexRadiance(options.output, radiance);
+    }
     logInfo("relight: wrote " + options.output);
 
     StageCost cost;
@@ -77,7 +92,7 @@ void runRelight(const RelightOptions& options) {
 void addRelightCommand(CLI::App& app) {
     auto options = std::make_shared<RelightOptions>();
     CLI::App* command =
-        app.add_subcommand("relight", "Per-vertex outgoing radiance of a bundle's transfer under new lighting");
+        app.add_subcommand("relight", "Per-vertex (or per-texel) outgoing radiance of a bundle's transfer under new lighting");
     command->add_option("bundle", options->bundle, "Bundle (.glb) with a \"transfer\" layer")->required();
     CLI::Option_group* lighting = command->add_option_group("lighting", "Where the lighting comes from");
     lighting->add_option("--env", options->env, "Environment map: 2:1 equirect or 1:6 cube strip");
@@ -87,7 +102,11 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--rotate-y", options->rotateYDegrees,
                         "Turn the lighting by this many degrees about +Y (right-handed)");
     command->add_option("--window", options->window, "Band window against ringing: none, hann or lanczos");
-    command->add_option("-o,--output", options->output, "Per-vertex radiance [V,3]: .npy (float32) or .csv")
+    command->add_flag("--texels", options->texels,
+                      "Relight the bundle's per-texel transfer (\"texel_transfer\", from `prt bake`) into an atlas "
+                      "image");
+    command->add_option("-o,--output", options->output,
+                        "Per-vertex radiance [V,3]: .npy (float32) or .csv; with --texels an RGB float .exr atlas")
         ->required();
     command->callback([options] { runRelight(*options); });
 }

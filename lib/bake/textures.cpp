@@ -2,9 +2,12 @@
 #include "bake.h"
 
 #include "core.h"
+#include "image.h"
+#include "runtime.h"
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace prt {
@@ -25,11 +28,7 @@ const char* texelFormatName(TexelFormat format) {
     return "?";
 }
 
-std::string coefficientChannel(int coefficient, int colour) {
-    char name[16];
-    std::snprintf(name, sizeof name, "T%03d.%c", coefficient, "RGB"[colour]);
-    return name;
-}
+std::string coefficientChannel(int coefficient, int colour) { return texelCoefficientChannel(coefficient, colour); }
 
 void writeCoefficientExr(const std::string& path, const float* texels, int width, int height, int coefficients,
                          bool half) {
@@ -48,33 +47,22 @@ void writeCoefficientExr(const std::string& path, const float* texels, int width
 }
 
 std::vector<float> readCoefficientExr(const std::string& path, int& width, int& height, int& coefficients) {
-    auto input = OIIO::ImageInput::open(path);
-    if (!input) throw Error(path, "", "cannot open coefficient texture (" + OIIO::geterror() + ")");
-    const OIIO::ImageSpec& spec = input->spec();
-    if ((width > 0 && spec.width != width) || (height > 0 && spec.height != height))
-        throw Error(path, "", std::to_string(spec.width) + "x" + std::to_string(spec.height) + " texels, expected " +
-                                  std::to_string(width) + "x" + std::to_string(height));
     if (coefficients <= 0) {
+        std::vector<std::string> present = imageChannelNames(path);
+        auto has = [&](const std::string& name) { return std::find(present.begin(), present.end(), name) != present.end(); };
         coefficients = 0;
-        while (spec.channelindex(coefficientChannel(coefficients, 0)) >= 0) ++coefficients;
+        while (has(coefficientChannel(coefficients, 0))) ++coefficients;
         if (coefficients == 0) throw Error(path, "channel " + coefficientChannel(0, 0), "is missing");
     }
-    width = spec.width, height = spec.height;
-    std::vector<int> channelOf(3 * size_t(coefficients));
+    std::vector<std::string> names;
     for (int j = 0; j < coefficients; ++j)
-        for (int c = 0; c < 3; ++c) {
-            channelOf[3 * j + c] = spec.channelindex(coefficientChannel(j, c));
-            if (channelOf[3 * j + c] < 0) throw Error(path, "channel " + coefficientChannel(j, c), "is missing");
-        }
-    size_t texelCount = size_t(width) * height;
-    std::vector<float> file(texelCount * spec.nchannels);
-    if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, file.data()))
-        throw Error(path, "", "cannot read pixels (" + input->geterror() + ")");
-    std::vector<float> texels(texelCount * 3 * coefficients);
-    for (size_t t = 0; t < texelCount; ++t)
-        for (size_t k = 0; k < channelOf.size(); ++k)
-            texels[t * channelOf.size() + k] = file[t * spec.nchannels + channelOf[k]];
-    return texels;
+        for (int c = 0; c < 3; ++c) names.push_back(coefficientChannel(j, c));
+    ImageChannels image = readImageChannels(path, names);
+    if ((width > 0 && image.width != width) || (height > 0 && image.height != height))
+        throw Error(path, "", std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                  " texels, expected " + std::to_string(width) + "x" + std::to_string(height));
+    width = image.width, height = image.height;
+    return std::move(image.values);
 }
 
 void writeImage8(const std::string& path, const uint8_t* bytes, int width, int height, int channels) {

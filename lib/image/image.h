@@ -33,6 +33,21 @@ Image readImage(const std::string& path);
 // radiance is finite and >= 0 everywhere.
 EnvironmentMap readEnvironmentMap(const std::string& path);
 
+// Channels of a multi-channel image picked by name: values [pixel][names.size()], row 0 at the top. 8-bit files
+// read as q / 255, float and half files as stored.
+struct ImageChannels {
+    int width = 0;
+    int height = 0;
+    std::vector<float> values;
+};
+// Throws prt::Error naming the file for a missing or unreadable file, and naming the channel ("channel T003.G")
+// when the file lacks one of `names`.
+ImageChannels readImageChannels(const std::string& path, const std::vector<std::string>& names);
+
+// The channel names of an image file in file order (OpenImageIO's: "R", "G", "B" for plain RGB files).
+// Throws prt::Error naming the file when it cannot be opened.
+std::vector<std::string> imageChannelNames(const std::string& path);
+
 // Writes a float RGB image atomically (EXR as float or half by `half`, other formats by extension).
 void writeImage(const std::string& path, const Image& image, bool half = false);
 

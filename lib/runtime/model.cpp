@@ -2,6 +2,7 @@
 #include "runtime.h"
 
 #include "core.h"
+#include "runtime_internal.h"
 
 #include <cmath>
 #include <limits>
@@ -20,6 +21,26 @@ std::string shapeText(const std::vector<uint64_t>& shape) {
 
 } // namespace
 
+int transferLayerOrder(const Layer& layer, const std::string& source, const std::string& place) {
+    const std::vector<uint64_t>& shape = layer.shape;
+    int order = int(std::lround(std::sqrt(shape.size() == 3 ? double(shape[1]) : 0.0)));
+    if (shape.size() != 3 || shape[2] != 3 || order < 1 || order > sh::kMaxOrder ||
+        uint64_t(order) * order != shape[1])
+        throw Error(source, place, "shape " + shapeText(shape) + " is not [rows, L*L, 3] for an order L in 1.." +
+                                       std::to_string(sh::kMaxOrder));
+    const nlohmann::json& paramOrder = layer.params.contains("order") ? layer.params["order"] : nlohmann::json();
+    if (!paramOrder.is_null() && !(paramOrder.is_number_integer() && paramOrder.get<int64_t>() == order))
+        throw Error(source, place, "params.order " + paramOrder.dump() + " does not match shape " + shapeText(shape));
+    return order;
+}
+
+void checkFiniteRows(const std::vector<float>& data, size_t rowValues, const std::string& source,
+                     const std::string& place, const char* row) {
+    for (size_t i = 0; i < data.size(); ++i)
+        if (!std::isfinite(data[i]))
+            throw Error(source, place + ", " + row + " " + std::to_string(i / rowValues), "transfer value is not finite");
+}
+
 RelightModel relightModel(Bundle bundle, const std::string& source) {
     Layer* layer = nullptr;
     for (Layer& candidate : bundle.layers)
@@ -32,24 +53,14 @@ RelightModel relightModel(Bundle bundle, const std::string& source) {
                                        "\"; expected domain \"vertex\", semantic \"sh_transfer_rgb\"");
 
     const std::vector<uint64_t>& shape = layer->shape;
-    int order = int(std::lround(std::sqrt(shape.size() == 3 ? double(shape[1]) : 0.0)));
-    if (shape.size() != 3 || shape[2] != 3 || order < 1 || order > sh::kMaxOrder ||
-        uint64_t(order) * order != shape[1])
-        throw Error(source, place, "shape " + shapeText(shape) + " is not [V, L*L, 3] for an order L in 1.." +
-                                       std::to_string(sh::kMaxOrder));
-    const nlohmann::json& paramOrder = layer->params.contains("order") ? layer->params["order"] : nlohmann::json();
-    if (!paramOrder.is_null() && !(paramOrder.is_number_integer() && paramOrder.get<int64_t>() == order))
-        throw Error(source, place, "params.order " + paramOrder.dump() + " does not match shape " + shapeText(shape));
+    int order = transferLayerOrder(*layer, source, place);
     if (shape[0] != bundle.mesh.vertexCount() || shape[0] > std::numeric_limits<uint32_t>::max())
         throw Error(source, place, "has " + std::to_string(shape[0]) + " rows for a mesh of " +
                                        std::to_string(bundle.mesh.vertexCount()) + " vertices");
     if (layer->data.size() != shape[0] * shape[1] * 3)
         throw Error(source, place, "holds " + std::to_string(layer->data.size()) + " floats, shape " +
                                        shapeText(shape) + " needs " + std::to_string(shape[0] * shape[1] * 3));
-    for (size_t i = 0; i < layer->data.size(); ++i)
-        if (!std::isfinite(layer->data[i]))
-            throw Error(source, place + ", vertex " + std::to_string(i / (shape[1] * 3)),
-                        "transfer value is not finite");
+    checkFiniteRows(layer->data, shape[1] * 3, source, place, "vertex");
 
     RelightModel model;
     model.vertexCount = uint32_t(shape[0]);

@@ -1,4 +1,4 @@
-// The thin runtime: relights a bundle's precomputed transfer under new distant lighting, per vertex.
+// The thin runtime: relights a bundle's precomputed transfer under new distant lighting, per vertex or per texel.
 // It needs no ray tracer or solver, only the bundle reader and SH; an engine links prt::runtime (see
 // tests/runtime/consumer for a complete find_package(prt) project).
 //
@@ -33,6 +33,26 @@ RelightModel relightModel(Bundle bundle, const std::string& source);
 
 // Reads a bundle file and takes its transfer layer, as relightModel does.
 RelightModel loadRelightModel(const std::string& bundlePath);
+
+// ---- per-texel transfer (bundles from `prt bake`) -------------------------------------------------------------
+// Per-texel transfer ready to relight: the "texel_transfer" layer of a bundle and the coefficient texture it
+// references. Rows are texels, row-major with row 0 at the top of the atlas (docs/bundle.md, "Texel layers"), so
+// the per-vertex kernel relights them unchanged.
+struct TexelRelightModel {
+    int width = 0, height = 0;
+    RelightModel rows; // rows.vertexCount = width * height texels
+};
+
+// Reads the bundle's "texel_transfer" layer and its texture: params.uri, relative to the bundle file (symlinks
+// resolved), is an OpenEXR with channels T000.R, T000.G, ... (params.format "half" or "float") or the JSON
+// sidecar of 8-bit PNG layers (format "u8": value = min + q * (max - min) / 255 per coefficient layer).
+// Needs: domain "texel", semantic "sh_transfer_rgb", shape [W*H, L*L, 3] with params width W and height H (and
+// params.order = L when set), texture files whose xxh128 equals the recorded hash and of W x H texels, finite
+// values. Throws prt::Error naming the bundle or the texture file, the place and the problem otherwise.
+TexelRelightModel loadTexelRelightModel(const std::string& bundlePath);
+
+// Channel name of coefficient j, colour c (0..2) in coefficient textures: "T000.R", "T012.B".
+std::string texelCoefficientChannel(int coefficient, int colour);
 
 // ---- lighting ------------------------------------------------------------------------------------------------
 // Lighting of `coefficientCount` RGB coefficients from lighting of another count: their common prefix, with
