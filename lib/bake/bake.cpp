@@ -302,6 +302,8 @@ void runBake(const BakeOptions& options) {
         layer.params["channels"] = "T{j:03d}.{R,G,B} for coefficient j";
     }
     storedBytes += std::filesystem::file_size(transferPath);
+    layer.params["files"] = nlohmann::json::array();
+    for (const std::string& path : written.paths) layer.params["files"].push_back(fileName(path));
     layer.params["uri"] = fileName(transferPath);
     layer.params["hash"] = hashFile(transferPath);
 
@@ -317,6 +319,7 @@ void runBake(const BakeOptions& options) {
     normalLayer.semantic = "tangent_normal";
     normalLayer.shape = {texelCount, 3};
     normalLayer.params = {{"uri", fileName(normalPath)},
+                          {"files", {fileName(normalPath)}},
                           {"hash", hashFile(normalPath)},
                           {"width", size},
                           {"height", size},

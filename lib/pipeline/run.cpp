@@ -278,7 +278,34 @@ std::string costLine(const nlohmann::json& record) {
     return line;
 }
 
-// Copies each declared output whose stage has a result atomically into place, unless it already holds it.
+// Copies `file` atomically to `path` unless that already holds the same bytes.
+void copyIfChanged(const std::string& file, const std::string& path, const std::string& hash) {
+    std::error_code error;
+    if (!fs::is_regular_file(path, error) || hashFile(path) != hash) writeBytesAtomic(path, readFileBytes(file));
+}
+
+// The external files a bundle's layers reference (params.files, relative to the bundle, docs/bundle.md): copied
+// next to the bundle's copy under the same names, so the references hold. Returns their destination paths.
+std::vector<std::string> copyCompanions(const std::string& bundleFile, const std::string& destination) {
+    std::vector<std::string> copied;
+    fs::path from = fs::path(bundleFile).parent_path(), to = fs::path(destination).parent_path();
+    for (const Layer& layer : readBundle(bundleFile).layers) {
+        if (!layer.params.contains("files") || !layer.params["files"].is_array()) continue;
+        for (const nlohmann::json& name : layer.params["files"]) {
+            fs::path relative = name.get<std::string>();
+            if (relative.is_absolute() || relative.filename() != relative)
+                throw Error(bundleFile, "layer \"" + layer.name + "\" params.files",
+                            "'" + relative.string() + "' is not a plain file name next to the bundle", kExitFailure);
+            std::string source = (from / relative).string();
+            copyIfChanged(source, (to / relative).string(), hashFile(source));
+            copied.push_back((to / relative).string());
+        }
+    }
+    return copied;
+}
+
+// Copies each declared output whose stage has a result atomically into place, unless it already holds it; a
+// bundle's companion files (external textures) go next to it.
 nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string, StoreEntry>& entries) {
     nlohmann::json copied = nlohmann::json::object();
     for (const PipelineOutput& output : pipeline.outputs) {
@@ -292,14 +319,18 @@ nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string,
         std::error_code error;
         fs::path parent = fs::path(output.path).parent_path();
         if (!parent.empty()) fs::create_directories(parent, error);
-        if (!fs::is_regular_file(output.path, error) || hashFile(output.path) != hash)
-            writeBytesAtomic(output.path, readFileBytes(entry->second.dir + "/" + product["file"].get<std::string>()));
+        std::string file = entry->second.dir + "/" + product["file"].get<std::string>();
+        copyIfChanged(file, output.path, hash);
         const StageSpec& spec = *pipeline.stages[findStage(pipeline, output.stage)].spec;
         FileKind kind = std::find_if(spec.outputs.begin(), spec.outputs.end(), [&](const PortSpec& port) {
                             return port.name == output.port;
                         })->kind;
         copied[output.name] = {{"path", output.path}, {"hash", hash}, {"kind", fileKindName(kind)},
                                {"from", output.stage + "." + output.port}};
+        if (kind == FileKind::Bundle) {
+            std::vector<std::string> companions = copyCompanions(file, output.path);
+            if (!companions.empty()) copied[output.name]["files"] = companions;
+        }
     }
     return copied;
 }

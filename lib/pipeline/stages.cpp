@@ -72,6 +72,32 @@ std::vector<StageSpec> makeCatalogue() {
     transfer.shardRefusal = transferShardRefusal;
     stages.push_back(transfer);
 
+    // Not shardable: gutter fill (push-pull over the whole atlas) and seam stitching couple texels of every range,
+    // so shards of texel ranges would need a merge that redoes both; one bake is minutes at most.
+    StageSpec bake{"bake", 1, "per-texel SH transfer into atlas textures"};
+    bake.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"high", FileKind::Mesh, "--high", "", true}};
+    // The textures land next to the bundle (bundle.transfer.exr, ...), listed in its layers' params.files; `prt run`
+    // copies them along with the bundle.
+    bake.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
+    bake.params = {{"resolution", ParamType::Integer, 1.0, 16384.0},
+                   {"order", ParamType::Integer, 1.0, kMaxOrder},
+                   {"samples", ParamType::Integer, 1.0, 65536.0},
+                   {"bounces", ParamType::Integer, 0.0, 64.0},
+                   kAlbedo,
+                   {"uv-set", ParamType::Integer, 0.0, 7.0},
+                   {"format", ParamType::String, 0.0, 0.0, {"half", "float", "u8"}},
+                   {"wrap", ParamType::String, 0.0, 0.0, {"none", "repeat"}},
+                   {"allow-overlap", ParamType::Boolean},
+                   {"dilate-only", ParamType::Boolean},
+                   {"no-seam-stitch", ParamType::Boolean},
+                   {"low-position", ParamType::Boolean},
+                   {"cage", ParamType::Number, 1e-9, 0.999999},
+                   {"max-miss", ParamType::Number, 0.0, 1.0},
+                   {"padding", ParamType::Integer, 2.0, 1024.0},
+                   kSeed};
+    bake.takesThreads = true;
+    stages.push_back(bake);
+
     StageSpec reference{"reference", 1, "ground-truth radiance by path tracing"};
     reference.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"env", FileKind::Env, "--env", ""}};
     reference.outputs = {{"radiance", FileKind::Radiance, "-o", "npy"},

@@ -1,5 +1,5 @@
-// Diffuse SH transfer per vertex or per receiver (texel): one direct pass of rays, then Jacobi Neumann bounces (thesis Fig. 4.2) that
-// gather the previous bounce at the direct pass's recorded hits instead of casting new rays.
+// Diffuse SH transfer per vertex or per receiver (texel): one direct pass of rays, then Jacobi Neumann bounces
+// (thesis Fig. 4.2) that gather the previous bounce at the direct pass's recorded hits instead of casting new rays.
 #include "transfer.h"
 
 #include "core.h"
