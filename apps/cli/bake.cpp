@@ -64,7 +64,8 @@ void addBakeCommand(CLI::App& app) {
     command->add_option("--order", o.order, "Number of SH bands L (L*L coefficients), 1.." +
                                                 std::to_string(sh::kMaxOrder) + " (default 3)");
     command->add_option("--samples", o.samples,
-                        "Hemisphere directions per texel, 1.." + std::to_string(kMaxTransferSamples) + " (default 1024)");
+                        "Hemisphere directions per texel, 1.." + std::to_string(kMaxTransferSamples) +
+                            " (default 1024)");
     command->add_option("--bounces", o.bounces, "Interreflection bounces (default 0: shadowed)");
     command->add_option("--albedo", args->albedo,
                         "Diffuse albedo R,G,B (or one grey value) in [0,1]; overrides the mesh's per-vertex albedo "

@@ -30,7 +30,8 @@ void runRelight(const RelightOptions& options) {
     // writeVertexRadiance checks this too, but only after the work; a typo should fail at once.
     std::string outputExtension = fileExtension(options.output);
     if (options.texels && outputExtension != "exr")
-        throw Error(options.output, "-o", "with --texels the output is an atlas image and must end in .exr", kExitUsage);
+        throw Error(options.output, "-o", "with --texels the output is an atlas image and must end in .exr",
+                    kExitUsage);
     if (!options.texels && outputExtension != "npy" && outputExtension != "csv")
         throw Error(options.output, "-o", "output must end in .npy or .csv", kExitUsage);
 
@@ -92,7 +93,7 @@ void runRelight(const RelightOptions& options) {
 void addRelightCommand(CLI::App& app) {
     auto options = std::make_shared<RelightOptions>();
     CLI::App* command =
-        app.add_subcommand("relight", "Per-vertex (or per-texel) outgoing radiance of a bundle's transfer under new lighting");
+        app.add_subcommand("relight", "Per-vertex (or per-texel) radiance of a bundle's transfer under new lighting");
     command->add_option("bundle", options->bundle, "Bundle (.glb) with a \"transfer\" layer")->required();
     CLI::Option_group* lighting = command->add_option_group("lighting", "Where the lighting comes from");
     lighting->add_option("--env", options->env, "Environment map: 2:1 equirect or 1:6 cube strip");

@@ -49,7 +49,9 @@ void writeCoefficientExr(const std::string& path, const float* texels, int width
 std::vector<float> readCoefficientExr(const std::string& path, int& width, int& height, int& coefficients) {
     if (coefficients <= 0) {
         std::vector<std::string> present = imageChannelNames(path);
-        auto has = [&](const std::string& name) { return std::find(present.begin(), present.end(), name) != present.end(); };
+        auto has = [&](const std::string& name) {
+            return std::find(present.begin(), present.end(), name) != present.end();
+        };
         coefficients = 0;
         while (has(coefficientChannel(coefficients, 0))) ++coefficients;
         if (coefficients == 0) throw Error(path, "channel " + coefficientChannel(0, 0), "is missing");

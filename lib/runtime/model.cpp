@@ -38,7 +38,8 @@ void checkFiniteRows(const std::vector<float>& data, size_t rowValues, const std
                      const std::string& place, const char* row) {
     for (size_t i = 0; i < data.size(); ++i)
         if (!std::isfinite(data[i]))
-            throw Error(source, place + ", " + row + " " + std::to_string(i / rowValues), "transfer value is not finite");
+            throw Error(source, place + ", " + row + " " + std::to_string(i / rowValues),
+                        "transfer value is not finite");
 }
 
 RelightModel relightModel(Bundle bundle, const std::string& source) {

@@ -110,7 +110,8 @@ TEST_F(BakeCli, RelightTexelsWritesTheRadianceAtlas) {
 
     for (const char* format : {"half", "u8"}) {
         std::string bundle = (out / (std::string(format) + ".glb")).string();
-        CliRun bake = run("bake " + input + " -o " + bundle + " --resolution 16 --order 3 --samples 16 --format " + format);
+        CliRun bake =
+            run("bake " + input + " -o " + bundle + " --resolution 16 --order 3 --samples 16 --format " + format);
         ASSERT_EQ(bake.exitCode, 0) << bake.stderrText;
         std::string atlas = (out / (std::string(format) + "_radiance.exr")).string();
         CliRun relit = run("relight " + bundle + " --texels --env " + envPath + " -o " + atlas);

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -151,6 +152,34 @@ TEST(BakeStage, BoxRoomWithoutUvsGetsAGeneratedAtlasAndU8Layers) {
         EXPECT_LT(std::abs(layer["min"].get<double>()), 0.01);
         EXPECT_LT(std::abs(layer["max"].get<double>()), 0.01);
     }
+}
+
+// Same inputs and seed, any thread count: the same bits, bounces included.
+TEST(BakeStage, ResultDoesNotDependOnTheThreadCount) {
+    Folder folder("threads");
+    // A plane in the shadow and bounce light of a ball whose UVs are collapsed into one corner (it covers no texel).
+    TriMesh ball = makeSphere(0.3f, 8, 16);
+    for (size_t v = 0; v < ball.vertexCount(); ++v) ball.positions[3 * v + 1] += 0.5f;
+    ball.texcoords.assign(2 * ball.vertexCount(), 1.0f);
+    TriMesh scene = mergeMeshes({makePlane(2.0f, 4), ball});
+    BakeOptions options = smallBake(writeMesh(folder, "scene.glb", scene), folder / "unused.glb");
+    options.bounces = 2;
+    options.albedo = {0.8f, 0.7f, 0.6f};
+    options.albedoOverride = true;
+    options.seed = 5;
+    options.threads = 1;
+    BakedAtlas one = bakeAtlas(options);
+    options.threads = 2;
+    BakedAtlas two = bakeAtlas(options);
+    ASSERT_EQ(one.transfer.size(), two.transfer.size());
+    EXPECT_EQ(std::memcmp(one.transfer.data(), two.transfer.data(), one.transfer.size() * sizeof(float)), 0);
+    EXPECT_EQ(one.normals, two.normals);
+    float lo = 1e9f, hi = -1e9f; // not trivially constant: shadow and bounce light vary over the plane
+    for (size_t t = 0; t < one.transfer.size(); t += 12) {
+        lo = std::min(lo, one.transfer[t]);
+        hi = std::max(hi, one.transfer[t]);
+    }
+    EXPECT_GT(hi - lo, 0.01f);
 }
 
 } // namespace
