@@ -2,8 +2,8 @@
 #include "bake.h"
 
 #include "core.h"
+#include "raycast.h"
 
-#include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -12,49 +12,6 @@
 #include <cmath>
 
 namespace prt {
-
-namespace {
-
-// An Embree scene over a mesh's triangles, released on destruction.
-struct EmbreeScene {
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
-
-    explicit EmbreeScene(const TriMesh& mesh) {
-        device = rtcNewDevice(nullptr);
-        if (!device) throw Error("", "embree", "cannot create a device", kExitFailure);
-        scene = rtcNewScene(device);
-        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        // Embree-owned buffers: Embree reads vertex buffers 16 bytes at a time, past a tight float3 array's end.
-        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-            geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertexCount()));
-        auto* triangles = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-            geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangleCount()));
-        if (vertices && triangles) {
-            std::copy(mesh.positions.begin(), mesh.positions.end(), vertices);
-            std::copy(mesh.indices.begin(), mesh.indices.end(), triangles);
-        }
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(scene, geometry);
-        rtcReleaseGeometry(geometry);
-        rtcCommitScene(scene);
-        RTCError error = rtcGetDeviceError(device);
-        if (error != RTC_ERROR_NONE) {
-            rtcReleaseScene(scene);
-            rtcReleaseDevice(device);
-            throw Error("", "embree scene build", "failed with error code " + std::to_string(int(error)),
-                        kExitFailure);
-        }
-    }
-    ~EmbreeScene() {
-        rtcReleaseScene(scene);
-        rtcReleaseDevice(device);
-    }
-    EmbreeScene(const EmbreeScene&) = delete;
-    EmbreeScene& operator=(const EmbreeScene&) = delete;
-};
-
-} // namespace
 
 CageProjection projectOntoHigh(const TriMesh& high, const std::vector<float>& positions,
                                const std::vector<float>& normals, float cage) {

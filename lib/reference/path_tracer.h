@@ -5,7 +5,7 @@
 #include "bundle.h"
 #include "image.h"
 
-#include <embree3/rtcore.h>
+#include "raycast.h"
 
 #include <array>
 #include <cstdint>
@@ -91,16 +91,9 @@ public:
 private:
     void albedoAt(const uint32_t* triangle, float u, float v, float out[3]) const;
 
-    struct EmbreeRelease {
-        void operator()(RTCDevice device) const { rtcReleaseDevice(device); }
-        void operator()(RTCScene scene) const { rtcReleaseScene(scene); }
-        void operator()(RTCGeometry geometry) const { rtcReleaseGeometry(geometry); }
-    };
-
     const TriMesh& mesh_;
     std::optional<std::array<float, 3>> constantAlbedo_;
-    std::unique_ptr<RTCDeviceTy, EmbreeRelease> device_; // declared first, released last
-    std::unique_ptr<RTCSceneTy, EmbreeRelease> scene_;
+    EmbreeScene embree_;
     float rayOffset_ = 0.0f;
 };
 

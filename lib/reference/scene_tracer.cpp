@@ -12,12 +12,6 @@ namespace prt::pathtrace {
 
 namespace {
 
-void throwIfEmbreeFailed(RTCDevice device, const char* step) {
-    RTCError error = rtcGetDeviceError(device);
-    if (error != RTC_ERROR_NONE)
-        throw Error("", std::string("embree ") + step, "error code " + std::to_string(int(error)), kExitFailure);
-}
-
 void normalize(float v[3]) {
     float length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     for (int c = 0; c < 3; ++c) v[c] /= length;
@@ -36,45 +30,9 @@ RTCRay makeRay(const float origin[3], const float d[3]) {
 } // namespace
 
 SceneTracer::SceneTracer(const TriMesh& mesh, const std::optional<std::array<float, 3>>& constantAlbedo)
-    : mesh_(mesh), constantAlbedo_(constantAlbedo), device_(rtcNewDevice(nullptr)) {
-    if (!device_)
-        throw Error("", "embree device",
-                    "cannot create (error code " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")",
-                    kExitFailure);
-    scene_.reset(rtcNewScene(device_.get()));
     // Robust traversal: no rays slip between adjacent triangles, so closed cavities never leak light.
-    rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(scene_.get(), RTC_BUILD_QUALITY_HIGH);
-
-    if (mesh.triangleCount() > 0) {
-        std::unique_ptr<RTCGeometryTy, EmbreeRelease> geometry(
-            rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE));
-        // Embree's own buffers carry the padding its SIMD loads need, so copy rather than share.
-        auto* positions = static_cast<float*>(rtcSetNewGeometryBuffer(
-            geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertexCount()));
-        auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-            geometry.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangleCount()));
-        throwIfEmbreeFailed(device_.get(), "buffers");
-        std::copy(mesh.positions.begin(), mesh.positions.end(), positions);
-        std::copy(mesh.indices.begin(), mesh.indices.end(), indices);
-        rtcCommitGeometry(geometry.get());
-        rtcAttachGeometry(scene_.get(), geometry.get());
-    }
-    rtcCommitScene(scene_.get());
-    throwIfEmbreeFailed(device_.get(), "scene build");
-
-    float lower[3] = {0, 0, 0}, upper[3] = {0, 0, 0};
-    for (size_t v = 0; v < mesh.vertexCount(); ++v)
-        for (int c = 0; c < 3; ++c) {
-            float p = mesh.positions[v * 3 + c];
-            lower[c] = v == 0 ? p : std::min(lower[c], p);
-            upper[c] = v == 0 ? p : std::max(upper[c], p);
-        }
-    float diagonal = std::sqrt((upper[0] - lower[0]) * (upper[0] - lower[0]) +
-                               (upper[1] - lower[1]) * (upper[1] - lower[1]) +
-                               (upper[2] - lower[2]) * (upper[2] - lower[2]));
-    rayOffset_ = 1e-4f * diagonal;
-}
+    : mesh_(mesh), constantAlbedo_(constantAlbedo), embree_(mesh, /*robust=*/true),
+      rayOffset_(prt::rayOffset(mesh)) {}
 
 void SceneTracer::albedoAt(const uint32_t* triangle, float u, float v, float out[3]) const {
     if (constantAlbedo_) {
@@ -109,7 +67,7 @@ HitKind SceneTracer::intersect(const float origin[3], const float d[3], ShadingP
     RTCRayHit rayHit{};
     rayHit.ray = makeRay(origin, d);
     rayHit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene_.get(), &context, &rayHit);
+    rtcIntersect1(embree_.scene, &context, &rayHit);
     if (rayHit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return HitKind::Miss;
 
     const uint32_t* triangle = &mesh_.indices[size_t(rayHit.hit.primID) * 3];
@@ -143,7 +101,7 @@ bool SceneTracer::occluded(const float origin[3], const float d[3]) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay ray = makeRay(origin, d);
-    rtcOccluded1(scene_.get(), &context, &ray);
+    rtcOccluded1(embree_.scene, &context, &ray);
     return ray.tfar < 0.0f; // Embree marks an occluded ray with tfar = -inf
 }
 

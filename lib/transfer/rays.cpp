@@ -1,4 +1,4 @@
-// The Embree scene, the shared Hammersley direction set and the per-vertex frames.
+// The shared Hammersley direction set and the per-vertex frames.
 #include "rays.h"
 
 #include "core.h"
@@ -8,46 +8,6 @@
 #include <string>
 
 namespace prt::rays {
-
-static void throwIfEmbreeFailed(RTCDevice device, const char* step) {
-    RTCError error = rtcGetDeviceError(device);
-    if (error != RTC_ERROR_NONE)
-        throw Error("", std::string("embree ") + step, "failed with error code " + std::to_string(int(error)),
-                    kExitFailure);
-}
-
-Scene::Scene(const TriMesh& mesh) {
-    device = rtcNewDevice(nullptr);
-    if (!device) throw Error("", "embree", "cannot create a device", kExitFailure);
-    try {
-        scene = rtcNewScene(device);
-        rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_HIGH);
-        // Embree-owned buffers: Embree reads vertex buffers 16 bytes at a time, past a tight float3 array's end.
-        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-            geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertexCount()));
-        auto* triangles = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-            geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangleCount()));
-        throwIfEmbreeFailed(device, "buffers");
-        std::copy(mesh.positions.begin(), mesh.positions.end(), vertices);
-        std::copy(mesh.indices.begin(), mesh.indices.end(), triangles);
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(scene, geometry);
-        rtcReleaseGeometry(geometry);
-        rtcCommitScene(scene);
-        throwIfEmbreeFailed(device, "scene build");
-    } catch (...) {
-        if (scene) rtcReleaseScene(scene);
-        rtcReleaseDevice(device);
-        throw;
-    }
-}
-
-Scene::~Scene() {
-    rtcReleaseScene(scene);
-    rtcReleaseDevice(device);
-}
 
 static double radicalInverse2(uint32_t bits) {
     bits = (bits << 16) | (bits >> 16);
@@ -178,18 +138,3 @@ void clipRange(const TriMesh& mesh, const TransferOptions& options, size_t& begi
 }
 
 } // namespace prt::rays
-
-namespace prt {
-
-float rayOffset(const TriMesh& mesh) {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < mesh.positions.size(); ++i) {
-        lo[i % 3] = std::min(lo[i % 3], mesh.positions[i]);
-        hi[i % 3] = std::max(hi[i % 3], mesh.positions[i]);
-    }
-    double diagonal = 0.0;
-    for (int a = 0; a < 3; ++a) diagonal += double(hi[a] - lo[a]) * (hi[a] - lo[a]);
-    return float(1e-4 * std::sqrt(diagonal));
-}
-
-} // namespace prt

@@ -1,6 +1,7 @@
 // Internal to lib/transfer: what the transfer passes and the bare yardstick share, so both cast the same rays.
 #pragma once
 
+#include "raycast.h"
 #include "transfer.h"
 
 #include <embree3/rtcore.h>
@@ -15,17 +16,6 @@ namespace prt::rays {
 // Vertices per work block: the unit of parallel work and of hit-record storage. Fixed, so that no result
 // depends on how blocks land on threads.
 inline constexpr size_t kBlockVertices = 256;
-
-// An Embree device and committed scene over the mesh's triangles (build quality high); released on destruction.
-struct Scene {
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
-
-    explicit Scene(const TriMesh& mesh);
-    ~Scene();
-    Scene(const Scene&) = delete;
-    Scene& operator=(const Scene&) = delete;
-};
 
 // The shared direction set in the local frame (normal = +z): uniform-hemisphere Hammersley, cos(theta_k) = z_k =
 // (k + 0.5) / N exactly as computed in double and rounded once.

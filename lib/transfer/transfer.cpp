@@ -148,7 +148,7 @@ uint32_t quantiseBarycentric(float w) { return uint32_t(std::lround(std::clamp(w
 // Casts one receiver's rays: occlusion rays, or nearest-hit rays when `hits` is not null, whose front-face hits are
 // appended to `hits` and back-face hits counted in `backFaceHits`. Adds the weighted local basis of every
 // occluded sample to `occluded`; returns whether there was any.
-bool traceVertex(const Context& context, const rays::Scene& scene, const rays::Fan& fan,
+bool traceVertex(const Context& context, const EmbreeScene& scene, const rays::Fan& fan,
                  RTCIntersectContext& intersectContext, std::vector<double>& occluded, HitBlock* hits,
                  uint64_t& backFaceHits) {
     int n = context.coefficients;
@@ -187,7 +187,7 @@ bool traceVertex(const Context& context, const rays::Scene& scene, const rays::F
 // Shadowed and interreflected direct pass over the context's receivers into `out` (row i for receiver i) and,
 // when not null, unit-albedo single-channel rows into `unitOut`. With `hitBlocks` (one per block of receivers)
 // rays find their nearest hits and front-face hits are recorded there; otherwise they are occlusion rays.
-void directPass(const Context& context, const rays::Scene& scene, float* out, float* unitOut,
+void directPass(const Context& context, const EmbreeScene& scene, float* out, float* unitOut,
                 std::vector<HitBlock>* hitBlocks, DirectCounts& counts, Progress* progress) {
     int n = context.coefficients;
     const size_t receiverCount = context.receivers.count;
@@ -362,7 +362,7 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
         DirectCounts counts;
         double start = nowSeconds();
         {
-            rays::Scene scene(mesh); // released before the bounces, which need only the hits
+            EmbreeScene scene(mesh); // released before the bounces, which need only the hits
             stats.buildSeconds = nowSeconds() - start;
             start = nowSeconds();
             std::clock_t cpuStart = std::clock();
@@ -444,7 +444,7 @@ Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, 
             return;
         }
         double start = nowSeconds();
-        rays::Scene scene(geometry);
+        EmbreeScene scene(geometry);
         stats.buildSeconds = nowSeconds() - start;
         start = nowSeconds();
         std::clock_t cpuStart = std::clock();

@@ -131,7 +131,4 @@ RayThroughput castBareOcclusionRays(const TriMesh& mesh, const TransferOptions& 
 RayThroughput castBareOcclusionRaysAt(const TriMesh& geometry, const Receivers& receivers,
                                       const TransferOptions& options);
 
-// The ray origin offset for a mesh: 1e-4 times its bounding-box diagonal.
-float rayOffset(const TriMesh& mesh);
-
 } // namespace prt

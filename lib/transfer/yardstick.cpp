@@ -30,7 +30,7 @@ RayThroughput castBare(const TriMesh& geometry, const Receivers& receivers, cons
     std::atomic<uint64_t> occluded{0};
     tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
     arena.execute([&] {
-        rays::Scene scene(geometry);
+        EmbreeScene scene(geometry);
         double start = nowSeconds();
         std::clock_t cpuStart = std::clock();
         tbb::parallel_for(tbb::blocked_range<size_t>(0, blockCount, 1), [&](const tbb::blocked_range<size_t>& blocks) {
