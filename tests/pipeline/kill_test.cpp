@@ -14,30 +14,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Slow enough to be caught in the middle: the transfer casts a few million rays.
-const char* kPipeline = R"(
-[inputs]
-sky = { env = "@DIR@/sky.exr" }
-
-[stages.ball]
-run = "scene"
-name = "two-spheres"
-
-[stages.transfer]
-run = "transfer"
-inputs = { mesh = "ball" }
-mode = "shadowed"
-samples = 1024
-
-[stages.relight]
-run = "relight"
-inputs = { bundle = "transfer", env = "sky" }
-
-[outputs]
-bundle = { from = "transfer", path = "@OUT@/bundle.glb" }
-radiance = { from = "relight", path = "@OUT@/radiance.npy" }
-)";
-
 // `prt run` in a process group of its own, so that one kill takes it and its stage.
 pid_t spawnRun(const std::string& pipeline, const std::string& cache, const std::string& log) {
     pid_t pid = fork();
@@ -100,7 +76,8 @@ protected:
     }
     // The pipeline writing its outputs to DIR/out-NAME, also as a file for `prt run`.
     Pipeline pipeline(const std::string& name) const {
-        std::string text = test::replaceAll(test::withDir(kPipeline, dir.path), "@OUT@", dir / ("out-" + name));
+        // Slow enough to be caught in the middle: the transfer casts a few million rays.
+        std::string text = test::twoSpheresPipeline(dir.path, 1024, 1, dir / ("out-" + name));
         test::writeText(dir / (name + ".toml"), text);
         return parsePipeline(text, dir / (name + ".toml"));
     }

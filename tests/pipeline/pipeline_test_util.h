@@ -88,6 +88,36 @@ inline std::string replaceAll(const std::string& text, const std::string& from, 
 // A pipeline's text with its folder placeholder "@DIR@" filled in.
 inline std::string withDir(const std::string& text, const std::string& dir) { return replaceAll(text, "@DIR@", dir); }
 
+// The pipeline most tests run: the two-spheres scene, shadowed transfer with `samples` directions in `shards`
+// shards, relit under DIR/sky.exr (writeSkyExr), bundle and radiance written into the folder `out`.
+inline std::string twoSpheresPipeline(const std::string& dir, int samples, int shards, const std::string& out) {
+    std::string text = R"(
+[inputs]
+sky = { env = "@DIR@/sky.exr" }
+
+[stages.ball]
+run = "scene"
+name = "two-spheres"
+
+[stages.transfer]
+run = "transfer"
+inputs = { mesh = "ball" }
+mode = "shadowed"
+samples = @SAMPLES@
+shards = @SHARDS@
+
+[stages.relight]
+run = "relight"
+inputs = { bundle = "transfer", env = "sky" }
+
+[outputs]
+bundle = { from = "transfer", path = "@OUT@/bundle.glb" }
+radiance = { from = "relight", path = "@OUT@/radiance.npy" }
+)";
+    text = replaceAll(replaceAll(text, "@SAMPLES@", std::to_string(samples)), "@SHARDS@", std::to_string(shards));
+    return withDir(replaceAll(text, "@OUT@", out), dir);
+}
+
 inline RunOptions testOptions(const std::string& cacheDir) {
     RunOptions options;
     options.prt = kPrt;

@@ -7,32 +7,8 @@
 namespace prt {
 namespace {
 
-const char* kPipeline = R"(
-[inputs]
-sky = { env = "@DIR@/sky.exr" }
-
-[stages.ball]
-run = "scene"
-name = "two-spheres"
-
-[stages.transfer]
-run = "transfer"
-inputs = { mesh = "ball" }
-mode = "shadowed"
-samples = 64
-shards = @SHARDS@
-
-[stages.relight]
-run = "relight"
-inputs = { bundle = "transfer", env = "sky" }
-
-[outputs]
-bundle = { from = "transfer", path = "@DIR@/out-@SHARDS@/bundle.glb" }
-radiance = { from = "relight", path = "@DIR@/out-@SHARDS@/radiance.npy" }
-)";
-
 Pipeline shardedPipeline(const test::TempDir& dir, int shards) {
-    std::string text = test::replaceAll(test::withDir(kPipeline, dir.path), "@SHARDS@", std::to_string(shards));
+    std::string text = test::twoSpheresPipeline(dir.path, 64, shards, dir / ("out-" + std::to_string(shards)));
     return parsePipeline(text, dir / "sharded.toml");
 }
 

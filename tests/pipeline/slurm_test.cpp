@@ -10,30 +10,6 @@ namespace {
 
 const std::string kScript = PRT_SOURCE_DIR "/scripts/slurm_local.sh";
 
-const char* kPipeline = R"(
-[inputs]
-sky = { env = "@DIR@/sky.exr" }
-
-[stages.ball]
-run = "scene"
-name = "two-spheres"
-
-[stages.transfer]
-run = "transfer"
-inputs = { mesh = "ball" }
-mode = "shadowed"
-samples = 64
-shards = 2
-
-[stages.relight]
-run = "relight"
-inputs = { bundle = "transfer", env = "sky" }
-
-[outputs]
-bundle = { from = "transfer", path = "@DIR@/out-@RUN@/bundle.glb" }
-radiance = { from = "relight", path = "@DIR@/out-@RUN@/radiance.npy" }
-)";
-
 class Slurm : public testing::Test {
 protected:
     static inline test::TempDir* daemons = nullptr;
@@ -68,9 +44,11 @@ protected:
     }
 
     test::TempDir dir;
-    Pipeline pipeline(const std::string& run, const char* text = kPipeline) const {
-        return parsePipeline(test::replaceAll(test::withDir(text, dir.path), "@RUN@", run), dir / (run + ".toml"));
+    // The two-spheres pipeline in two shards, writing into DIR/out-RUN.
+    std::string pipelineText(const std::string& run) const {
+        return test::twoSpheresPipeline(dir.path, 64, 2, dir / ("out-" + run));
     }
+    Pipeline pipeline(const std::string& run) const { return parsePipeline(pipelineText(run), dir / (run + ".toml")); }
     RunOptions slurm(const std::string& cache) const {
         RunOptions options = test::testOptions(cache);
         options.executor = Executor::Slurm;
@@ -82,7 +60,7 @@ protected:
 TEST_F(Slurm, ShardedPipelineMatchesTheLocalRunBitForBit) {
     Pipeline local = pipeline("local");
     std::string file = dir / "farm.toml";
-    test::writeText(file, test::replaceAll(test::withDir(kPipeline, dir.path), "@RUN@", "farm"));
+    test::writeText(file, pipelineText("farm"));
     Pipeline farm = loadPipeline(file); // jobs reread the file, so it must exist
     nlohmann::json localReport = test::runQuietly(local, test::testOptions(dir / "local-cache"));
     nlohmann::json farmReport = test::runQuietly(farm, slurm(dir / "farm-cache"));
