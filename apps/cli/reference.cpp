@@ -93,10 +93,8 @@ void runReference(const ReferenceCommandOptions& options) {
     reference.seed = options.seed;
     reference.threads = resolveThreads(options.threads);
     if (!options.albedo.empty()) {
-        std::vector<float> albedo = parseNumbers(options.albedo, 3, "--albedo");
-        for (float a : albedo)
-            if (a < 0.0f || a > 1.0f) throw Error("", "--albedo", "each channel must lie in [0, 1]", kExitUsage);
-        reference.albedo = std::array<float, 3>{albedo[0], albedo[1], albedo[2]};
+        std::array<double, 3> albedo = parseAlbedo(options.albedo);
+        reference.albedo = std::array<float, 3>{float(albedo[0]), float(albedo[1]), float(albedo[2])};
     }
     PinholeCamera camera;
     if (imageMode) {
@@ -166,8 +164,8 @@ void addReferenceCommand(CLI::App& app) {
         ->capture_default_str();
     command->add_option("--samples", options->samples, "Paths per vertex or pixel (>= 2)")->capture_default_str();
     command->add_option("--albedo", options->albedo,
-                        "Constant diffuse albedo R,G,B in [0,1], e.g. 0.8,0.8,0.8 (default: the mesh's COLOR_0, "
-                        "else white)");
+                        "Constant diffuse albedo R,G,B or one grey value in [0,1], e.g. 0.8 "
+                        "(default: the mesh's COLOR_0, else white)");
     command->add_option("--seed", options->seed, "Random seed; same seed, same output for any thread count")
         ->capture_default_str();
     command->add_option("--threads", options->threads, "Worker threads (default: all)");
