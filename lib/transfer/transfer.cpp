@@ -299,8 +299,9 @@ void bounce(const Context& context, const std::vector<HitBlock>& hitBlocks, int 
     });
 }
 
-// The closed form (albedo/pi) A_l Y_lm(n) for every receiver: directRow with nothing occluded.
-void unshadowedPass(const Context& context, float* out) {
+// The closed form (albedo/pi) A_l Y_lm(n) for every receiver: directRow with nothing occluded. Returns its seconds.
+double unshadowedPass(const Context& context, float* out) {
+    double start = nowSeconds();
     tbb::blocked_range<size_t> receivers(0, context.receivers.count, rays::kBlockVertices);
     tbb::parallel_for(receivers, [&](const tbb::blocked_range<size_t>& range) {
         std::vector<double> none(context.coefficients, 0.0), scratch;
@@ -309,6 +310,14 @@ void unshadowedPass(const Context& context, float* out) {
             directRow(context, fan, none, false, v, scratch, out + v * context.stride, nullptr);
         }
     });
+    return nowSeconds() - start;
+}
+
+// What hit records take (the layout in transfer.h): 4 bytes per receiver, 10 per hit.
+uint64_t hitRecordBytes(const std::vector<HitBlock>& blocks) {
+    uint64_t bytes = 0;
+    for (const HitBlock& block : blocks) bytes += block.end.size() * 4 + block.triangle.size() * 10;
+    return bytes;
 }
 
 std::optional<Progress> maybeProgress(const TransferOptions& options, const std::string& label, size_t total) {
@@ -346,9 +355,7 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
     tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
     arena.execute([&] {
         if (options.mode == TransferMode::Unshadowed) {
-            double start = nowSeconds();
-            unshadowedPass(context, total.data());
-            stats.directSeconds = nowSeconds() - start;
+            stats.directSeconds = unshadowedPass(context, total.data());
             return;
         }
         bool interreflected = options.mode == TransferMode::Interreflected;
@@ -377,8 +384,7 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
         stats.rays = counts.rays;
         stats.hits = counts.hits;
         stats.backFaceHits = counts.backFaceHits;
-        for (const HitBlock& block : hitBlocks)
-            stats.hitRecordBytes += block.end.size() * 4 + block.triangle.size() * 10;
+        stats.hitRecordBytes = hitRecordBytes(hitBlocks);
         if (options.bounces == 0) return;
 
         // Jacobi iteration: bounce b gathers bounce b-1 everywhere before anything overwrites it.
@@ -438,9 +444,7 @@ Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, 
     tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
     arena.execute([&] {
         if (options.mode == TransferMode::Unshadowed) {
-            double start = nowSeconds();
-            unshadowedPass(context, total.data());
-            stats.directSeconds = nowSeconds() - start;
+            stats.directSeconds = unshadowedPass(context, total.data());
             return;
         }
         double start = nowSeconds();
@@ -460,9 +464,7 @@ Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, 
             directPass(context, scene, rows, nullptr, gather ? &hitBlocks : nullptr, counts,
                        progress ? &*progress : nullptr);
             if (!gather) continue;
-            uint64_t hitBytes = 0;
-            for (const HitBlock& block : hitBlocks) hitBytes += block.end.size() * 4 + block.triangle.size() * 10;
-            stats.hitRecordBytes = std::max(stats.hitRecordBytes, hitBytes);
+            stats.hitRecordBytes = std::max(stats.hitRecordBytes, hitRecordBytes(hitBlocks));
             bounce(context, hitBlocks, 3, outgoing.data(), nullptr, rows, 1, nullptr);
         }
         finish(progress);
