@@ -24,6 +24,7 @@ struct BakeArgs {
     std::string albedo;
     bool noSeamStitch = false;
     bool lowPosition = false;
+    std::string shard;
 };
 
 void runBakeCommand(BakeArgs args) {
@@ -40,6 +41,7 @@ void runBakeCommand(BakeArgs args) {
     if (options.threads < 0) throw Error("", "--threads", "must be >= 0 (0: all cores)", kExitUsage);
     options.threads = resolveThreads(options.threads);
     options.toolVersion = PRT_VERSION;
+    if (!args.shard.empty()) parseShard(args.shard, options.shardIndex, options.shardCount);
     runBake(options);
 }
 
@@ -91,6 +93,14 @@ void addBakeCommand(CLI::App& app) {
     command->add_option("--threads", o.threads, "Worker threads (default 0: all cores)");
     command->add_flag("--yardstick", o.yardstick,
                       "Also cast the direct pass's rays with bare Embree and log both throughputs");
+    CLI::Option* shard = command->add_option(
+        "--shard", args->shard,
+        "I/N: compute only the I-th of N contiguous ranges of covered texels, written to -o as a 'texel_range' "
+        "bundle (no textures) for a later --merge");
+    command->add_option("--merge", o.shardFiles,
+                        "Join these shard bundles (every --shard I/N of one bake, any order, baked with the same "
+                        "options as given here), then fill, stitch and write as the unsharded bake does")
+        ->excludes(shard);
     command->callback([args] { runBakeCommand(*args); });
 }
 

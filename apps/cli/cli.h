@@ -30,6 +30,10 @@ int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
 // typed. Throws prt::Error(kExitUsage) naming --albedo otherwise.
 std::array<double, 3> parseAlbedo(const std::string& text);
 
+// Parses --shard "I/N" with 0 <= I < N into index I and count N. Throws prt::Error(kExitUsage) naming --shard
+// otherwise.
+void parseShard(const std::string& text, int& index, int& count);
+
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);
 

@@ -34,14 +34,6 @@ struct TransferArgs {
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
 
-// "I/N" with 0 <= I < N.
-void parseShard(const std::string& text, int& index, int& count) {
-    char slash = 0, rest = 0;
-    std::istringstream in(text);
-    if (!(in >> index >> slash >> count) || slash != '/' || (in >> rest) || count < 1 || index < 0 || index >= count)
-        throw usage("--shard", "'" + text + "' is not I/N with 0 <= I < N");
-}
-
 TransferOptions resolveOptions(const TransferArgs& args) {
     TransferOptions options;
     options.mode = parseTransferMode(args.mode);
@@ -82,8 +74,9 @@ void runTransfer(const TransferArgs& args) {
     TriMesh& mesh = input.mesh;
     if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
     size_t vertexCount = mesh.vertexCount();
-    options.vertexBegin = vertexCount * shardIndex / shardCount;
-    options.vertexEnd = vertexCount * (shardIndex + 1) / shardCount;
+    RowRange range = shardRows(vertexCount, shardIndex, shardCount);
+    options.vertexBegin = range.begin;
+    options.vertexEnd = range.end;
     bool perVertexAlbedo = !mesh.albedo.empty() && !options.albedoOverride;
     logInfo("transfer: " + args.input + " (" + std::to_string(vertexCount) + " vertices) " + args.mode + ", order " +
             std::to_string(options.order) + ", " + std::to_string(options.samples) + " samples" +
@@ -183,6 +176,13 @@ std::array<double, 3> parseAlbedo(const std::string& text) {
     if (values.size() == 1) return {values[0], values[0], values[0]};
     if (values.size() != 3) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
     return {values[0], values[1], values[2]};
+}
+
+void parseShard(const std::string& text, int& index, int& count) {
+    char slash = 0, rest = 0;
+    std::istringstream in(text);
+    if (!(in >> index >> slash >> count) || slash != '/' || (in >> rest) || count < 1 || index < 0 || index >= count)
+        throw usage("--shard", "'" + text + "' is not I/N with 0 <= I < N");
 }
 
 void addTransferCommand(CLI::App& app) {

@@ -1,4 +1,5 @@
-// The `prt bake` stage: validate everything, bake per-texel transfer, fill, stitch, write textures then the bundle.
+// The `prt bake` stage: validate everything, bake per-texel transfer (all texels, or one shard's range), fill,
+// stitch, write textures then the bundle; or join shards and finish as the unsharded bake does.
 #include "bake.h"
 
 #include "core.h"
@@ -91,18 +92,16 @@ std::string fileName(const std::string& path) { return std::filesystem::path(pat
 
 } // namespace
 
-BakedAtlas bakeAtlas(const BakeOptions& options) {
+BakeSurface bakeSurface(const BakeOptions& options) {
     checkOptions(options);
     const int size = options.resolution;
-    const int channels = 3 * options.order * options.order;
-    BakedAtlas baked;
-    BakeStats& stats = baked.stats;
-
-    TriMesh& mesh = baked.mesh;
+    BakeSurface surface;
+    TriMesh& mesh = surface.mesh;
     mesh = readMeshWithNormals(options.input, "low");
     if (options.uvSet > 0) mesh.texcoords = readTexcoordSet(options.input, options.uvSet);
     bool generated = mesh.texcoords.empty();
-    nlohmann::json atlasRecord = {{"generated", generated}, {"source_uv_set", options.uvSet}};
+    nlohmann::json& atlasRecord = surface.atlasRecord;
+    atlasRecord = {{"generated", generated}, {"source_uv_set", options.uvSet}};
     if (generated) {
         AtlasOptions atlasOptions;
         atlasOptions.width = atlasOptions.height = size;
@@ -120,25 +119,24 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
     raster.width = raster.height = size;
     raster.wrap = options.wrap;
     raster.allowOverlap = options.allowOverlap;
-    TexelSamples& samples = baked.samples;
+    TexelSamples& samples = surface.samples;
     samples = rasteriseAtlas(mesh, raster, options.input);
     const size_t count = samples.texel.size();
-    stats.texels = count;
     if (count == 0) throw Error(options.input, "texcoords", "cover no texel of the atlas");
     if (samples.overlappingTexels > 0)
         logWarn("bake: " + std::to_string(samples.overlappingTexels) +
                 " texels lie under overlapping UV triangles; the lowest triangle keeps each");
-    std::vector<float> positions, normals;
+    std::vector<float>& positions = surface.positions;
+    std::vector<float>& normals = surface.normals;
     texelSurface(mesh, samples, positions, normals);
 
-    TriMesh high;
-    std::vector<float> detailNormals = normals;
-    nlohmann::json highRecord;
+    surface.detailNormals = normals;
     if (!options.high.empty()) {
+        TriMesh& high = surface.high;
         high = readMeshWithNormals(options.high, "high");
         float cage = float(options.cage * boundingDiagonal(mesh));
         CageProjection projection = projectOntoHigh(high, positions, normals, cage);
-        stats.cageRays = count;
+        surface.cageRays = count;
         double missed = double(projection.misses) / double(count);
         if (missed > options.maxMissFraction)
             throw Error(options.high, "",
@@ -149,24 +147,19 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
         if (projection.misses > 0)
             logWarn("bake: " + std::to_string(projection.misses) + " of " + std::to_string(count) +
                     " texels missed the high mesh; they keep the low surface's point and normal");
-        detailNormals = projection.normals;
+        surface.detailNormals = projection.normals;
         if (options.highPosition) positions = std::move(projection.positions);
         normals = std::move(projection.normals);
-        highRecord = {{"mesh", fileName(options.high)}, {"hash", hashFile(options.high)},
-                      {"cage", cage}, {"position", options.highPosition ? "high" : "low"},
-                      {"misses", projection.misses}};
+        surface.highRecord = {{"mesh", fileName(options.high)}, {"hash", hashFile(options.high)},
+                              {"cage", cage}, {"position", options.highPosition ? "high" : "low"},
+                              {"misses", projection.misses}};
     }
-    const TriMesh& geometry = options.high.empty() ? mesh : high;
+    return surface;
+}
 
-    // Transfer per texel: the per-vertex integrator with texels as receivers.
-    std::vector<float> albedo = sampleAlbedo(mesh, samples, options.albedoOverride);
-    std::vector<uint64_t> keys(samples.texel.begin(), samples.texel.end()); // rotations follow texels, not order
-    Receivers receivers;
-    receivers.positions = positions.data();
-    receivers.normals = normals.data();
-    receivers.albedo = albedo.empty() ? nullptr : albedo.data();
-    receivers.keys = keys.data();
-    receivers.count = count;
+namespace {
+
+TransferOptions texelTransferOptions(const BakeOptions& options) {
     TransferOptions transferOptions;
     transferOptions.mode = options.bounces > 0 ? TransferMode::Interreflected : TransferMode::Shadowed;
     transferOptions.order = options.order;
@@ -176,12 +169,43 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
     transferOptions.albedoOverride = options.albedoOverride;
     transferOptions.seed = options.seed;
     transferOptions.threads = options.threads;
+    return transferOptions;
+}
+
+} // namespace
+
+TexelTransferRows bakeTexelTransfer(const BakeSurface& surface, const BakeOptions& options, size_t begin,
+                                    size_t end) {
+    const TexelSamples& samples = surface.samples;
+    const size_t count = samples.texel.size();
+    const int size = options.resolution;
+    end = std::min(end, count);
+    begin = std::min(begin, end);
+    const TriMesh& geometry = options.high.empty() ? surface.mesh : surface.high;
+    TexelTransferRows result;
+    result.begin = begin;
+    result.end = end;
+    BakeStats& stats = result.stats;
+    stats.texels = end - begin;
+
+    // Transfer per texel: the per-vertex integrator with texels as receivers.
+    std::vector<float> albedo = sampleAlbedo(surface.mesh, samples, options.albedoOverride);
+    std::vector<uint64_t> keys(samples.texel.begin() + begin, samples.texel.begin() + end); // rotations follow texels
+    Receivers receivers;
+    receivers.positions = surface.positions.data() + 3 * begin;
+    receivers.normals = surface.normals.data() + 3 * begin;
+    receivers.albedo = albedo.empty() ? nullptr : albedo.data() + 3 * begin;
+    receivers.keys = keys.data();
+    receivers.count = end - begin;
+    TransferOptions transferOptions = texelTransferOptions(options);
+    std::string range = end - begin == count ? "" : " (texels " + std::to_string(begin) + ".." + std::to_string(end) +
+                                                        " of them)";
     logInfo("bake: " + std::to_string(count) + " texels of " + std::to_string(size) + "x" + std::to_string(size) +
-            " (" + std::to_string(100.0 * count / (double(size) * size)) + "% covered), order " +
+            " (" + std::to_string(100.0 * count / (double(size) * size)) + "% covered)" + range + ", order " +
             std::to_string(options.order) + ", " + std::to_string(options.samples) + " samples" +
             (options.bounces > 0 ? ", " + std::to_string(options.bounces) + " bounces" : "") + ", rays against " +
             (options.high.empty() ? "the low mesh"
-                                  : "the high mesh (" + std::to_string(high.triangleCount()) + " triangles)"));
+                                  : "the high mesh (" + std::to_string(surface.high.triangleCount()) + " triangles)"));
     double transferStart = nowSeconds();
     Transfer transfer;
     try {
@@ -193,14 +217,34 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
     stats.transferSeconds = nowSeconds() - transferStart;
     stats.directSeconds = transfer.stats.directSeconds;
     stats.rays = transfer.stats.rays;
+    stats.cageRays = surface.cageRays;
     if (options.yardstick) {
         RayThroughput bare = castBareOcclusionRaysAt(geometry, receivers, transferOptions);
         stats.bareRaysPerSecond = bare.seconds > 0.0 ? bare.rays / bare.seconds : 0.0;
     }
+    result.rows = std::move(transfer.coefficients);
+    result.rayOffset = transfer.stats.rayOffset;
+    return result;
+}
+
+BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vector<float> rows, float rayOffset,
+                      BakeStats stats) {
+    const int size = options.resolution;
+    const int channels = 3 * options.order * options.order;
+    BakedAtlas baked;
+    baked.mesh = std::move(surface.mesh);
+    baked.samples = std::move(surface.samples);
+    const TriMesh& mesh = baked.mesh;
+    const TexelSamples& samples = baked.samples;
+    const size_t count = samples.texel.size();
+    if (rows.size() != count * channels)
+        throw Error("", "bake", "finishing needs the rows of all " + std::to_string(count) + " covered texels",
+                    kExitFailure);
+    stats.texels = count;
 
     // Atlas images: fill the gutters, then make seams agree (lookups on chart borders read the gutters).
-    baked.transfer = scatter(samples, transfer.coefficients.data(), channels);
-    transfer.coefficients = {};
+    baked.transfer = scatter(samples, rows.data(), channels);
+    rows = {};
     std::vector<uint8_t> covered = coverageMask(samples);
     double fillStart = nowSeconds();
     if (options.dilateOnly)
@@ -213,7 +257,8 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
     if (options.seamStitch)
         stats.stitchedTexels = stitchSeams(mesh, seams, size, size, baked.transfer.data(), channels);
 
-    std::vector<float> tangentNormals = tangentSpaceNormals(mesh, vertexTangents(mesh), samples, detailNormals);
+    std::vector<float> tangentNormals =
+        tangentSpaceNormals(mesh, vertexTangents(mesh), samples, surface.detailNormals);
     baked.normals = scatter(samples, tangentNormals.data(), 3);
     pushPull(baked.normals.data(), size, size, 3, covered.data());
     for (size_t t = 0; t < baked.normals.size() / 3; ++t) {
@@ -228,9 +273,9 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
     baked.params = {{"width", size},
                     {"height", size},
                     {"uv_set", 0},
-                    {"atlas", atlasRecord},
+                    {"atlas", surface.atlasRecord},
                     {"order", options.order},
-                    {"mode", transferModeName(transferOptions.mode)},
+                    {"mode", transferModeName(texelTransferOptions(options).mode)},
                     {"samples", options.samples},
                     {"bounces", options.bounces},
                     {"albedo", mesh.albedo.empty() || options.albedoOverride
@@ -239,20 +284,69 @@ BakedAtlas bakeAtlas(const BakeOptions& options) {
                     {"seed", options.seed},
                     {"direction_set", kTransferDirectionSet},
                     {"rotation_key", "texel index y * width + x"},
-                    {"ray_offset", transfer.stats.rayOffset},
+                    {"ray_offset", rayOffset},
                     {"covered_texels", count},
                     {"sample_point", "texel centre, or the triangle's point nearest to it for partly covered texels"},
                     {"fill", options.dilateOnly ? "dilate-one-ring" : "push-pull"},
                     {"seam_stitch", options.seamStitch},
                     {"wrap", options.wrap == UvWrap::Repeat ? "repeat" : "none"}};
-    if (!highRecord.is_null()) baked.params["high"] = highRecord;
+    if (!surface.highRecord.is_null()) baked.params["high"] = surface.highRecord;
+    baked.stats = stats;
     return baked;
 }
+
+BakedAtlas bakeAtlas(const BakeOptions& options) {
+    BakeSurface surface = bakeSurface(options);
+    TexelTransferRows rows = bakeTexelTransfer(surface, options, 0, surface.samples.texel.size());
+    return finishBake(std::move(surface), options, std::move(rows.rows), rows.rayOffset, rows.stats);
+}
+
+namespace {
+
+void reportBakeCost(double start, const BakeStats& stats) {
+    StageCost cost;
+    cost.stage = "bake";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = stats.rays + stats.cageRays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
+// One shard: the transfer of its range of covered texels, written as a texel_range bundle.
+void runBakeShard(const BakeOptions& options, double start) {
+    BakeSurface surface = bakeSurface(options);
+    RowRange range = shardRows(surface.samples.texel.size(), options.shardIndex, options.shardCount);
+    TexelTransferRows rows = bakeTexelTransfer(surface, options, range.begin, range.end);
+    writeTexelShard(options, surface, rows);
+    logInfo("bake: wrote shard " + std::to_string(options.shardIndex) + "/" + std::to_string(options.shardCount) +
+            " (covered texels " + std::to_string(range.begin) + ".." + std::to_string(range.end) + ") to " +
+            options.output);
+    reportBakeCost(start, rows.stats);
+}
+
+// The merge: every shard's rows joined, then the unsharded bake's finishing.
+BakedAtlas bakeFromShards(const BakeOptions& options) {
+    BakeSurface surface = bakeSurface(options);
+    float rayOffset = 0.0f;
+    std::vector<float> rows = joinTexelShards(options, surface, rayOffset);
+    BakeStats stats;
+    stats.cageRays = surface.cageRays;
+    logInfo("bake: joined " + std::to_string(options.shardFiles.size()) + " shards");
+    return finishBake(std::move(surface), options, std::move(rows), rayOffset, stats);
+}
+
+} // namespace
 
 void runBake(const BakeOptions& options) {
     double start = nowSeconds();
     if (fileExtension(options.output) != "glb") throw usage("-o", "the output bundle must end in .glb");
-    BakedAtlas baked = bakeAtlas(options);
+    if (options.shardCount < 1 || options.shardIndex < 0 || options.shardIndex >= options.shardCount)
+        throw usage("--shard", std::to_string(options.shardIndex) + "/" + std::to_string(options.shardCount) +
+                                   " is not I/N with 0 <= I < N");
+    if (options.shardCount > 1 && !options.shardFiles.empty())
+        throw usage("--merge", "joins the shards of a bake; it does not go with --shard");
+    if (options.shardCount > 1) return runBakeShard(options, start);
+    BakedAtlas baked = options.shardFiles.empty() ? bakeAtlas(options) : bakeFromShards(options);
     const BakeStats& stats = baked.stats;
     const int size = options.resolution;
     const int coefficients = options.order * options.order;
@@ -346,7 +440,8 @@ void runBake(const BakeOptions& options) {
             std::to_string(texelsPerSecond) + " texels/s, " + std::to_string(raysPerSecond / 1e6) +
             " Mrays/s, fill " + std::to_string(stats.fillSeconds) + " s, " + std::to_string(stats.seamEdges) +
             " seam edges, " + std::to_string(stats.stitchedTexels) + " texels stitched");
-    if (options.yardstick)
+    bool yardstick = options.yardstick && options.shardFiles.empty(); // a merge casts no transfer rays
+    if (yardstick)
         logInfo("bake: bare Embree over the same rays: " + std::to_string(stats.bareRaysPerSecond / 1e6) +
                 " Mrays/s; the bake reached " + std::to_string(raysPerSecond / stats.bareRaysPerSecond) + " of it");
     nlohmann::json record = {{"texels", stats.texels},
@@ -358,15 +453,10 @@ void runBake(const BakeOptions& options) {
                              {"seam_edges", stats.seamEdges},
                              {"stitched_texels", stats.stitchedTexels},
                              {"stored_bytes", storedBytes}};
-    if (options.yardstick) record["bare_rays_per_second"] = stats.bareRaysPerSecond;
+    if (yardstick) record["bare_rays_per_second"] = stats.bareRaysPerSecond;
     logEvent("bake_stats", record.dump());
 
-    StageCost cost;
-    cost.stage = "bake";
-    cost.seconds = nowSeconds() - start;
-    cost.rays = stats.rays + stats.cageRays;
-    cost.peakMemoryBytes = peakMemoryBytes();
-    reportCost(cost);
+    reportBakeCost(start, stats);
 }
 
 } // namespace prt

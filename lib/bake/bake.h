@@ -249,6 +249,11 @@ struct BakeOptions {
     int threads = 0;
     bool yardstick = false;   // also cast the direct pass's rays with bare Embree, to compare rays/s in one run
     std::string toolVersion;
+    // Sharding (docs/bundle.md "texel_range"): shardCount > 1 computes the transfer of covered texels
+    // shardRows(covered, shardIndex, shardCount) only and writes them as a shard bundle, no textures; shardFiles
+    // non-empty joins such shards (all of one bake with these options) and finishes as the unsharded bake does.
+    int shardIndex = 0, shardCount = 1;
+    std::vector<std::string> shardFiles;
 };
 
 struct BakeStats {
@@ -273,15 +278,63 @@ struct BakedAtlas {
     BakeStats stats;
 };
 
-// Reads the inputs and validates everything (options, UVs, high-mesh coverage), then bakes: rasterise, cage
-// projection, the per-vertex transfer integrator with texels as receivers (rays against the high mesh when given),
-// gutter fill, seam stitching, tangent-space normals. Writes nothing; logs progress.
-// Throws prt::Error (kExitUsage for bad options, kExitInput for bad inputs).
+// The bake in three steps, so that shards compute step 2 for a range and a merge does step 3 once:
+// 1. bakeSurface: reads the inputs and validates everything (options, UVs, high-mesh coverage): the atlas, its
+//    covered texels (the row order of the transfer) and the receivers, cage-projected onto the high mesh if given.
+// 2. bakeTexelTransfer: the per-vertex transfer integrator with covered texels [begin, end) as receivers (rays
+//    against the high mesh when given). Rows depend only on the surface and the options, never on the range.
+// 3. finishBake: from the rows of every covered texel, scatter, gutter fill, seam stitching, tangent-space normals.
+// bakeAtlas is the three over all texels. None writes anything; they log progress.
+// Throw prt::Error (kExitUsage for bad options, kExitInput for bad inputs).
+struct BakeSurface {
+    TriMesh mesh;                 // the low mesh with the atlas as texcoords (generated when it had none)
+    TexelSamples samples;
+    std::vector<float> positions; // receivers [covered texel][3]: sample points (high-mesh points with --high)
+    std::vector<float> normals;   // receivers' normals (the high mesh's with --high)
+    std::vector<float> detailNormals; // what the normal map encodes, [covered texel][3]
+    TriMesh high;                 // empty without --high
+    nlohmann::json atlasRecord, highRecord; // recorded in the texel layer's params
+    uint64_t cageRays = 0;
+};
+BakeSurface bakeSurface(const BakeOptions& options);
+
+struct TexelTransferRows {
+    size_t begin = 0, end = 0; // covered texels
+    std::vector<float> rows;   // [end - begin][order^2][3]
+    float rayOffset = 0.0f;
+    BakeStats stats;           // rays, transferSeconds, directSeconds, bareRaysPerSecond
+};
+TexelTransferRows bakeTexelTransfer(const BakeSurface& surface, const BakeOptions& options, size_t begin,
+                                    size_t end);
+
+// Needs rows of every covered texel ([covered][order^2][3]) from bakeTexelTransfer with these options.
+BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vector<float> rows, float rayOffset,
+                      BakeStats stats);
+
 BakedAtlas bakeAtlas(const BakeOptions& options);
 
-// The stage: bakeAtlas, then the textures and last the bundle that references them, each atomically; when a later
-// write fails the earlier files are removed, so an error leaves no output. Logs a summary and the stage cost.
-// Throws prt::Error (kExitUsage, kExitInput as bakeAtlas; kExitOutput for write failures).
+// The stage. Unsharded: bakeAtlas, then the textures and last the bundle that references them. With shardCount > 1:
+// writeTexelShard. With shardFiles: joinTexelShards, finishBake, then the same files as unsharded, bit for bit.
+// Each file is written atomically; when a later write fails the earlier files are removed, so an error leaves no
+// output. Logs a summary and the stage cost.
+// Throws prt::Error (kExitUsage, kExitInput as bakeAtlas and joinTexelShards; kExitOutput for write failures).
 void runBake(const BakeOptions& options);
+
+// ---- shards (shards.cpp) ----------------------------------------------------------------------------------------
+
+// What a shard records so that a merge can tell whether it belongs to its bake: every option that changes the
+// rows (atlas, rasterisation, high mesh and cage, transfer parameters), the inputs' content hashes and the atlas's
+// size and covered texel count.
+nlohmann::json texelShardIdentity(const BakeOptions& options, const BakeSurface& surface);
+
+// Writes the shard bundle of options.output: the mesh with its atlas and one layer "texel_transfer" of domain
+// "texel_range" holding the rows, params = identity + {shard: [I, N], row_begin, row_end, ray_offset}.
+void writeTexelShard(const BakeOptions& options, const BakeSurface& surface, const TexelTransferRows& rows);
+
+// Reads options.shardFiles and joins their rows: [covered][order^2][3], and the ray offset they record.
+// Needs shards 0..N-1 of one N, each once (any order), every identity member equal to this bake's, rows tiling
+// [0, covered) exactly. Throws prt::Error(shard file, place, problem, kExitInput) naming the first shard and
+// member that does not fit.
+std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface& surface, float& rayOffset);
 
 } // namespace prt

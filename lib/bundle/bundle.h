@@ -81,4 +81,10 @@ Bundle readBundle(const std::string& path);
 // Finds a layer by name; nullptr if absent.
 const Layer* findLayer(const Bundle& bundle, const std::string& name);
 
+// The order of shard bundles of one `--shard I/N` run, given their sharded layers (null where a bundle has none):
+// result[I] is the position of shard I. Needs every layer's params.shard = [I, N] with N the number of layers and
+// each I once. Throws prt::Error(files[s], "", problem, kExitInput) naming the first bundle that is no shard, of
+// another N, out of range or given twice.
+std::vector<size_t> orderShards(const std::vector<const Layer*>& layers, const std::vector<std::string>& files);
+
 } // namespace prt

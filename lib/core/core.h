@@ -4,6 +4,7 @@
 // The driver turns an Error into one line on stderr and its exit code; see README "Exit codes".
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <stdexcept>
@@ -99,6 +100,16 @@ double nowSeconds();
 
 // Lower-case file extension without the dot ("glb", "obj"); empty if none.
 std::string fileExtension(const std::string& path);
+
+// ---- shards -------------------------------------------------------------------------------------------------
+// Rows [begin, end) of shard `index` of `count` over `rows` rows (0 <= index < count): contiguous, in shard order,
+// sizes differing by at most one, the shards tiling [0, rows) exactly. Every `--shard I/N` stage splits by this.
+struct RowRange {
+    size_t begin = 0, end = 0;
+};
+inline RowRange shardRows(size_t rows, int index, int count) {
+    return {rows * size_t(index) / size_t(count), rows * size_t(index + 1) / size_t(count)};
+}
 
 // ---- .npy arrays --------------------------------------------------------------------------------------------
 // float32, C order. Used for per-vertex radiance [V,3] and other per-element outputs.

@@ -174,9 +174,11 @@ std::string paramText(const nlohmann::json& value) {
     return value.get<std::string>();
 }
 
-// The command line of a stage run in its entry folder; inputs are symlinked there as "input-<port>.<ext>".
+// The command line of a stage run in its entry folder; inputs are symlinked there as "input-<port>.<ext>". A merge
+// (shardIndex -1) run by the stage itself gets its shards' files as "shard-<I>.<ext>" after spec.mergeFlag.
 std::vector<std::string> stageCommand(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options,
-                                      const std::string& dir, int shardIndex, int shardCount) {
+                                      const std::string& dir, int shardIndex, int shardCount,
+                                      const std::vector<std::string>& shardFiles) {
     const StageSpec& spec = *stage.spec;
     std::vector<std::string> args = {options.prt, "--log-json", spec.name};
     for (const ParamSpec& param : spec.params)
@@ -202,7 +204,16 @@ std::vector<std::string> stageCommand(const PipelineStage& stage, const StageInp
         }
     }
     if (spec.takesThreads && options.threads > 0) args.insert(args.end(), {"--threads", std::to_string(options.threads)});
-    if (shardCount > 1) args.insert(args.end(), {"--shard", std::to_string(shardIndex) + "/" + std::to_string(shardCount)});
+    if (shardCount > 1 && shardIndex >= 0)
+        args.insert(args.end(), {"--shard", std::to_string(shardIndex) + "/" + std::to_string(shardCount)});
+    if (shardIndex < 0 && !shardFiles.empty()) {
+        args.push_back(spec.mergeFlag);
+        for (size_t i = 0; i < shardFiles.size(); ++i) {
+            std::string link = "shard-" + std::to_string(i) + "." + fileExtension(shardFiles[i]);
+            fs::create_symlink(absolutePath(shardFiles[i]), dir + "/" + link);
+            args.push_back(link);
+        }
+    }
     return args;
 }
 
@@ -218,32 +229,12 @@ nlohmann::json describeOutputs(const StageSpec& spec, const std::string& dir, co
     return outputs;
 }
 
-// Joins the stored shards of `stage` into `dir`; returns the merge's cost.
-nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, const std::map<std::string, std::string>& hashes,
-                         const std::string& store, int shardCount, const std::string& label) {
-    double start = nowSeconds();
-    const PortSpec& port = stage.spec->outputs.front(); // shardable stages write one bundle
-    std::vector<Bundle> shards;
-    std::vector<std::string> files;
-    for (int i = 0; i < shardCount; ++i) {
-        std::string shardKey = keyOf(keyIngredients(stage, hashes, i, shardCount));
-        std::optional<StoreEntry> entry = findStoreEntry(store, shardKey);
-        if (!entry)
-            throw Error(store, label, "shard " + std::to_string(i + 1) + "/" + std::to_string(shardCount) + " (" +
-                                          shardKey + ") is not in the store", kExitFailure);
-        files.push_back(entry->dir + "/" + entry->manifest["outputs"][port.name]["file"].get<std::string>());
-        shards.push_back(readBundle(files.back()));
-    }
-    writeBundle(dir + "/" + port.name + "." + port.extension, mergeShards(shards, files));
-    writeBytesAtomic(dir + "/stage.log", "merged " + std::to_string(shardCount) + " shards\n");
-    return {{"seconds", nowSeconds() - start}, {"rays", 0}, {"peak_memory_bytes", peakMemoryBytes()}};
-}
-
 // Runs `prt STAGE` with `dir` as its current directory; returns its cost and command line.
 nlohmann::json runStageIn(const std::string& dir, const PipelineStage& stage, const StageInputs& inputs,
-                          const RunOptions& options, int shardIndex, int shardCount, const std::string& label) {
+                          const RunOptions& options, int shardIndex, int shardCount, const std::string& label,
+                          const std::vector<std::string>& shardFiles = {}) {
     double start = nowSeconds();
-    std::vector<std::string> args = stageCommand(stage, inputs, options, dir, shardIndex, shardCount);
+    std::vector<std::string> args = stageCommand(stage, inputs, options, dir, shardIndex, shardCount, shardFiles);
     logInfo(label + ": running " + stage.spec->name);
     ChildResult child = runLogged(args, dir, dir + "/stage.log", label);
     if (!WIFEXITED(child.status) || WEXITSTATUS(child.status) != 0)
@@ -255,6 +246,31 @@ nlohmann::json runStageIn(const std::string& dir, const PipelineStage& stage, co
     args[0] = "prt";
     return {{"seconds", nowSeconds() - start}, {"rays", child.rays}, {"peak_memory_bytes", child.peakMemoryBytes},
             {"command", args}};
+}
+
+// Joins the stored shards of `stage` into `dir`, by mergeShards or by the stage itself (spec.mergeFlag); returns
+// the merge's cost.
+nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, const StageInputs& inputs,
+                         const RunOptions& options, int shardCount, const std::string& label) {
+    double start = nowSeconds();
+    std::string store = storeDir(options);
+    std::map<std::string, std::string> hashes = inputHashes(inputs);
+    const PortSpec& port = stage.spec->outputs.front(); // shardable stages write one bundle
+    std::vector<Bundle> shards;
+    std::vector<std::string> files;
+    for (int i = 0; i < shardCount; ++i) {
+        std::string shardKey = keyOf(keyIngredients(stage, hashes, i, shardCount));
+        std::optional<StoreEntry> entry = findStoreEntry(store, shardKey);
+        if (!entry)
+            throw Error(store, label, "shard " + std::to_string(i + 1) + "/" + std::to_string(shardCount) + " (" +
+                                          shardKey + ") is not in the store", kExitFailure);
+        files.push_back(entry->dir + "/" + entry->manifest["outputs"][port.name]["file"].get<std::string>());
+    }
+    if (!stage.spec->mergeFlag.empty()) return runStageIn(dir, stage, inputs, options, -1, shardCount, label, files);
+    for (const std::string& file : files) shards.push_back(readBundle(file));
+    writeBundle(dir + "/" + port.name + "." + port.extension, mergeShards(shards, files));
+    writeBytesAtomic(dir + "/stage.log", "merged " + std::to_string(shardCount) + " shards\n");
+    return {{"seconds", nowSeconds() - start}, {"rays", 0}, {"peak_memory_bytes", peakMemoryBytes()}};
 }
 
 } // namespace
@@ -290,7 +306,7 @@ nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, con
     fs::remove_all(dir);
     fs::create_directories(dir);
     try {
-        nlohmann::json cost = merge ? mergeInto(dir, stage, hashes, store, shardCount, label)
+        nlohmann::json cost = merge ? mergeInto(dir, stage, inputs, options, shardCount, label)
                                     : runStageIn(dir, stage, inputs, options, shardIndex, shardCount, label);
         nlohmann::json outputs = describeOutputs(*stage.spec, dir, label);
         if (existing && existing->manifest["outputs"] != outputs)

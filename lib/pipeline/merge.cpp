@@ -35,27 +35,16 @@ Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::str
     const Bundle& first = shards[0];
     size_t count = shards.size();
 
-    // Order the shards by their index and check each is the one its position says.
-    std::vector<size_t> order(count);
-    std::vector<int> seen(count, -1);
-    for (size_t s = 0; s < count; ++s) {
-        const Layer* layer = first.layers.empty() ? nullptr : findLayer(shards[s], first.layers[0].name);
-        const nlohmann::json* shard = layer && layer->params.contains("shard") ? &layer->params["shard"] : nullptr;
-        if (!shard || !shard->is_array() || shard->size() != 2 || !(*shard)[0].is_number_integer() ||
-            !(*shard)[1].is_number_integer())
-            throw Error(files[s], "", "not a shard bundle: no layer with params.shard = [I, N]", kExitInput);
-        int64_t index = (*shard)[0], total = (*shard)[1];
-        if (total != int64_t(count))
-            throw Error(files[s], "", "is shard " + std::to_string(index) + " of " + std::to_string(total) + ", but " +
-                                          std::to_string(count) + " shards were given", kExitInput);
-        if (index < 0 || index >= total)
-            throw Error(files[s], "", "shard index " + std::to_string(index) + " is out of range", kExitInput);
-        if (seen[index] >= 0)
-            throw Error(files[s], "", "shard " + std::to_string(index) + " is given twice (also " + files[seen[index]] + ")",
-                        kExitInput);
-        seen[index] = int(s);
-        order[index] = s;
-    }
+    std::vector<const Layer*> sharded(count);
+    for (size_t s = 0; s < count; ++s)
+        sharded[s] = first.layers.empty() ? nullptr : findLayer(shards[s], first.layers[0].name);
+    std::vector<size_t> order = orderShards(sharded, files);
+    for (const Layer& layer : first.layers)
+        if (layer.domain == "texel_range")
+            throw Error(files[0], "layer " + layer.name,
+                        "is a bake shard: its merge redoes the bake's finishing, so run `prt bake MESH -o OUT.glb "
+                        "--merge SHARD...` with the shards' options instead",
+                        kExitUsage);
 
     Bundle merged = first;
     for (size_t s = 1; s < count; ++s) {

@@ -57,7 +57,10 @@ struct StageSpec {
     // Why these parameters do not go together, or "" when they do.
     std::string (*paramsRefusal)(const nlohmann::json& params) = nullptr;
     bool takesThreads = false;                // takes --threads; outputs do not depend on it, so keys ignore it
-    bool shardable = false;                   // takes --shard I/N and writes "vertex_range" layers for mergeShards
+    bool shardable = false;                   // takes --shard I/N and writes one bundle of "..._range" layers
+    // How the merge job joins the shards: "" by mergeShards ("vertex_range" layers); else by running the stage
+    // again with its inputs and parameters plus "<mergeFlag> SHARD..." (`prt bake --merge`: its finishing needs them).
+    std::string mergeFlag = {};
     // Why these parameters cannot be sharded, or "" when they can (shardable stages only).
     std::string (*shardRefusal)(const nlohmann::json& params) = nullptr;
 };

@@ -72,8 +72,8 @@ std::vector<StageSpec> makeCatalogue() {
     transfer.shardRefusal = transferShardRefusal;
     stages.push_back(transfer);
 
-    // Not shardable: gutter fill (push-pull over the whole atlas) and seam stitching couple texels of every range,
-    // so shards of texel ranges would need a merge that redoes both; one bake is minutes at most.
+    // Shards are ranges of covered texels ("texel_range" layers). Gutter fill and seam stitching couple the whole
+    // atlas, so the merge is `prt bake ... --merge SHARD...`, which joins the rows and finishes as one bake does.
     StageSpec bake{"bake", 1, "per-texel SH transfer into atlas textures"};
     bake.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"high", FileKind::Mesh, "--high", "", true}};
     // The textures land next to the bundle (bundle.transfer.exr, ...), listed in its layers' params.files; `prt run`
@@ -96,6 +96,8 @@ std::vector<StageSpec> makeCatalogue() {
                    {"padding", ParamType::Integer, 2.0, 1024.0},
                    kSeed};
     bake.takesThreads = true;
+    bake.shardable = true;
+    bake.mergeFlag = "--merge";
     stages.push_back(bake);
 
     StageSpec reference{"reference", 1, "ground-truth radiance by path tracing"};

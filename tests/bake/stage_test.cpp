@@ -154,15 +154,19 @@ TEST(BakeStage, BoxRoomWithoutUvsGetsAGeneratedAtlasAndU8Layers) {
     }
 }
 
+// A plane in the shadow and bounce light of a ball whose UVs are collapsed into one corner (it covers no texel);
+// `detail` refines both, `lift` raises the plane (a high mesh for the plane of detail 1).
+TriMesh planeUnderABall(int detail, float lift = 0.0f) {
+    TriMesh ball = makeSphere(0.3f, 8 * detail, 16 * detail);
+    for (size_t v = 0; v < ball.vertexCount(); ++v) ball.positions[3 * v + 1] += 0.5f;
+    ball.texcoords.assign(2 * ball.vertexCount(), 1.0f);
+    return mergeMeshes({makePlane(2.0f, 4 * detail, lift), ball});
+}
+
 // Same inputs and seed, any thread count: the same bits, bounces included.
 TEST(BakeStage, ResultDoesNotDependOnTheThreadCount) {
     Folder folder("threads");
-    // A plane in the shadow and bounce light of a ball whose UVs are collapsed into one corner (it covers no texel).
-    TriMesh ball = makeSphere(0.3f, 8, 16);
-    for (size_t v = 0; v < ball.vertexCount(); ++v) ball.positions[3 * v + 1] += 0.5f;
-    ball.texcoords.assign(2 * ball.vertexCount(), 1.0f);
-    TriMesh scene = mergeMeshes({makePlane(2.0f, 4), ball});
-    BakeOptions options = smallBake(writeMesh(folder, "scene.glb", scene), folder / "unused.glb");
+    BakeOptions options = smallBake(writeMesh(folder, "scene.glb", planeUnderABall(1)), folder / "unused.glb");
     options.bounces = 2;
     options.albedo = {0.8f, 0.7f, 0.6f};
     options.albedoOverride = true;
@@ -180,6 +184,116 @@ TEST(BakeStage, ResultDoesNotDependOnTheThreadCount) {
         hi = std::max(hi, one.transfer[t]);
     }
     EXPECT_GT(hi - lo, 0.01f);
+}
+
+// ---- shards ------------------------------------------------------------------------------------------------------
+
+// Bakes `options` as `count` texel-range shards into their own folder; returns the shard files.
+std::vector<std::string> bakeShards(BakeOptions options, const Folder& folder, int count) {
+    std::vector<std::string> files;
+    options.shardCount = count;
+    for (int i = 0; i < count; ++i) {
+        options.shardIndex = i;
+        options.output = folder / ("shard-" + std::to_string(i) + ".glb");
+        runBake(options);
+        files.push_back(options.output);
+    }
+    EXPECT_EQ(folder.files(), size_t(count)) << "shards write their bundle only, no textures";
+    return files;
+}
+
+// The unsharded bake and the merge of 3 shards (given out of order) write the same files, bit for bit.
+void expectMergedShardsEqualTheWholeBake(BakeOptions options, const std::string& name) {
+    Folder whole(name + "_whole"), parts(name + "_parts"), merged(name + "_merged");
+    options.output = whole / "baked.glb";
+    runBake(options);
+    std::vector<std::string> shards = bakeShards(options, parts, 3);
+    options.output = merged / "baked.glb";
+    options.shardFiles = {shards[2], shards[0], shards[1]};
+    runBake(options);
+    ASSERT_EQ(merged.files(), whole.files());
+    for (const fs::directory_entry& file : fs::directory_iterator(whole.path))
+        EXPECT_EQ(readFileBytes(merged / file.path().filename().string()), readFileBytes(file.path().string()))
+            << file.path().filename() << " differs after the merge";
+}
+
+TEST(BakeShards, MergedShardsEqualTheUnshardedBakeInHalf) {
+    Folder inputs("shards_half_in");
+    BakeOptions options = smallBake(writeMesh(inputs, "scene.glb", planeUnderABall(1)), "");
+    expectMergedShardsEqualTheWholeBake(options, "shards_half");
+}
+
+TEST(BakeShards, MergedShardsEqualTheUnshardedBakeInU8WithAGeneratedAtlas) {
+    Folder inputs("shards_u8_in");
+    BakeOptions options = smallBake(writeMesh(inputs, "room.glb", makeBoxRoom(2.0f, 2)), "");
+    options.format = TexelFormat::U8;
+    expectMergedShardsEqualTheWholeBake(options, "shards_u8");
+}
+
+TEST(BakeShards, MergedShardsEqualTheUnshardedBakeWithAHighMeshAndABounce) {
+    Folder inputs("shards_high_in");
+    BakeOptions options = smallBake(writeMesh(inputs, "low.glb", planeUnderABall(1)), "");
+    options.high = writeMesh(inputs, "high.glb", planeUnderABall(2, 0.002f));
+    options.bounces = 1;
+    options.samples = 16;
+    expectMergedShardsEqualTheWholeBake(options, "shards_high");
+}
+
+class BakeShardMerge : public testing::Test {
+protected:
+    Folder inputs{"merge_in"}, parts{"merge_parts"}, merged{"merge_out"};
+    BakeOptions options = smallBake(writeMesh(inputs, "scene.glb", planeUnderABall(1)), "");
+    std::vector<std::string> shards;
+
+    void SetUp() override { shards = bakeShards(options, parts, 3); }
+
+    // The merge of `files` fails naming `file` and `problem`, and writes nothing.
+    void expectRefused(const std::vector<std::string>& files, const std::string& file, const std::string& problem) {
+        BakeOptions merge = options;
+        merge.output = merged / "baked.glb";
+        merge.shardFiles = files;
+        Error e = expectFailureWithoutOutput(merge, merged, 0);
+        EXPECT_EQ(e.file(), file) << e.what();
+        EXPECT_NE(std::string(e.what()).find(problem), std::string::npos) << e.what();
+    }
+};
+
+TEST_F(BakeShardMerge, RefusesAMissingShard) {
+    expectRefused({shards[0], shards[2]}, shards[0], "is shard 0 of 3, but 2 shards were given");
+}
+
+TEST_F(BakeShardMerge, RefusesAShardOfAnotherBake) {
+    BakeOptions other = options;
+    other.seed = 7;
+    other.shardIndex = 1;
+    other.shardCount = 3;
+    other.output = inputs / "seed7.glb";
+    runBake(other);
+    expectRefused({shards[0], other.output, shards[2]}, other.output, "params.seed: is 7, but this bake has 0");
+    options.samples = 64; // the merge's own options must match the shards' too
+    expectRefused(shards, shards[0], "params.samples");
+}
+
+TEST_F(BakeShardMerge, RefusesOverlappingShards) {
+    expectRefused({shards[0], shards[1], shards[1]}, shards[1], "shard 1 is given twice");
+    Bundle bundle = readBundle(shards[1]); // shard 1 claims one texel of shard 0 as well
+    Layer& layer = bundle.layers[0];
+    layer.params["row_begin"] = layer.params["row_begin"].get<uint64_t>() - 1;
+    layer.shape[0] += 1;
+    layer.data.insert(layer.data.begin(), layer.data.begin(), layer.data.begin() + 12);
+    std::string overlapping = inputs / "overlapping.glb";
+    writeBundle(overlapping, bundle);
+    expectRefused({shards[0], overlapping, shards[2]}, overlapping, "overlap or leave a gap");
+}
+
+TEST_F(BakeShardMerge, RefusesShardAndMergeTogether) {
+    BakeOptions both = options;
+    both.output = merged / "baked.glb";
+    both.shardFiles = shards;
+    both.shardCount = 3;
+    Error e = expectFailureWithoutOutput(both, merged, 0);
+    EXPECT_EQ(e.exitCode(), kExitUsage);
+    EXPECT_EQ(e.place(), "--merge");
 }
 
 } // namespace

@@ -1,5 +1,5 @@
 // A bake stage in a pipeline: its bundle's textures travel with it, to the declared output and to stages that read
-// the bundle from the store.
+// the bundle from the store; sharded, it writes the same files as unsharded.
 #include "pipeline_test_util.h"
 
 #include "runtime.h"
@@ -22,18 +22,27 @@ resolution = 32
 order = 2
 samples = 16
 format = "@FORMAT@"
+shards = @SHARDS@
 
 [outputs]
 baked = { from = "bake", path = "@DIR@/out/baked.glb" }
 )";
 
+// The bake pipeline in `dir` (which holds shape.obj), its output under OUT.
+Pipeline bakePipeline(const test::TempDir& dir, const std::string& format, int shards, const std::string& out) {
+    std::string text = test::replaceAll(test::replaceAll(kPipeline, "@FORMAT@", format), "@SHARDS@",
+                                        std::to_string(shards));
+    text = test::replaceAll(test::withDir(text, dir.path), dir.path + "/out/", out + "/");
+    std::string file = dir / ("bake-" + format + "-" + std::to_string(shards) + ".toml");
+    test::writeText(file, text);
+    return loadPipeline(file);
+}
+
 TEST(PipelineBake, OutputBundleArrivesWithItsTexturesAndRelights) {
     for (const char* format : {"half", "u8"}) {
         test::TempDir dir;
         test::writeTwoSpheresObj(dir / "shape.obj");
-        std::string text = test::replaceAll(test::replaceAll(kPipeline, "@DIR@", dir.path), "@FORMAT@", format);
-        test::writeText(dir / "bake.toml", text);
-        Pipeline pipeline = loadPipeline(dir / "bake.toml");
+        Pipeline pipeline = bakePipeline(dir, format, 1, dir / "out");
         nlohmann::json report = runPipeline(pipeline, test::testOptions(dir / "cache"));
         const nlohmann::json& output = report["outputs"]["baked"];
         ASSERT_TRUE(output.contains("files")) << output.dump();
@@ -43,6 +52,26 @@ TEST(PipelineBake, OutputBundleArrivesWithItsTexturesAndRelights) {
         EXPECT_EQ(model.width, 32);
         EXPECT_EQ(model.rows.order, 2);
         EXPECT_EQ(model.rows.transfer.size(), 32u * 32u * 4u * 3u);
+    }
+}
+
+// Three texel-range shards and the stage's own merge (`prt bake --merge`) give the unsharded bake's files.
+TEST(PipelineBake, ShardedBakeWritesTheUnshardedFiles) {
+    test::TempDir dir;
+    test::writeTwoSpheresObj(dir / "shape.obj");
+    nlohmann::json whole = test::runQuietly(bakePipeline(dir, "u8", 1, dir / "out-1"), test::testOptions(dir / "c1"));
+    nlohmann::json sharded = test::runQuietly(bakePipeline(dir, "u8", 3, dir / "out-3"), test::testOptions(dir / "c3"));
+    EXPECT_EQ(test::outputHashes(sharded), test::outputHashes(whole));
+    const nlohmann::json& bake = sharded["stages"][1];
+    ASSERT_EQ(bake["id"], "bake");
+    EXPECT_EQ(bake["shards"], 3);
+    ASSERT_EQ(bake["shard_jobs"].size(), 4u); // three shards and the merge
+    EXPECT_EQ(bake["key"], whole["stages"][1]["key"]);
+    const nlohmann::json& files = whole["outputs"]["baked"]["files"];
+    ASSERT_GE(files.size(), 2u);
+    for (const auto& file : files) {
+        std::string name = std::filesystem::path(file.get<std::string>()).filename().string();
+        EXPECT_EQ(readFileBytes(dir / ("out-3/" + name)), readFileBytes(file.get<std::string>())) << name;
     }
 }
 
