@@ -41,6 +41,9 @@ void writeCoefficientExr(const std::string& path, const float* texels, int width
             for (int c = 0; c < 3; ++c) spec.channelnames.push_back(coefficientChannel(j, c));
         spec.alpha_channel = -1;
         spec.attribute("compression", "zip");
+        // OIIO stamps the current time as capDate otherwise: a fixed one keeps the bytes a function of the texels,
+        // so reruns, cached results and merged shards are bit-identical.
+        spec.attribute("DateTime", "1970:01:01 00:00:00");
         if (!output->open(tmpPath, spec) || !output->write_image(OIIO::TypeDesc::FLOAT, texels) || !output->close())
             throw Error(path, "", "cannot write OpenEXR (" + output->geterror() + ")", kExitOutput);
     });
