@@ -21,6 +21,8 @@ void writeImage(const std::string& path, const Image& image, bool half) {
         OIIO::TypeDesc storage = exr && half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
         OIIO::ImageSpec spec(image.width, image.height, 3, storage);
         if (exr) spec.attribute("compression", "zip");
+        // OIIO would stamp the current time (EXR capDate): a fixed one keeps same pixels, same bytes.
+        spec.attribute("DateTime", "1970:01:01 00:00:00");
         if (!output->open(tmpPath, spec) || !output->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data()) ||
             !output->close())
             throw Error(path, "", "cannot write image (" + output->geterror() + ")", kExitOutput);
