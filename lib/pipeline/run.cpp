@@ -286,9 +286,13 @@ void copyIfChanged(const std::string& file, const std::string& path, const std::
 
 // The external files a bundle's layers reference (params.files, relative to the bundle, docs/bundle.md): copied
 // next to the bundle's copy under the same names, so the references hold. Returns their destination paths.
-std::vector<std::string> copyCompanions(const std::string& bundleFile, const std::string& destination) {
+// `claimed` maps each path this run has written to its output's name; a companion that would overwrite another
+// output's file is an error naming both, since their bundles would then share (and corrupt) one texture.
+std::vector<std::string> copyCompanions(const Pipeline& pipeline, const PipelineOutput& output,
+                                        const std::string& bundleFile,
+                                        std::map<std::string, std::string>& claimed) {
     std::vector<std::string> copied;
-    fs::path from = fs::path(bundleFile).parent_path(), to = fs::path(destination).parent_path();
+    fs::path from = fs::path(bundleFile).parent_path(), to = fs::path(output.path).parent_path();
     for (const Layer& layer : readBundle(bundleFile).layers) {
         if (!layer.params.contains("files") || !layer.params["files"].is_array()) continue;
         for (const nlohmann::json& name : layer.params["files"]) {
@@ -296,9 +300,15 @@ std::vector<std::string> copyCompanions(const std::string& bundleFile, const std
             if (relative.is_absolute() || relative.filename() != relative)
                 throw Error(bundleFile, "layer \"" + layer.name + "\" params.files",
                             "'" + relative.string() + "' is not a plain file name next to the bundle", kExitFailure);
-            std::string source = (from / relative).string();
-            copyIfChanged(source, (to / relative).string(), hashFile(source));
-            copied.push_back((to / relative).string());
+            std::string source = (from / relative).string(), target = (to / relative).lexically_normal().string();
+            auto [owner, fresh] = claimed.emplace(target, output.name);
+            if (!fresh && owner->second != output.name)
+                throw Error(pipeline.file, "outputs." + output.name,
+                            "its bundle's texture " + target + " would overwrite the file of output '" +
+                                owner->second + "': put the two outputs in different folders",
+                            kExitInput);
+            copyIfChanged(source, target, hashFile(source));
+            copied.push_back(target);
         }
     }
     return copied;
@@ -308,6 +318,9 @@ std::vector<std::string> copyCompanions(const std::string& bundleFile, const std
 // bundle's companion files (external textures) go next to it.
 nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string, StoreEntry>& entries) {
     nlohmann::json copied = nlohmann::json::object();
+    std::map<std::string, std::string> claimed; // destination path -> output name
+    for (const PipelineOutput& output : pipeline.outputs)
+        claimed.emplace(fs::path(output.path).lexically_normal().string(), output.name);
     for (const PipelineOutput& output : pipeline.outputs) {
         auto entry = entries.find(output.stage);
         if (entry == entries.end()) {
@@ -328,7 +341,7 @@ nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string,
         copied[output.name] = {{"path", output.path}, {"hash", hash}, {"kind", fileKindName(kind)},
                                {"from", output.stage + "." + output.port}};
         if (kind == FileKind::Bundle) {
-            std::vector<std::string> companions = copyCompanions(file, output.path);
+            std::vector<std::string> companions = copyCompanions(pipeline, output, file, claimed);
             if (!companions.empty()) copied[output.name]["files"] = companions;
         }
     }
@@ -388,7 +401,14 @@ nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options) 
         auto entry = entries.find(stage.id);
         if (entry != entries.end()) last[stage.id] = entry->second.manifest["ingredients"];
     }
-    report["outputs"] = failure ? nlohmann::json::object() : copyOutputs(pipeline, entries);
+    report["outputs"] = nlohmann::json::object();
+    if (!failure) {
+        try {
+            report["outputs"] = copyOutputs(pipeline, entries);
+        } catch (const Error& e) {
+            failure = e; // the report still records what ran
+        }
+    }
     report.update({{"ok", !failure}, {"seconds", epochSeconds() - runStart}, {"cache_hits", hits},
                    {"stages_run", ran}, {"peak_memory_bytes", peak}});
     if (failure) report["error"] = failure->what();

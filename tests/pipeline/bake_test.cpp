@@ -75,5 +75,24 @@ TEST(PipelineBake, ShardedBakeWritesTheUnshardedFiles) {
     }
 }
 
+// Two baked bundles declared into one folder would share texture names: the run says so instead of letting the
+// second overwrite the first's textures.
+TEST(PipelineBake, TwoBakedOutputsInOneFolderAreAnError) {
+    test::TempDir dir;
+    test::writeTwoSpheresObj(dir / "shape.obj");
+    std::string text = test::replaceAll(test::replaceAll(kPipeline, "@FORMAT@", "u8"), "@SHARDS@", "1");
+    text = test::withDir(text, dir.path) + "other = { from = \"bake\", path = \"" + dir.path + "/out/other.glb\" }\n";
+    Pipeline pipeline = parsePipeline(text, dir / "clash.toml");
+    try {
+        test::runQuietly(pipeline, test::testOptions(dir / "cache"));
+        FAIL() << "expected an error";
+    } catch (const Error& e) {
+        std::string message = e.what();
+        EXPECT_NE(message.find("outputs.other"), std::string::npos) << message;
+        EXPECT_NE(message.find("'baked'"), std::string::npos) << message;
+        EXPECT_NE(message.find("different folders"), std::string::npos) << message;
+    }
+}
+
 } // namespace
 } // namespace prt
