@@ -16,21 +16,6 @@
 namespace prt::test {
 namespace {
 
-using OpenMeshTriangles = OpenMesh::TriMesh_ArrayKernelT<>;
-
-// Writes the mesh with OpenMesh's own writer, so the round trip checks our side of its readers.
-void writeWithOpenMesh(const TriMesh& mesh, const std::string& file, bool binary) {
-    OpenMeshTriangles out;
-    std::vector<OpenMesh::VertexHandle> handles;
-    for (size_t v = 0; v < mesh.vertexCount(); ++v)
-        handles.push_back(out.add_vertex({mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]}));
-    for (size_t t = 0; t < mesh.triangleCount(); ++t)
-        out.add_face(handles[mesh.indices[3 * t]], handles[mesh.indices[3 * t + 1]], handles[mesh.indices[3 * t + 2]]);
-    OpenMesh::IO::Options options;
-    if (binary) options += OpenMesh::IO::Options::Binary;
-    ASSERT_TRUE(OpenMesh::IO::write_mesh(out, file, options));
-}
-
 // OpenMesh's ascii writers print 6 significant digits: compare positions on a grid coarser than that.
 float quantize(float x) { return std::round(x * 1e4f) / 1e4f; }
 

@@ -21,19 +21,6 @@ namespace {
 
 using nlohmann::json;
 
-// OpenMesh's binary writers give files whose byte layout the truncation and NaN tests can aim at.
-void writeWithOpenMesh(const TriMesh& mesh, const std::string& file, bool binary) {
-    OpenMesh::TriMesh_ArrayKernelT<> out;
-    std::vector<OpenMesh::VertexHandle> handles;
-    for (size_t v = 0; v < mesh.vertexCount(); ++v)
-        handles.push_back(out.add_vertex({mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]}));
-    for (size_t t = 0; t < mesh.triangleCount(); ++t)
-        out.add_face(handles[mesh.indices[3 * t]], handles[mesh.indices[3 * t + 1]], handles[mesh.indices[3 * t + 2]]);
-    OpenMesh::IO::Options options;
-    if (binary) options += OpenMesh::IO::Options::Binary;
-    ASSERT_TRUE(OpenMesh::IO::write_mesh(out, file, options));
-}
-
 class Meshprep : public ScratchTest {
 protected:
     MeshprepOptions optionsFor(const std::string& input) const {
