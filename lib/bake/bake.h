@@ -205,11 +205,8 @@ enum class TexelFormat { Half, Float, U8 };
 TexelFormat parseTexelFormat(const std::string& name);
 const char* texelFormatName(TexelFormat format);
 
-// Channel name of coefficient j, colour c (0..2): "T000.R".
-std::string coefficientChannel(int coefficient, int colour);
-
 // Writes [width * height][coefficients][3] transfer atomically as one OpenEXR with ZIP compression and channels
-// named by coefficientChannel. Throws prt::Error(path, ..., kExitOutput) when it cannot be written.
+// named by texelCoefficientChannel (runtime.h: "T000.R"), as the runtime reads them. Throws prt::Error(path, ..., kExitOutput) when it cannot be written.
 void writeCoefficientExr(const std::string& path, const float* texels, int width, int height, int coefficients,
                          bool half);
 

@@ -28,8 +28,6 @@ const char* texelFormatName(TexelFormat format) {
     return "?";
 }
 
-std::string coefficientChannel(int coefficient, int colour) { return texelCoefficientChannel(coefficient, colour); }
-
 void writeCoefficientExr(const std::string& path, const float* texels, int width, int height, int coefficients,
                          bool half) {
     writeFileAtomic(path, [&](const std::string& tmpPath) {
@@ -38,7 +36,7 @@ void writeCoefficientExr(const std::string& path, const float* texels, int width
         OIIO::ImageSpec spec(width, height, 3 * coefficients, half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
         spec.channelnames.clear();
         for (int j = 0; j < coefficients; ++j)
-            for (int c = 0; c < 3; ++c) spec.channelnames.push_back(coefficientChannel(j, c));
+            for (int c = 0; c < 3; ++c) spec.channelnames.push_back(texelCoefficientChannel(j, c));
         spec.alpha_channel = -1;
         spec.attribute("compression", "zip");
         // OIIO stamps the current time as capDate otherwise: a fixed one keeps the bytes a function of the texels,
@@ -56,12 +54,12 @@ std::vector<float> readCoefficientExr(const std::string& path, int& width, int& 
             return std::find(present.begin(), present.end(), name) != present.end();
         };
         coefficients = 0;
-        while (has(coefficientChannel(coefficients, 0))) ++coefficients;
-        if (coefficients == 0) throw Error(path, "channel " + coefficientChannel(0, 0), "is missing");
+        while (has(texelCoefficientChannel(coefficients, 0))) ++coefficients;
+        if (coefficients == 0) throw Error(path, "channel " + texelCoefficientChannel(0, 0), "is missing");
     }
     std::vector<std::string> names;
     for (int j = 0; j < coefficients; ++j)
-        for (int c = 0; c < 3; ++c) names.push_back(coefficientChannel(j, c));
+        for (int c = 0; c < 3; ++c) names.push_back(texelCoefficientChannel(j, c));
     ImageChannels image = readImageChannels(path, names);
     if ((width > 0 && image.width != width) || (height > 0 && image.height != height))
         throw Error(path, "", std::to_string(image.width) + "x" + std::to_string(image.height) +

@@ -1,6 +1,7 @@
 #include "bake.h"
 
 #include "core.h"
+#include "runtime.h"
 
 #include <gtest/gtest.h>
 
@@ -17,9 +18,9 @@ std::string tempPath(const std::string& name) {
 }
 
 TEST(CoefficientExr, ChannelNamesFollowTheDocumentedPattern) {
-    EXPECT_EQ(coefficientChannel(0, 0), "T000.R");
-    EXPECT_EQ(coefficientChannel(8, 2), "T008.B");
-    EXPECT_EQ(coefficientChannel(123, 1), "T123.G");
+    EXPECT_EQ(texelCoefficientChannel(0, 0), "T000.R");
+    EXPECT_EQ(texelCoefficientChannel(8, 2), "T008.B");
+    EXPECT_EQ(texelCoefficientChannel(123, 1), "T123.G");
 }
 
 TEST(CoefficientExr, FloatRoundTripsExactlyAndHalfToHalfPrecision) {
