@@ -21,6 +21,20 @@ std::string shapeText(const std::vector<uint64_t>& shape) {
 
 } // namespace
 
+Layer& transferLayer(Bundle& bundle, const std::string& name, const std::string& domain, const std::string& source,
+                     const char* stage) {
+    Layer* layer = nullptr;
+    for (Layer& candidate : bundle.layers)
+        if (candidate.name == name) layer = &candidate;
+    if (!layer)
+        throw Error(source, "PRT_bundle", "no \"" + name + "\" layer to relight (run `prt " + stage + "` to make one)");
+    if (layer->domain != domain || layer->semantic != "sh_transfer_rgb")
+        throw Error(source, "layer \"" + name + "\"",
+                    "domain \"" + layer->domain + "\", semantic \"" + layer->semantic + "\"; expected domain \"" +
+                        domain + "\", semantic \"sh_transfer_rgb\"");
+    return *layer;
+}
+
 int transferLayerOrder(const Layer& layer, const std::string& source, const std::string& place) {
     const std::vector<uint64_t>& shape = layer.shape;
     int order = int(std::lround(std::sqrt(shape.size() == 3 ? double(shape[1]) : 0.0)));
@@ -43,15 +57,8 @@ void checkFiniteRows(const std::vector<float>& data, size_t rowValues, const std
 }
 
 RelightModel relightModel(Bundle bundle, const std::string& source) {
-    Layer* layer = nullptr;
-    for (Layer& candidate : bundle.layers)
-        if (candidate.name == "transfer") layer = &candidate;
-    if (!layer)
-        throw Error(source, "PRT_bundle", "no \"transfer\" layer to relight (run `prt transfer` to make one)");
+    Layer* layer = &transferLayer(bundle, "transfer", "vertex", source, "transfer");
     const std::string place = "layer \"transfer\"";
-    if (layer->domain != "vertex" || layer->semantic != "sh_transfer_rgb")
-        throw Error(source, place, "domain \"" + layer->domain + "\", semantic \"" + layer->semantic +
-                                       "\"; expected domain \"vertex\", semantic \"sh_transfer_rgb\"");
 
     const std::vector<uint64_t>& shape = layer->shape;
     int order = transferLayerOrder(*layer, source, place);

@@ -9,6 +9,11 @@
 
 namespace prt {
 
+// The layer called `name` of `bundle`, of semantic "sh_transfer_rgb" in `domain`. `stage` names the prt stage that
+// makes such a layer, for the message when there is none. Throws prt::Error(source, ...) otherwise.
+Layer& transferLayer(Bundle& bundle, const std::string& name, const std::string& domain, const std::string& source,
+                     const char* stage);
+
 // The SH order L of a transfer layer of shape [rows, L*L, 3] (params.order, when set, must agree).
 // Throws prt::Error(source, place, ...) naming the shape otherwise.
 int transferLayerOrder(const Layer& layer, const std::string& source, const std::string& place);

@@ -107,13 +107,8 @@ std::string texelCoefficientChannel(int coefficient, int colour) {
 
 TexelRelightModel loadTexelRelightModel(const std::string& bundlePath) {
     Bundle bundle = readBundle(bundlePath);
-    const Layer* layer = findLayer(bundle, "texel_transfer");
-    if (!layer)
-        throw Error(bundlePath, "PRT_bundle", "no \"texel_transfer\" layer to relight (run `prt bake` to make one)");
+    const Layer* layer = &transferLayer(bundle, "texel_transfer", "texel", bundlePath, "bake");
     const std::string place = "layer \"texel_transfer\"";
-    if (layer->domain != "texel" || layer->semantic != "sh_transfer_rgb")
-        throw Error(bundlePath, place, "domain \"" + layer->domain + "\", semantic \"" + layer->semantic +
-                                           "\"; expected domain \"texel\", semantic \"sh_transfer_rgb\"");
     int order = transferLayerOrder(*layer, bundlePath, place);
     int width = sizeParam(layer->params, "width", bundlePath, place + ", params");
     int height = sizeParam(layer->params, "height", bundlePath, place + ", params");
