@@ -3,6 +3,7 @@
 #include "bake.h"
 
 #include "core.h"
+#include "image.h"
 #include "sh.h"
 #include "transfer.h"
 
@@ -376,7 +377,7 @@ void runBake(const BakeOptions& options) {
             std::snprintf(suffix, sizeof suffix, ".transfer.T%03d.png", j);
             std::string path = base + suffix;
             written.paths.push_back(path);
-            writeImage8(path, plane.data(), size, size, 3);
+            writeImagePixels(path, size, size, {"R", "G", "B"}, plane.data());
             storedBytes += std::filesystem::file_size(path);
             layers.push_back({{"coefficient", j}, {"uri", fileName(path)}, {"hash", hashFile(path)},
                               {"min", compressed.range[2 * j]}, {"max", compressed.range[2 * j + 1]}});
@@ -406,7 +407,7 @@ void runBake(const BakeOptions& options) {
         normalBytes[i] = uint8_t(std::lround(std::clamp((double(baked.normals[i]) + 1.0) * 127.5, 0.0, 255.0)));
     std::string normalPath = base + ".normal.png";
     written.paths.push_back(normalPath);
-    writeImage8(normalPath, normalBytes.data(), size, size, 3);
+    writeImagePixels(normalPath, size, size, {"R", "G", "B"}, normalBytes.data());
     Layer normalLayer;
     normalLayer.name = "normal_map";
     normalLayer.domain = "texel";

@@ -215,8 +215,6 @@ void writeCoefficientExr(const std::string& path, const float* texels, int width
 // (expected sizes of 0 accept any).
 std::vector<float> readCoefficientExr(const std::string& path, int& width, int& height, int& coefficients);
 
-// Writes an 8-bit image atomically, format by extension (PNG for prt's layers): [width * height][channels].
-void writeImage8(const std::string& path, const uint8_t* bytes, int width, int height, int channels);
 // Reads the first `channels` channels of an 8-bit image (expected sizes of 0 accept any).
 std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int channels);
 

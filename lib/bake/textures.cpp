@@ -30,21 +30,10 @@ const char* texelFormatName(TexelFormat format) {
 
 void writeCoefficientExr(const std::string& path, const float* texels, int width, int height, int coefficients,
                          bool half) {
-    writeFileAtomic(path, [&](const std::string& tmpPath) {
-        auto output = OIIO::ImageOutput::create("openexr");
-        if (!output) throw Error(path, "", "no OpenEXR writer (" + OIIO::geterror() + ")", kExitOutput);
-        OIIO::ImageSpec spec(width, height, 3 * coefficients, half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
-        spec.channelnames.clear();
-        for (int j = 0; j < coefficients; ++j)
-            for (int c = 0; c < 3; ++c) spec.channelnames.push_back(texelCoefficientChannel(j, c));
-        spec.alpha_channel = -1;
-        spec.attribute("compression", "zip");
-        // OIIO stamps the current time as capDate otherwise: a fixed one keeps the bytes a function of the texels,
-        // so reruns, cached results and merged shards are bit-identical.
-        spec.attribute("DateTime", "1970:01:01 00:00:00");
-        if (!output->open(tmpPath, spec) || !output->write_image(OIIO::TypeDesc::FLOAT, texels) || !output->close())
-            throw Error(path, "", "cannot write OpenEXR (" + output->geterror() + ")", kExitOutput);
-    });
+    std::vector<std::string> names;
+    for (int j = 0; j < coefficients; ++j)
+        for (int c = 0; c < 3; ++c) names.push_back(texelCoefficientChannel(j, c));
+    writeImagePixels(path, width, height, names, texels, half ? PixelStorage::Half : PixelStorage::Float);
 }
 
 std::vector<float> readCoefficientExr(const std::string& path, int& width, int& height, int& coefficients) {
@@ -66,18 +55,6 @@ std::vector<float> readCoefficientExr(const std::string& path, int& width, int& 
                                   " texels, expected " + std::to_string(width) + "x" + std::to_string(height));
     width = image.width, height = image.height;
     return std::move(image.values);
-}
-
-void writeImage8(const std::string& path, const uint8_t* bytes, int width, int height, int channels) {
-    writeFileAtomic(path, [&](const std::string& tmpPath) {
-        // The temporary name hides the extension, so the format comes from the final path.
-        auto output = OIIO::ImageOutput::create(path);
-        if (!output)
-            throw Error(path, "", "no image writer for this extension (" + OIIO::geterror() + ")", kExitOutput);
-        OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
-        if (!output->open(tmpPath, spec) || !output->write_image(OIIO::TypeDesc::UINT8, bytes) || !output->close())
-            throw Error(path, "", "cannot write image (" + output->geterror() + ")", kExitOutput);
-    });
 }
 
 std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int channels) {

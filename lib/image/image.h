@@ -1,6 +1,7 @@
 // Images and environment maps through OpenImageIO: float RGB in memory, validated on load.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -50,5 +51,17 @@ std::vector<std::string> imageChannelNames(const std::string& path);
 
 // Writes a float RGB image atomically (EXR as float or half by `half`, other formats by extension).
 void writeImage(const std::string& path, const Image& image, bool half = false);
+
+// How a written file stores its channel values; formats without it (PNG) take the nearest type they have.
+enum class PixelStorage { U8, Half, Float };
+
+// Writes `width` x `height` pixels of `channelNames.size()` interleaved channels atomically, the format from the
+// path's extension (OpenEXR with ZIP compression; PNG for prt's 8-bit layers). `pixels` are floats ([0, 1] maps to
+// 0..255 for U8 storage) or, in the second form, bytes stored as 8 bits. No header holds the time of writing, so the
+// same pixels give the same bytes. Throws prt::Error(path, ..., kExitOutput) when it cannot write; `path` is untouched.
+void writeImagePixels(const std::string& path, int width, int height, const std::vector<std::string>& channelNames,
+                      const float* pixels, PixelStorage storage);
+void writeImagePixels(const std::string& path, int width, int height, const std::vector<std::string>& channelNames,
+                      const uint8_t* pixels);
 
 } // namespace prt
