@@ -5,7 +5,6 @@
 #include <csignal>
 #include <cstdio>
 #include <exception>
-#include <thread>
 #include <vector>
 
 #ifndef PRT_VERSION
@@ -13,12 +12,6 @@
 #endif
 
 namespace prt::cli {
-
-int resolveThreads(int requested) {
-    if (requested > 0) return requested;
-    unsigned hw = std::thread::hardware_concurrency();
-    return hw > 0 ? int(hw) : 1;
-}
 
 int runDriver(int argc, char** argv, const char* onlyCommand) {
     std::vector<char*> args(argv, argv + argc);
