@@ -284,15 +284,13 @@ void copyIfChanged(const std::string& file, const std::string& path, const std::
     if (!fs::is_regular_file(path, error) || hashFile(path) != hash) writeBytesAtomic(path, readFileBytes(file));
 }
 
-// The external files a bundle's layers reference (params.files, relative to the bundle, docs/bundle.md): copied
-// next to the bundle's copy under the same names, so the references hold. Returns their destination paths.
-// `claimed` maps each path this run has written to its output's name; a companion that would overwrite another
-// output's file is an error naming both, since their bundles would then share (and corrupt) one texture.
-std::vector<std::string> copyCompanions(const Pipeline& pipeline, const PipelineOutput& output,
-                                        const std::string& bundleFile,
-                                        std::map<std::string, std::string>& claimed) {
-    std::vector<std::string> copied;
-    fs::path from = fs::path(bundleFile).parent_path(), to = fs::path(output.path).parent_path();
+// The external files a bundle's layers reference (params.files, relative to the bundle, docs/bundle.md), as
+// (source, target) pairs: each goes next to the bundle's copy at `destination` under the same name, so the
+// references hold.
+std::vector<std::pair<std::string, std::string>> companionFiles(const std::string& bundleFile,
+                                                                const std::string& destination) {
+    std::vector<std::pair<std::string, std::string>> files;
+    fs::path from = fs::path(bundleFile).parent_path(), to = fs::path(destination).parent_path();
     for (const Layer& layer : readBundle(bundleFile).layers) {
         if (!layer.params.contains("files") || !layer.params["files"].is_array()) continue;
         for (const nlohmann::json& name : layer.params["files"]) {
@@ -300,27 +298,28 @@ std::vector<std::string> copyCompanions(const Pipeline& pipeline, const Pipeline
             if (relative.is_absolute() || relative.filename() != relative)
                 throw Error(bundleFile, "layer \"" + layer.name + "\" params.files",
                             "'" + relative.string() + "' is not a plain file name next to the bundle", kExitFailure);
-            std::string source = (from / relative).string(), target = (to / relative).lexically_normal().string();
-            auto [owner, fresh] = claimed.emplace(target, output.name);
-            if (!fresh && owner->second != output.name)
-                throw Error(pipeline.file, "outputs." + output.name,
-                            "its bundle's texture " + target + " would overwrite the file of output '" +
-                                owner->second + "': put the two outputs in different folders",
-                            kExitInput);
-            copyIfChanged(source, target, hashFile(source));
-            copied.push_back(target);
+            files.emplace_back((from / relative).string(), (to / relative).lexically_normal().string());
         }
     }
-    return copied;
+    return files;
 }
 
+// One declared output to copy out of the store, with a bundle's companion files.
+struct OutputCopy {
+    const PipelineOutput* output = nullptr;
+    std::string file, hash;
+    FileKind kind = FileKind::Mesh;
+    std::vector<std::pair<std::string, std::string>> companions; // (source, target)
+};
+
 // Copies each declared output whose stage has a result atomically into place, unless it already holds it; a
-// bundle's companion files (external textures) go next to it.
+// bundle's companion files (external textures) go next to it. Two outputs whose files would land on one path
+// (two bundles' textures in one folder) are an error naming both, raised before anything is copied.
 nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string, StoreEntry>& entries) {
-    nlohmann::json copied = nlohmann::json::object();
     std::map<std::string, std::string> claimed; // destination path -> output name
     for (const PipelineOutput& output : pipeline.outputs)
         claimed.emplace(fs::path(output.path).lexically_normal().string(), output.name);
+    std::vector<OutputCopy> copies;
     for (const PipelineOutput& output : pipeline.outputs) {
         auto entry = entries.find(output.stage);
         if (entry == entries.end()) {
@@ -328,21 +327,39 @@ nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string,
             continue;
         }
         const nlohmann::json& product = entry->second.manifest["outputs"][output.port];
-        std::string hash = product["hash"];
+        OutputCopy copy;
+        copy.output = &output;
+        copy.file = entry->second.dir + "/" + product["file"].get<std::string>();
+        copy.hash = product["hash"];
+        const StageSpec& spec = *pipeline.stages[findStage(pipeline, output.stage)].spec;
+        copy.kind = std::find_if(spec.outputs.begin(), spec.outputs.end(), [&](const PortSpec& port) {
+                        return port.name == output.port;
+                    })->kind;
+        if (copy.kind == FileKind::Bundle) copy.companions = companionFiles(copy.file, output.path);
+        for (const auto& [source, target] : copy.companions) {
+            auto [owner, fresh] = claimed.emplace(target, output.name);
+            if (!fresh && owner->second != output.name)
+                throw Error(pipeline.file, "outputs." + output.name,
+                            "its bundle's texture " + target + " would overwrite the file of output '" +
+                                owner->second + "': put the two outputs in different folders",
+                            kExitInput);
+        }
+        copies.push_back(std::move(copy));
+    }
+
+    nlohmann::json copied = nlohmann::json::object();
+    for (const OutputCopy& copy : copies) {
+        const PipelineOutput& output = *copy.output;
         std::error_code error;
         fs::path parent = fs::path(output.path).parent_path();
         if (!parent.empty()) fs::create_directories(parent, error);
-        std::string file = entry->second.dir + "/" + product["file"].get<std::string>();
-        copyIfChanged(file, output.path, hash);
-        const StageSpec& spec = *pipeline.stages[findStage(pipeline, output.stage)].spec;
-        FileKind kind = std::find_if(spec.outputs.begin(), spec.outputs.end(), [&](const PortSpec& port) {
-                            return port.name == output.port;
-                        })->kind;
-        copied[output.name] = {{"path", output.path}, {"hash", hash}, {"kind", fileKindName(kind)},
+        copyIfChanged(copy.file, output.path, copy.hash);
+        copied[output.name] = {{"path", output.path}, {"hash", copy.hash}, {"kind", fileKindName(copy.kind)},
                                {"from", output.stage + "." + output.port}};
-        if (kind == FileKind::Bundle) {
-            std::vector<std::string> companions = copyCompanions(pipeline, output, file, claimed);
-            if (!companions.empty()) copied[output.name]["files"] = companions;
+        if (copy.companions.empty()) continue;
+        for (const auto& [source, target] : copy.companions) {
+            copyIfChanged(source, target, hashFile(source));
+            copied[output.name]["files"].push_back(target);
         }
     }
     return copied;

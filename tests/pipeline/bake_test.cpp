@@ -92,6 +92,8 @@ TEST(PipelineBake, TwoBakedOutputsInOneFolderAreAnError) {
         EXPECT_NE(message.find("'baked'"), std::string::npos) << message;
         EXPECT_NE(message.find("different folders"), std::string::npos) << message;
     }
+    // Refused before anything was copied: neither bundle nor any texture is there.
+    EXPECT_FALSE(std::filesystem::exists(dir / "out")) << "partial outputs left";
 }
 
 } // namespace
