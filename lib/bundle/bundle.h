@@ -26,50 +26,86 @@ struct TriMesh {
     size_t triangleCount() const { return indices.size() / 3; }
 };
 
-// One precomputed array in a bundle. `domain` says what the first axis runs over:
-//   "vertex"  : one row per mesh vertex, in the mesh's vertex order
+// One precomputed array in a bundle. `domain` says what the first axis runs over (docs/bundle.md, "Layer domains"):
+//   "vertex"  : one row per vertex of the layer's object, in its vertex order
 //   "texel"   : one row per atlas texel (row-major, y down), `params` holds width/height
-//   "occluder": one row per grid cell of an occluder's FIV grid
-//   "lobe"    : one row per (vertex, lobe) of a view-dependent fit
-// `shape` is the full array shape, first axis = rows; data is float32, C order.
+//   "grid"    : one row per sample of a regular grid around the object (FIV grids); params name the axes
+//   "vertex_range", "texel_range": a shard's rows of a vertex or texel layer
+// `shape` is the full array shape, first axis = rows, C order (last axis fastest).
+// Values: float layers ("float32", "float16") keep them in `data` (float16 is rounded to nearest-even half on write
+// and widened on read, so `data` always holds what a reader gets back); integer layers ("uint8", "uint16",
+// "uint32") keep them in `integers`. Exactly one of the two is filled, with the product of `shape` elements.
 struct Layer {
     std::string name;     // unique within a bundle, e.g. "transfer"
     std::string domain;   // see above
     std::string semantic; // what a row means, e.g. "sh_transfer_rgb" ([coefficient][3] per vertex)
     std::vector<uint64_t> shape;
-    std::vector<float> data;
+    std::string componentType = "float32"; // "float32" | "float16" | "uint8" | "uint16" | "uint32"
+    std::vector<float> data;               // float32 and float16 layers
+    std::vector<uint32_t> integers;        // uint8, uint16 and uint32 layers (each value must fit the type)
+    uint32_t object = 0;                   // the bundle object the rows belong to: 0 is Bundle::mesh, k is objects[k-1]
     nlohmann::json params = nlohmann::json::object(); // order, mode, samples, ... as the producing stage set them
 };
 
-// Provenance of a bundle: who produced it from what.
-struct Bundle {
+// A further mesh of a bundle (version 2): an occluder type, a second receiver, ... Object k >= 1 of a bundle is
+// objects[k - 1]; object 0 is always Bundle::mesh. Each object is its own glTF mesh and node.
+struct BundleObject {
+    std::string name; // unique within the bundle, not empty
+    std::string role; // "receiver", "occluder", or another word the producing stage documents
     TriMesh mesh;
+};
+
+// A placement of an object (version 2): its vertex p sits at p + translation, in world units. Written as a glTF
+// node with that translation, so viewers show every instance.
+struct Instance {
+    std::string name;   // may be empty
+    uint32_t object = 0; // 0 is Bundle::mesh, k is objects[k-1]
+    std::array<float, 3> translation{0, 0, 0};
+};
+
+// What a bundle holds, with its provenance.
+struct Bundle {
+    TriMesh mesh;                      // object 0
+    std::string meshName;              // object 0's name ("" reads as "mesh")
+    std::string meshRole = "receiver"; // object 0's role
+    std::vector<BundleObject> objects; // objects 1..N (version 2)
+    std::vector<Instance> instances;   // (version 2); empty means every object once, untranslated
     std::vector<Layer> layers;
     nlohmann::json producer = nlohmann::json::object(); // {"tool":"prt","version":..,"stage":..}
     nlohmann::json inputs = nlohmann::json::object();   // {"mesh": "xxh128:..", "env": ..}
     nlohmann::json convention = nlohmann::json::object();
 };
 
-inline constexpr int kBundleVersion = 1;
+// The mesh of object `object` (0: bundle.mesh, k: objects[k-1]). Throws prt::Error (kExitFailure) when absent.
+const TriMesh& objectMesh(const Bundle& bundle, uint32_t object);
+
+// The version prt writes; readBundle reads this one and every earlier one (docs/bundle.md, "Versioning").
+inline constexpr int kBundleVersion = 2;
+inline constexpr int kOldestBundleVersion = 1;
 inline constexpr const char* kBundleExtension = "PRT_bundle";
 
-// Writes `bundle` as a .glb atomically. The mesh is a standard glTF primitive (POSITION, NORMAL, TEXCOORD_0,
-// COLOR_0 when present); layers go into buffer views referenced only from the PRT_bundle extension, with a
-// checksum of the binary chunk so readers detect truncation and tampering.
-// Needs: a mesh with at least one triangle and per-vertex arrays of matching sizes; layers with unique non-empty
-// names, data.size() equal to the product of shape (or no data when that product is 0 or params.uri names an
-// external file), vertex-domain layers with vertexCount() rows. JSON (producer, inputs, convention, params) is
-// stored as glTF stores it: null members and empty arrays or objects are left out, integers beyond 32 bits become
-// doubles; NaN, infinities and integers beyond 2^53 are refused. Throws prt::Error (kExitFailure) when these
-// needs are not met and prt::Error (kExitOutput) when the file cannot be written; either way `path` is untouched.
-void writeBundle(const std::string& path, const Bundle& bundle);
+// Writes `bundle` as a .glb atomically. Each object is a standard glTF mesh (POSITION, NORMAL, TEXCOORD_0,
+// COLOR_0 when present) with its node; layers go into buffer views referenced only from the PRT_bundle extension,
+// with a checksum of the binary chunk so readers detect truncation and tampering.
+// Needs: meshes with at least one triangle and per-vertex arrays of matching sizes; unique non-empty object names;
+// layers with unique non-empty names, a known componentType whose value array (data or integers) holds the product
+// of shape elements (or nothing when that product is 0 or params.uri names an external file), integer values that
+// fit their type, an existing object, and vertex-domain layers with that object's vertex count of rows; instances
+// of existing objects with finite translations. `version` may be 1 for readers that predate version 2: then the
+// bundle must use nothing of version 2 (objects, instances, non-float32 layers). JSON (producer, inputs,
+// convention, params) is stored as glTF stores it: null members and empty arrays or objects are left out,
+// integers beyond 32 bits become doubles; NaN, infinities and integers beyond 2^53 are refused. Throws prt::Error
+// (kExitFailure) when these needs are not met and prt::Error (kExitOutput) when the file cannot be written;
+// either way `path` is untouched.
+void writeBundle(const std::string& path, const Bundle& bundle, int version = kBundleVersion);
 
 // The "convention" record stages write into their bundles: the choices of docs/conventions.md, by name.
 nlohmann::json conventionRecord();
 
 // Reads a .glb or .gltf. Throws prt::Error naming the file and the problem for: a missing file, a truncated or
 // malformed glTF, a PRT_bundle of an unsupported version, a checksum mismatch. A plain glTF without the extension
-// reads as a bundle with no layers.
+// reads as a bundle with no layers. Version 1 and 2 bundles read alike (version 1 has one object and float32
+// layers only); a version 2 bundle's objects are read from their own glTF meshes, untransformed.
 // The mesh merges every TRIANGLES primitive reachable from the default scene (or every mesh when the file has no
 // scene), with node transforms applied (winding kept counter-clockwise under mirroring transforms). NORMAL and
 // TEXCOORD_0 are kept when every primitive has them. Albedo is COLOR_0 times the material's baseColorFactor, or
@@ -77,6 +113,11 @@ nlohmann::json conventionRecord();
 // validation reports them); an index outside its own primitive reads as 0xFFFFFFFF so merging cannot hide it.
 // Every accessor is bounds-checked against its buffer, so a malformed file cannot cause an out-of-bounds read.
 Bundle readBundle(const std::string& path);
+
+// IEEE 754 binary16 conversions, as float16 layers store values: round to nearest even, overflow to infinity
+// (writeBundle refuses non-finite values), subnormals kept. Exact for every half value both ways.
+uint16_t floatToHalf(float value);
+float halfToFloat(uint16_t half);
 
 // Finds a layer by name; nullptr if absent.
 const Layer* findLayer(const Bundle& bundle, const std::string& name);
