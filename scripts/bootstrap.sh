@@ -12,6 +12,7 @@ packages=(
   libxxhash-dev libgtest-dev libbenchmark-dev
   python3-numpy python3-matplotlib python3-openimageio
   slurm-wlm munge
+  chromium
 )
 missing=()
 for p in "${packages[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
@@ -21,6 +22,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
+
+# The browser viewer's npm packages (three, playwright-core) at the versions of viewer/package-lock.json; its test
+# drives Debian's chromium above, never a downloaded browser.
+[ -d viewer/node_modules/three ] && [ -d viewer/node_modules/playwright-core ] || (cd viewer && npm ci --no-audit --no-fund)
 
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build

@@ -7,6 +7,10 @@
 #include <array>
 #include <string>
 
+namespace prt {
+struct PinholeCamera; // raycast.h
+}
+
 namespace prt::cli {
 
 // Adds one subcommand to `app`. The subcommand's callback does the work and throws prt::Error on bad input;
@@ -22,6 +26,7 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
+void addRenderCommand(CLI::App& app);
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
@@ -33,6 +38,12 @@ std::array<double, 3> parseAlbedo(const std::string& text);
 // Parses --shard "I/N" with 0 <= I < N into index I and count N. Throws prt::Error(kExitUsage) naming --shard
 // otherwise.
 void parseShard(const std::string& text, int& index, int& count);
+
+// Parses a pinhole camera as `prt reference --image` and `prt render` take it: `size` "W,H" (given by the option
+// `sizeOption`) and `view` "EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY" (--camera, FOVY in degrees).
+// Throws prt::Error(kExitUsage) naming the option for anything else, eye == target or up along the view.
+void parsePinholeCamera(const std::string& size, const char* sizeOption, const std::string& view,
+                        PinholeCamera& camera);
 
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);

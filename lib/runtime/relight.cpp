@@ -3,8 +3,7 @@
 
 #include "core.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include <algorithm>
 
 namespace prt {
 
@@ -55,10 +54,14 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
                     kExitFailure);
     const int coefficients = sh::coefficientCount(model.order);
     const size_t rowValues = size_t(coefficients) * 3;
-    // Blocks of a few thousand vertices keep the scheduling overhead far below the memory traffic.
-    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 4096), [&](const tbb::blocked_range<size_t>& range) {
-        relight(model.transfer.data() + range.begin() * rowValues, range.size(), coefficients, lighting,
-                radiance + (range.begin() - begin) * 3);
+    // Blocks of a few thousand vertices keep the scheduling overhead far below the memory traffic; std::threads
+    // rather than TBB keep the installed runtime free of it.
+    constexpr size_t kBlock = 4096;
+    const size_t count = end - begin, blocks = (count + kBlock - 1) / kBlock;
+    parallelBlocks(blocks, 0, [&](size_t block) {
+        size_t first = begin + block * kBlock, last = std::min(end, first + kBlock);
+        relight(model.transfer.data() + first * rowValues, last - first, coefficients, lighting,
+                radiance + (first - begin) * 3);
     });
 }
 

@@ -3,9 +3,6 @@
 
 #include "core.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -91,7 +88,7 @@ std::vector<double> texelSolidAngles(const EnvironmentMap& env) {
     return solidAngle;
 }
 
-std::vector<float> projectEnvironment(const EnvironmentMap& env, int order) {
+std::vector<float> projectEnvironment(const EnvironmentMap& env, int order, int threads) {
     if (order < 1 || order > kMaxOrder)
         throw Error("", "sh::projectEnvironment",
                     "order " + std::to_string(order) + " outside 1.." + std::to_string(kMaxOrder), kExitFailure);
@@ -100,34 +97,33 @@ std::vector<float> projectEnvironment(const EnvironmentMap& env, int order) {
     int width = image.width, height = image.height, count = coefficientCount(order);
 
     // Fixed row blocks, each summed in its own double buffer and reduced in block order: the result does not
-    // depend on how TBB schedules the blocks, so it is bit-identical for any thread count.
+    // depend on which thread takes which block, so it is bit-identical for any thread count.
     constexpr int kRowsPerBlock = 8;
     int blockCount = (height + kRowsPerBlock - 1) / kRowsPerBlock;
     std::vector<double> partial(size_t(blockCount) * count * 3, 0.0);
     Progress progress("project environment", uint64_t(height));
-    tbb::parallel_for(tbb::blocked_range<int>(0, blockCount), [&](const tbb::blocked_range<int>& blocks) {
+    parallelBlocks(size_t(blockCount), threads, [&](size_t blockIndex) {
         std::vector<double> basis(count);
-        for (int block = blocks.begin(); block != blocks.end(); ++block) {
-            double* sum = &partial[size_t(block) * count * 3];
-            int yEnd = std::min(height, (block + 1) * kRowsPerBlock);
-            for (int y = block * kRowsPerBlock; y < yEnd; ++y) {
-                for (int x = 0; x < width; ++x) {
-                    size_t texel = size_t(y) * width + x;
-                    double d[3];
-                    texelDirection(env, x, y, d);
-                    evaluate(order, d[0], d[1], d[2], basis.data());
-                    const float* radiance = &image.rgb[texel * 3];
-                    double r = radiance[0] * solidAngle[texel], g = radiance[1] * solidAngle[texel],
-                           b = radiance[2] * solidAngle[texel];
-                    for (int i = 0; i < count; ++i) {
-                        sum[i * 3 + 0] += basis[i] * r;
-                        sum[i * 3 + 1] += basis[i] * g;
-                        sum[i * 3 + 2] += basis[i] * b;
-                    }
+        int block = int(blockIndex);
+        double* sum = &partial[size_t(block) * count * 3];
+        int yEnd = std::min(height, (block + 1) * kRowsPerBlock);
+        for (int y = block * kRowsPerBlock; y < yEnd; ++y) {
+            for (int x = 0; x < width; ++x) {
+                size_t texel = size_t(y) * width + x;
+                double d[3];
+                texelDirection(env, x, y, d);
+                evaluate(order, d[0], d[1], d[2], basis.data());
+                const float* radiance = &image.rgb[texel * 3];
+                double r = radiance[0] * solidAngle[texel], g = radiance[1] * solidAngle[texel],
+                       b = radiance[2] * solidAngle[texel];
+                for (int i = 0; i < count; ++i) {
+                    sum[i * 3 + 0] += basis[i] * r;
+                    sum[i * 3 + 1] += basis[i] * g;
+                    sum[i * 3 + 2] += basis[i] * b;
                 }
             }
-            progress.add(uint64_t(yEnd - block * kRowsPerBlock));
         }
+        progress.add(uint64_t(yEnd - block * kRowsPerBlock));
     });
     progress.finish();
 
