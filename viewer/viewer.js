@@ -1,6 +1,6 @@
 // The prt viewer: loads a bundle, relights its SH transfer on the GPU under any environment's SH lighting, and
 // lets the user turn the environment and change the order. Shading agrees with `prt relight` (the same sum) and
-// pictures with `prt render` (the same pinhole camera and tone map, image.h toneMap).
+// pictures with `prt render` (the same pinhole camera and tone map, compare.h toneMap).
 import * as THREE from 'three';
 import { readBundle, syntheticBundle } from './bundle.js';
 import { fitLighting, rotateLightingY } from './sh.js';
@@ -54,7 +54,7 @@ in vec3 vRadiance;
 in vec2 vUv;
 in float vError;
 out vec4 colour;
-// image.h toneMap: x = radiance 2^exposure, Reinhard x / (1 + x), sRGB; the framebuffer rounds to 8 bits.
+// compare.h toneMap: x = radiance 2^exposure, Reinhard x / (1 + x), sRGB; the framebuffer rounds to 8 bits.
 vec3 toneMap(vec3 radiance) {
   vec3 x = max(radiance * exp2(exposure), 0.0);
   vec3 d = x / (1.0 + x);

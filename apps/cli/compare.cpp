@@ -128,7 +128,7 @@ void addCompareCommand(CLI::App& app) {
     command->add_option("--metrics", options->metricsOutput, "With --image: also write the metrics JSON here");
     command->add_option("--scale", options->scaleTop, "With --image: relative error at the top of the colour scale")
         ->capture_default_str();
-    command->add_option("--exposure", options->exposure, "With --image: stops for the strip's tone map (image.h)")
+    command->add_option("--exposure", options->exposure, "With --image: stops for the strip's tone map (compare.h toneMap)")
         ->capture_default_str();
     command->callback([options] { runCompare(*options); });
 }

@@ -2,6 +2,7 @@
 #include "cli.h"
 
 #include "bundle.h"
+#include "compare.h"
 #include "core.h"
 #include "image.h"
 #include "raycast.h"
@@ -65,7 +66,12 @@ void runRender(const RenderOptions& options) {
     } else {
         image = renderVertexRadiance(mesh, radiance, camera);
     }
-    writeRendered(options.output, image.radiance, image.coverage, options.exposure);
+    if (extension == "exr") {
+        writeRenderedExr(options.output, image.radiance, image.coverage);
+    } else {
+        Picture picture = tonemappedPicture(image.radiance.rgb.data(), camera.width, camera.height, options.exposure);
+        writeImagePixels(options.output, picture.width, picture.height, {"R", "G", "B"}, picture.rgb.data());
+    }
     logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +
             std::to_string(camera.height) + ", " + (options.texels ? "per texel" : "per vertex") + ")");
 

@@ -66,7 +66,12 @@ struct Picture {
 // The relative error in false colour (viridis from 0 to `scaleTop`, saturated above; grey outside the mask) with a
 // legend bar and its end labels under the image. Needs scaleTop > 0.
 Picture relativeErrorPicture(const ImageComparison& comparison, double scaleTop);
-// Linear radiance through the tone map of image.h (toneMap, `exposure` in stops).
+// The tone map of every 8-bit picture prt writes (`prt render` PNGs, `prt compare --image` strips) and of the browser
+// viewer (viewer/): x = radiance * 2^exposure per channel, then Reinhard x / (1 + x), then the sRGB transfer
+// function (x <= 0.0031308: 12.92 x, else 1.055 x^(1/2.4) - 0.055), rounded to the nearest of 256 levels.
+// Negative and NaN radiance map to 0. Linear outputs (EXR) are never tone mapped.
+uint8_t toneMap(float radiance, float exposure);
+// Linear radiance (width * height * 3 values) through toneMap, `exposure` in stops.
 Picture tonemappedPicture(const float* radiance, int width, int height, float exposure);
 // result | reference | error side by side, 4 pixels apart, each labelled at its top.
 Picture comparisonStrip(const Picture& result, const Picture& reference, const Picture& error);

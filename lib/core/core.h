@@ -111,13 +111,6 @@ inline RowRange shardRows(size_t rows, int index, int count) {
     return {rows * size_t(index) / size_t(count), rows * size_t(index + 1) / size_t(count)};
 }
 
-// ---- threads ------------------------------------------------------------------------------------------------
-// Calls work(block) once for every block in [0, blockCount), on up to `threads` std::threads (0 = the hardware's
-// count), each taking the next block in turn; returns when all are done. Callers that keep one result per block
-// and combine them in block order get the same bits for any thread count. The first exception thrown by `work`
-// is rethrown here once every thread has stopped. It needs no TBB, so the thin runtime can use it.
-void parallelBlocks(size_t blockCount, int threads, const std::function<void(size_t block)>& work);
-
 // ---- .npy arrays --------------------------------------------------------------------------------------------
 // float32, C order. Used for per-vertex radiance [V,3] and other per-element outputs.
 void writeNpy(const std::string& path, const std::vector<float>& data, const std::vector<size_t>& shape);

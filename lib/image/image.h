@@ -64,11 +64,4 @@ void writeImagePixels(const std::string& path, int width, int height, const std:
 void writeImagePixels(const std::string& path, int width, int height, const std::vector<std::string>& channelNames,
                       const uint8_t* pixels);
 
-// ---- tone map ------------------------------------------------------------------------------------------------
-// The tone map of every 8-bit picture prt writes (`prt render` PNGs, `prt compare --image` strips) and of the browser
-// viewer (viewer/): x = radiance * 2^exposure per channel, then Reinhard x / (1 + x), then the sRGB transfer
-// function (x <= 0.0031308: 12.92 x, else 1.055 x^(1/2.4) - 0.055), rounded to the nearest of 256 levels.
-// Negative and NaN radiance map to 0. Linear outputs (EXR) are never tone mapped.
-uint8_t toneMap(float radiance, float exposure);
-
 } // namespace prt

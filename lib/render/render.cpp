@@ -112,23 +112,14 @@ RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const
     });
 }
 
-void writeRendered(const std::string& path, const Image& image, const std::vector<float>& coverage, float exposure) {
+void writeRenderedExr(const std::string& path, const Image& image, const std::vector<float>& coverage) {
     const size_t pixels = size_t(image.width) * image.height;
-    std::string extension = fileExtension(path);
-    if (extension == "exr") {
-        std::vector<float> rgba(pixels * 4);
-        for (size_t p = 0; p < pixels; ++p) {
-            std::copy(&image.rgb[p * 3], &image.rgb[p * 3] + 3, &rgba[p * 4]);
-            rgba[p * 4 + 3] = coverage.empty() ? 1.0f : coverage[p];
-        }
-        writeImagePixels(path, image.width, image.height, {"R", "G", "B", "A"}, rgba.data(), PixelStorage::Float);
-    } else if (extension == "png") {
-        std::vector<uint8_t> rgb(pixels * 3);
-        for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = toneMap(image.rgb[i], exposure);
-        writeImagePixels(path, image.width, image.height, {"R", "G", "B"}, rgb.data());
-    } else {
-        throw Error(path, "-o", "the image must end in .exr (linear) or .png (tone mapped)", kExitUsage);
+    std::vector<float> rgba(pixels * 4);
+    for (size_t p = 0; p < pixels; ++p) {
+        std::copy(&image.rgb[p * 3], &image.rgb[p * 3] + 3, &rgba[p * 4]);
+        rgba[p * 4 + 3] = coverage.empty() ? 1.0f : coverage[p];
     }
+    writeImagePixels(path, image.width, image.height, {"R", "G", "B", "A"}, rgba.data(), PixelStorage::Float);
 }
 
 } // namespace prt

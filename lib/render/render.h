@@ -30,8 +30,8 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 // Needs mesh.uvs for every vertex, atlas.rgb sized width * height * 3. Throws prt::Error otherwise.
 RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera);
 
-// Writes `image` by extension: .exr as linear float RGBA (A = coverage, empty coverage = 1), .png tone mapped
-// (image.h toneMap, `exposure` in stops) as RGB. Atomic. Throws prt::Error(kExitUsage) for another extension.
-void writeRendered(const std::string& path, const Image& image, const std::vector<float>& coverage, float exposure);
+// Writes `image` atomically as a linear float RGBA OpenEXR, A = coverage (empty coverage: 1). For a tone-mapped
+// PNG, `prt render` passes the radiance through compare.h's toneMap, the one tone map of prt's pictures.
+void writeRenderedExr(const std::string& path, const Image& image, const std::vector<float>& coverage);
 
 } // namespace prt

@@ -4,6 +4,9 @@
 #include "core.h"
 
 #include <algorithm>
+#include <atomic>
+#include <thread>
+#include <vector>
 
 namespace prt {
 
@@ -58,11 +61,19 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
     // rather than TBB keep the installed runtime free of it.
     constexpr size_t kBlock = 4096;
     const size_t count = end - begin, blocks = (count + kBlock - 1) / kBlock;
-    parallelBlocks(blocks, 0, [&](size_t block) {
-        size_t first = begin + block * kBlock, last = std::min(end, first + kBlock);
-        relight(model.transfer.data() + first * rowValues, last - first, coefficients, lighting,
-                radiance + (first - begin) * 3);
-    });
+    std::atomic<size_t> nextBlock{0};
+    auto relightBlocks = [&] {
+        for (size_t block; (block = nextBlock.fetch_add(1)) < blocks;) {
+            size_t first = begin + block * kBlock, last = std::min(end, first + kBlock);
+            relight(model.transfer.data() + first * rowValues, last - first, coefficients, lighting,
+                    radiance + (first - begin) * 3);
+        }
+    };
+    size_t workers = std::min<size_t>(blocks, std::max(1u, std::thread::hardware_concurrency()));
+    std::vector<std::thread> pool;
+    for (size_t i = 1; i < workers; ++i) pool.emplace_back(relightBlocks);
+    relightBlocks();
+    for (std::thread& thread : pool) thread.join();
 }
 
 } // namespace prt

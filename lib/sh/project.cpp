@@ -4,6 +4,8 @@
 #include "core.h"
 
 #include <algorithm>
+#include <atomic>
+#include <thread>
 #include <cmath>
 #include <numbers>
 
@@ -102,29 +104,37 @@ std::vector<float> projectEnvironment(const EnvironmentMap& env, int order, int 
     int blockCount = (height + kRowsPerBlock - 1) / kRowsPerBlock;
     std::vector<double> partial(size_t(blockCount) * count * 3, 0.0);
     Progress progress("project environment", uint64_t(height));
-    parallelBlocks(size_t(blockCount), threads, [&](size_t blockIndex) {
+    // std::threads taking the next block in turn (no TBB: the thin runtime projects too).
+    std::atomic<int> nextBlock{0};
+    auto projectBlocks = [&] {
         std::vector<double> basis(count);
-        int block = int(blockIndex);
-        double* sum = &partial[size_t(block) * count * 3];
-        int yEnd = std::min(height, (block + 1) * kRowsPerBlock);
-        for (int y = block * kRowsPerBlock; y < yEnd; ++y) {
-            for (int x = 0; x < width; ++x) {
-                size_t texel = size_t(y) * width + x;
-                double d[3];
-                texelDirection(env, x, y, d);
-                evaluate(order, d[0], d[1], d[2], basis.data());
-                const float* radiance = &image.rgb[texel * 3];
-                double r = radiance[0] * solidAngle[texel], g = radiance[1] * solidAngle[texel],
-                       b = radiance[2] * solidAngle[texel];
-                for (int i = 0; i < count; ++i) {
-                    sum[i * 3 + 0] += basis[i] * r;
-                    sum[i * 3 + 1] += basis[i] * g;
-                    sum[i * 3 + 2] += basis[i] * b;
+        for (int block; (block = nextBlock.fetch_add(1)) < blockCount;) {
+            double* sum = &partial[size_t(block) * count * 3];
+            int yEnd = std::min(height, (block + 1) * kRowsPerBlock);
+            for (int y = block * kRowsPerBlock; y < yEnd; ++y) {
+                for (int x = 0; x < width; ++x) {
+                    size_t texel = size_t(y) * width + x;
+                    double d[3];
+                    texelDirection(env, x, y, d);
+                    evaluate(order, d[0], d[1], d[2], basis.data());
+                    const float* radiance = &image.rgb[texel * 3];
+                    double r = radiance[0] * solidAngle[texel], g = radiance[1] * solidAngle[texel],
+                           b = radiance[2] * solidAngle[texel];
+                    for (int i = 0; i < count; ++i) {
+                        sum[i * 3 + 0] += basis[i] * r;
+                        sum[i * 3 + 1] += basis[i] * g;
+                        sum[i * 3 + 2] += basis[i] * b;
+                    }
                 }
             }
+            progress.add(uint64_t(yEnd - block * kRowsPerBlock));
         }
-        progress.add(uint64_t(yEnd - block * kRowsPerBlock));
-    });
+    };
+    int workers = std::clamp(threads > 0 ? threads : int(std::thread::hardware_concurrency()), 1, blockCount);
+    std::vector<std::thread> pool;
+    for (int i = 1; i < workers; ++i) pool.emplace_back(projectBlocks);
+    projectBlocks();
+    for (std::thread& thread : pool) thread.join();
     progress.finish();
 
     std::vector<double> total(size_t(count) * 3, 0.0);

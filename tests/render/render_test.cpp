@@ -2,6 +2,8 @@
 // shared with prt reference --image.
 #include "render.h"
 
+#include "compare.h"
+
 #include "core.h"
 
 #include <gtest/gtest.h>
@@ -108,7 +110,7 @@ TEST(Render, RejectsMismatchedInputs) {
     EXPECT_THROW(prt::renderVertexRadiance(square(), std::vector<float>(12), bad), prt::Error);
 }
 
-// The tone map of image.h: 0 stays 0, x = 1 is Reinhard 0.5 in sRGB (188), exposure doubles before the curve.
+// The tone map of compare.h: 0 stays 0, x = 1 is Reinhard 0.5 in sRGB (188), exposure doubles before the curve.
 TEST(Render, ToneMapIsReinhardThenSrgb) {
     EXPECT_EQ(prt::toneMap(0.0f, 0.0f), 0);
     EXPECT_EQ(prt::toneMap(-1.0f, 0.0f), 0);
