@@ -265,7 +265,7 @@ ImageComparison compareImages(const float* result, const float* reference, const
 
 Picture relativeErrorPicture(const ImageComparison& comparison, double scaleTop) {
     Picture picture;
-    picture.width = std::max(comparison.width, 16 + textWidth("0%") + textWidth(percent(scaleTop) + "+") + 32);
+    picture.width = comparison.width; // labels that do not fit are clipped
     picture.height = comparison.height + kLegendHeight;
     picture.rgb.assign(size_t(picture.width) * picture.height * 3, 0);
     for (int y = 0; y < comparison.height; ++y)

@@ -1,8 +1,8 @@
 // `prt render` and `prt compare --image` through the binary: a square of known radiance under a constant sky.
+#include "bundle.h"
 #include "compare.h"
 #include "core.h"
 #include "image.h"
-#include "runtime.h"
 
 #include <gtest/gtest.h>
 
