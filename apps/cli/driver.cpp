@@ -32,6 +32,8 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addEnvshCommand(app);
     addTransferCommand(app);
     addBakeCommand(app);
+    addFivCommand(app);
+    addFivshadeCommand(app);
     addReferenceCommand(app);
     addRelightCommand(app);
     addCompareCommand(app);

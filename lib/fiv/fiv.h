@@ -170,3 +170,23 @@ Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector
 nlohmann::json gridParams(const GridSpec& grid, const BoundingSphere& sphere);
 
 } // namespace prt::fiv
+
+namespace prt::fiv {
+
+// ---- the stage -----------------------------------------------------------------------------------------------
+struct FivStageOptions {
+    std::vector<std::string> inputs; // one occluder mesh (.glb), or visibility bundles (one whole, or every shard)
+    std::string output;              // .glb: the FIV bundle, or with visibilityOnly the visibility bundle
+    std::string env;                 // environment map; needed unless visibilityOnly
+    VisibilityOptions visibility;    // grid, cube, supersample, allowOpen, threads, shard (mesh input only)
+    bool visibilityOnly = false;     // (a) only
+    int difmapSize = 32;
+    bool half = true;                // FIV layers as float16 (else float32)
+};
+// `prt fiv`: (a) from a mesh input, unless the input is a visibility bundle already; then (b) unless
+// visibilityOnly. Writes one bundle atomically, logs rays against the naive count, reports its cost.
+// Throws prt::Error: kExitUsage for bad options (a shard without visibilityOnly, no env, several meshes),
+// kExitInput for bad inputs (see sampleVisibility, readVisibility, joinShards).
+void runFiv(const FivStageOptions& options);
+
+} // namespace prt::fiv
