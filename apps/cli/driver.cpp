@@ -33,6 +33,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addTransferCommand(app);
     addBakeCommand(app);
     addFivCommand(app);
+    addFivVisibilityCommand(app);
     addFivshadeCommand(app);
     addReferenceCommand(app);
     addRelightCommand(app);

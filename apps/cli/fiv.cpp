@@ -58,16 +58,15 @@ void runFivCommand(FivArgs args) {
 
 } // namespace
 
-void addFivCommand(CLI::App& app) {
-    auto args = std::make_shared<FivArgs>();
-    CLI::App* command = app.add_subcommand(
-        "fiv", "FIV grid of an occluder type: which environment texels it hides from receivers all around it (Embree "
-               "rays), reduced under an environment into 9 floats per sample, the DifMap and FIV(Env)");
+// The options both subcommands share: `prt fiv-visibility` is `prt fiv --visibility-only`, a stage of its own
+// so that pipelines cache and shard the environment-independent half apart from the reduction.
+static void addFivOptions(CLI::App* command, const std::shared_ptr<FivArgs>& args, bool visibilityStage) {
     command->add_option("input", args->stage.inputs,
                         "Occluder mesh (.glb, closed), or the visibility bundle(s) of `--visibility-only` (all shards)")
         ->required();
     command->add_option("-o,--output", args->stage.output, "Output bundle (.glb)")->required();
-    command->add_option("--env", args->stage.env, "Environment map (2:1 equirectangular or 1:6 cube strip)");
+    if (!visibilityStage)
+        command->add_option("--env", args->stage.env, "Environment map (2:1 equirectangular or 1:6 cube strip)");
     command->add_option("--grid", args->grid, "Samples NT,NP,NR: azimuth, polar (poles included), shells")->capture_default_str();
     command->add_option("--shells", args->shells,
                         "Innermost and outermost shell radius MIN,MAX in bounding-sphere radii (log spaced)")
@@ -78,14 +77,34 @@ void addFivCommand(CLI::App& app) {
                         "S x S rays per cube texel: fractional coverage against the binary mask's aliasing")
         ->capture_default_str();
     command->add_option("--difmap", args->stage.difmapSize, "DifMap (irradiance cube) face size")->capture_default_str();
-    command->add_flag("--visibility-only", args->stage.visibilityOnly,
-                      "Write the environment-independent visibility (part a) only; reduce it later with --env");
+    if (!visibilityStage)
+        command->add_flag("--visibility-only", args->stage.visibilityOnly,
+                          "Write the environment-independent visibility (part a) only; reduce it later with --env");
     command->add_option("--shard", args->shard, "With --visibility-only: grid rows of shard I/N");
+    command->add_option("--merge", args->stage.merge, "With --visibility-only: join these visibility shards");
     command->add_flag("--allow-open", args->stage.visibility.allowOpen,
                       "Accept an open occluder: samples count as inside when most of 26 rays first hit a back face");
     command->add_flag("--float32", args->float32, "Store the grid as float32 (default float16)");
     command->add_option("--threads", args->stage.visibility.threads, "Worker threads (default: all)");
-    command->callback([args] { runFivCommand(*args); });
+    command->callback([args, visibilityStage] {
+        if (visibilityStage) args->stage.visibilityOnly = true;
+        runFivCommand(*args);
+    });
+}
+
+void addFivCommand(CLI::App& app) {
+    auto args = std::make_shared<FivArgs>();
+    CLI::App* command = app.add_subcommand(
+        "fiv", "FIV grid of an occluder type: which environment texels it hides from receivers all around it (Embree "
+               "rays), reduced under an environment into 9 floats per sample, the DifMap and FIV(Env)");
+    addFivOptions(command, args, false);
+}
+
+void addFivVisibilityCommand(CLI::App& app) {
+    auto args = std::make_shared<FivArgs>();
+    CLI::App* command = app.add_subcommand(
+        "fiv-visibility", "The environment-independent half of `prt fiv` (= prt fiv --visibility-only): the masks");
+    addFivOptions(command, args, true);
 }
 
 } // namespace prt::cli

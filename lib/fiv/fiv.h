@@ -180,11 +180,12 @@ struct FivStageOptions {
     std::string env;                 // environment map; needed unless visibilityOnly
     VisibilityOptions visibility;    // grid, cube, supersample, allowOpen, threads, shard (mesh input only)
     bool visibilityOnly = false;     // (a) only
+    std::vector<std::string> merge;  // with visibilityOnly: visibility shards to join instead of sampling
     int difmapSize = 32;
     bool half = true;                // FIV layers as float16 (else float32)
 };
 // `prt fiv`: (a) from a mesh input, unless the input is a visibility bundle already; then (b) unless
-// visibilityOnly. Writes one bundle atomically, logs rays against the naive count, reports its cost.
+// visibilityOnly. With visibilityOnly and `merge`, joins those visibility shards into one visibility bundle. Writes one bundle atomically, logs rays against the naive count, reports its cost.
 // Throws prt::Error: kExitUsage for bad options (a shard without visibilityOnly, no env, several meshes),
 // kExitInput for bad inputs (see sampleVisibility, readVisibility, joinShards).
 void runFiv(const FivStageOptions& options);

@@ -19,6 +19,20 @@ void runFiv(const FivStageOptions& options) {
     if (options.difmapSize < 1 || options.difmapSize > kMaxCube)
         throw Error("", "--difmap", "must lie in 1.." + std::to_string(kMaxCube), kExitUsage);
 
+    if (!options.merge.empty()) {
+        if (!options.visibilityOnly) throw Error("", "--merge", "joins visibility shards only", kExitUsage);
+        std::vector<Visibility> parts;
+        Bundle shard = readBundle(options.merge[0]);
+        for (size_t i = 0; i < options.merge.size(); ++i) {
+            if (i > 0) shard = readBundle(options.merge[i]);
+            parts.push_back(readVisibility(shard, options.merge[i]));
+        }
+        Visibility joined = joinShards(std::move(parts), options.merge);
+        Bundle firstShard = readBundle(options.merge[0]);
+        writeBundle(options.output, visibilityBundle(firstShard.mesh, joined, firstShard.inputs));
+        logInfo("fiv: joined " + std::to_string(options.merge.size()) + " visibility shards into " + options.output);
+        return;
+    }
     Bundle first = readBundle(options.inputs[0]);
     bool fromVisibility = findLayer(first, "fiv_mask_offsets") != nullptr;
     Visibility vis;

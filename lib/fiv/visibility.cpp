@@ -219,8 +219,11 @@ Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& op
                 bool pole = j == 0 || j + 1 == size_t(options.grid.polar);
                 size_t lo = std::max(line * azimuth, range.begin), hi = std::min((line + 1) * azimuth, range.end);
                 if (pole) { // every azimuth of a pole row is the same sample: compute it once, copy it
+                    // Its rays count where its first row lies, so shards sum to the unsharded count.
                     std::vector<uint8_t> poleBytes;
-                    bool valid = sampleMask(tracer, cube, vis, radii, line * azimuth, candidates, poleBytes, lineRays);
+                    uint64_t poleRays = 0;
+                    bool valid = sampleMask(tracer, cube, vis, radii, line * azimuth, candidates, poleBytes, poleRays);
+                    if (line * azimuth >= range.begin) lineRays += poleRays;
                     for (size_t row = lo; row < hi; ++row) {
                         bytes[row - range.begin] = valid ? poleBytes : std::vector<uint8_t>();
                         vis.valid[row - range.begin] = valid;

@@ -203,6 +203,8 @@ TEST(FivVisibility, ShardsAndThreadCountsGiveIdenticalMasks) {
     EXPECT_EQ(joined.offsets, whole.offsets);
     EXPECT_EQ(joined.bits, whole.bits);
     EXPECT_EQ(joined.valid, whole.valid);
+    EXPECT_EQ(joined.rays, whole.rays);
+    EXPECT_EQ(joined.naiveRays, whole.naiveRays);
     // Every azimuth of a pole row holds the same mask.
     for (int k = 0; k < options.grid.shells; ++k)
         for (int j : {0, options.grid.polar - 1}) {
