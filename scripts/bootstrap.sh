@@ -26,6 +26,9 @@ fi
 # The browser viewer's npm packages (three, playwright-core) at the versions of viewer/package-lock.json; its test
 # drives Debian's chromium above, never a downloaded browser.
 [ -d viewer/node_modules/three ] && [ -d viewer/node_modules/playwright-core ] || (cd viewer && npm ci --no-audit --no-fund)
+# npm packages the tests use (package-lock.json pins them): the Khronos glTF validator.
+[ -d tests/bundle/gltf_validator/node_modules/gltf-validator ] ||
+  npm ci --prefix tests/bundle/gltf_validator --no-audit --no-fund --loglevel=error
 
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build

@@ -27,6 +27,9 @@ void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
+void addFivCommand(CLI::App& app);
+void addFivVisibilityCommand(CLI::App& app);
+void addFivshadeCommand(CLI::App& app);
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
@@ -44,6 +47,8 @@ void parseShard(const std::string& text, int& index, int& count);
 // Throws prt::Error(kExitUsage) naming the option for anything else, eye == target or up along the view.
 void parsePinholeCamera(const std::string& size, const char* sizeOption, const std::string& view,
                         PinholeCamera& camera);
+// Parses "X,Y,Z": exactly three finite numbers. Throws prt::Error(kExitUsage) naming `option` otherwise.
+std::array<float, 3> parsePoint(const std::string& text, const char* option);
 
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);
