@@ -2,8 +2,8 @@
 """Comparison strips for docs/: the Stanford bunny relit by `prt render` (shadowed per-vertex transfer) against
 `prt reference --image` (path-traced, the same camera and albedo) under each of the eight HDR maps.
 
-usage: scripts/strips.py [--prt build/prt] [--data .cache/data] [--work .cache/strips] [--size 240,180]
-                         [--order 6] [--samples 128]
+usage: scripts/strips.py [--prt build/prt] [--data .cache/data] [--work .cache/strips] [--size 160,120]
+                         [--order 6] [--samples 512]
 
 Writes docs/strips/MAP.png (result | reference | relative luminance error), docs/strips/MAP.diff.png (the error
 picture with its legend) and docs/strips/strips.json (each map's `prt compare --image` metrics). One command
@@ -36,9 +36,9 @@ def main():
     parser.add_argument("--prt", default=root / "build/prt")
     parser.add_argument("--data", default=root / ".cache/data")
     parser.add_argument("--work", default=root / ".cache/strips")
-    parser.add_argument("--size", default="240,180")
+    parser.add_argument("--size", default="160,120")
     parser.add_argument("--order", type=int, default=6)
-    parser.add_argument("--samples", type=int, default=128)
+    parser.add_argument("--samples", type=int, default=512)
     args = parser.parse_args()
     prt, data, work = Path(args.prt), Path(args.data), Path(args.work)
     out = root / "docs/strips"

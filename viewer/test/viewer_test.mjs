@@ -30,10 +30,15 @@ run('transfer', file('scene.glb'), '--mode', 'shadowed', '--order', '4', '--samp
 run('envsh', env, '--order', '8', '-o', file('env.sh.json'));
 const size = [160, 120];
 const camera = '0,1,3.6,0,0,0,0,1,0,40';
-const cases = [{ rotate: 0, order: 4 }, { rotate: 75, order: 4 }, { rotate: 0, order: 2 }];
+// Per texel too: a small bake whose texels live in the bundle (--format bundle), looked up nearest at TEXCOORD_0.
+run('bake', file('scene.glb'), '--resolution', '64', '--order', '3', '--samples', '32', '--format', 'bundle', '-o',
+    file('baked.glb'));
+const cases = [{ rotate: 0, order: 4 }, { rotate: 75, order: 4 }, { rotate: 0, order: 2 },
+               { rotate: 40, order: 3, texel: true }];
 for (const [i, c] of cases.entries())
-  run('render', file('bundle.glb'), '--env', env, '--camera', camera, '--size', size.join(','), '--rotate-y',
-      String(c.rotate), '--order', String(c.order), '-o', file(`render${i}.png`));
+  run('render', file(c.texel ? 'baked.glb' : 'bundle.glb'), ...(c.texel ? ['--texels'] : []), '--env', env,
+      '--camera', camera, '--size', size.join(','), '--rotate-y', String(c.rotate), '--order', String(c.order), '-o',
+      file(`render${i}.png`));
 
 const server = await serve(work);
 const base = `http://127.0.0.1:${server.address().port}`;
@@ -44,13 +49,19 @@ const browser = await chromium.launch({
          '--enable-unsafe-swiftshader', '--use-angle=swiftshader'],
 });
 let failed = false;
+const results = [];
 try {
   const page = await browser.newPage({ viewport: { width: 640, height: 360 }, deviceScaleFactor: 1 });
   page.on('pageerror', (error) => console.error('page error:', error.message));
-  await page.goto(`${base}/?bundle=data/bundle.glb&maps=data/env.sh.json&camera=${camera}&size=${size.join(',')}`);
-  const info = await page.evaluate(async () => { const api = await window.prtReady; return { renderer: api.renderer }; });
-  console.log(`viewer: ${info.renderer}`);
+  let info = null, loaded = null;
   for (const [i, c] of cases.entries()) {
+    const bundle = c.texel ? 'baked.glb&mode=texel' : 'bundle.glb';
+    if (loaded !== bundle) {
+      await page.goto(`${base}/?bundle=data/${bundle}&maps=data/env.sh.json&camera=${camera}&size=${size.join(',')}`);
+      info = await page.evaluate(async () => { const api = await window.prtReady; return { renderer: api.renderer }; });
+      if (!loaded) console.log(`viewer: ${info.renderer}`);
+      loaded = bundle;
+    }
     const png = fs.readFileSync(file(`render${i}.png`)).toString('base64');
     const result = await page.evaluate(async ({ png, c, size }) => {
       // Decode prt render's PNG in the page, with no colour management, to its stored 8-bit values.
@@ -83,11 +94,12 @@ try {
     }, { png, c, size });
     await page.locator('#view').screenshot({ path: file(`viewer${i}.png`) });
     const ok = result.points >= 100 && result.max <= kMaxLevels && result.mean <= kMeanLevels;
-    console.log(`case rotate ${c.rotate} order ${c.order}: ${result.points} pixels, max ${result.max} mean ` +
+    console.log(`case ${c.texel ? 'per texel' : 'per vertex'} rotate ${c.rotate} order ${c.order}: ${result.points} pixels, max ${result.max} mean ` +
                 `${result.mean.toFixed(3)} levels (tolerance max ${kMaxLevels}, mean ${kMeanLevels}) ${ok ? 'ok' : 'FAILED'}`);
     failed ||= !ok;
+    results.push({ ...c, ...result, ok });
   }
-  fs.writeFileSync(file('agreement.json'), JSON.stringify({ renderer: info.renderer }) + '\n');
+  fs.writeFileSync(file('agreement.json'), JSON.stringify({ renderer: info.renderer, results }, null, 2) + '\n');
 } finally {
   await browser.close();
   server.close();
