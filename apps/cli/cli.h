@@ -22,13 +22,10 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
-<<<<<<< HEAD
 void addAdaptCommand(CLI::App& app);
-=======
 void addFivCommand(CLI::App& app);
 void addFivVisibilityCommand(CLI::App& app);
 void addFivshadeCommand(CLI::App& app);
->>>>>>> main
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);

@@ -89,28 +89,6 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 // the model.
 void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance);
 
-<<<<<<< HEAD
-// ---- adaptive transfer (bundles from `prt adapt`; docs/bundle.md "Adaptive transfer", docs/adapt.md) ---------
-// The highest order this runtime evaluates; a bundle asking for more bands is refused with an error saying so.
-inline constexpr int kMaxRuntimeOrder = sh::kMaxOrder;
-
-// The adaptive transfer of a bundle as a RelightModel: the ragged layer "transfer_ragged" (float32, float16, or
-// uint8/uint16 codes with per-band scales, decoded here) with its offsets, or the clustered-PCA layers
-// "transfer_cpca_*" (reconstructed here to full order). Needs the layers and params docs/bundle.md lists, offsets
-// ascending from 0 whose every difference is n^2 with 1 <= n <= params.order <= kMaxRuntimeOrder, codes and
-// cluster indices in range, finite values. Throws prt::Error naming `source`, the layer and the problem
-// otherwise (for a vertex asking for more bands than the runtime has, naming the vertex and both orders).
-RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source);
-
-// True when the bundle holds adaptive transfer layers (and so relightModel reads them).
-bool hasAdaptiveTransfer(const Bundle& bundle);
-
-// Relights vertices [begin, end) of an adaptive model (model.offsets not empty): each vertex with its own bands,
-// the lighting's first n_v^2 coefficients. Runs of equal order go through the same kernel as full-order rows, so
-// a model whose every vertex has the full order relights bit for bit like the full-order model. Single-threaded.
-// relight(model, ...) above calls it for adaptive models.
-void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance);
-=======
 // ---- FIV shadows of moving occluders (bundles from `prt fiv`; docs/fiv.md) ----------------------------------
 // Irradiance at receiver points (position, unit normal; any mesh, deforming or not) under a distant environment
 // with rigid occluders that translate: I = DifMap(N) - sum_j I_occ,j (overlap-corrected), clamped to
@@ -189,6 +167,26 @@ double discOverlap(double r1, double r2, double s);
 // Irradiance of a uniform cap of half-angle sigma (sin^2 sigma given) at angle theta (cos given) from the normal,
 // clipped by the tangent plane, per unit radiance: integral over the cap of max(0, N . w) dw.
 double clippedCapIrradiance(double cosTheta, double sinSigmaSquared);
->>>>>>> main
+
+// ---- adaptive transfer (bundles from `prt adapt`; docs/bundle.md "Adaptive transfer", docs/adapt.md) ---------
+// The highest order this runtime evaluates; a bundle asking for more bands is refused with an error saying so.
+inline constexpr int kMaxRuntimeOrder = sh::kMaxOrder;
+
+// The adaptive transfer of a bundle as a RelightModel: the ragged layer "transfer_ragged" (float32, float16, or
+// uint8/uint16 codes with per-band scales, decoded here) with its offsets, or the clustered-PCA layers
+// "transfer_cpca_*" (reconstructed here to full order). Needs the layers and params docs/bundle.md lists, offsets
+// ascending from 0 whose every difference is n^2 with 1 <= n <= params.order <= kMaxRuntimeOrder, codes and
+// cluster indices in range, finite values. Throws prt::Error naming `source`, the layer and the problem
+// otherwise (for a vertex asking for more bands than the runtime has, naming the vertex and both orders).
+RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source);
+
+// True when the bundle holds adaptive transfer layers (and so relightModel reads them).
+bool hasAdaptiveTransfer(const Bundle& bundle);
+
+// Relights vertices [begin, end) of an adaptive model (model.offsets not empty): each vertex with its own bands,
+// the lighting's first n_v^2 coefficients. Runs of equal order go through the same kernel as full-order rows, so
+// a model whose every vertex has the full order relights bit for bit like the full-order model. Single-threaded.
+// relight(model, ...) above calls it for adaptive models.
+void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance);
 
 } // namespace prt
