@@ -17,7 +17,7 @@ struct AdaptArgs {
     std::string bundle, output;
     double maxError = 0.0;
     int order = 0;
-    std::vector<std::string> envs;
+    std::vector<std::string> envs, shFiles;
     std::string prior = "maps", format = "float", scales = "per-vertex";
     int clusters = 64, components = 0, maxStep = 1;
 };
@@ -41,8 +41,8 @@ void runAdapt(const AdaptArgs& args, const CLI::App& command) {
         throw Error("", "--prior", "\"" + args.prior + "\" is not maps or worst", kExitUsage);
     if (args.scales != "per-vertex" && args.scales != "per-cluster")
         throw Error("", "--scales", "\"" + args.scales + "\" is not per-vertex or per-cluster", kExitUsage);
-    if (haveError && args.envs.empty())
-        throw Error("", "--env", "--max-error needs a lighting prior: one or more --env maps", kExitUsage);
+    if (haveError && args.envs.empty() && args.shFiles.empty())
+        throw Error("", "--env", "--max-error needs a lighting prior: one or more --env maps (or --sh files)", kExitUsage);
     if (fileExtension(args.output) != "glb") throw Error(args.output, "-o", "output must end in .glb", kExitUsage);
 
     adapt::AdaptOptions options;
@@ -64,12 +64,20 @@ void runAdapt(const AdaptArgs& args, const CLI::App& command) {
     if (haveOrder && args.order > order)
         throw Error(args.bundle, "--order", std::to_string(args.order) + " is above the transfer's order " +
                     std::to_string(order), kExitUsage);
-    if (haveOrder) order = args.order;
 
     std::vector<std::vector<float>> lightings;
     for (const std::string& env : args.envs) {
         lightings.push_back(environmentLighting(readEnvironmentMap(env), order, nullptr, sh::Window::None));
         options.lightingNames.push_back(hashFile(env));
+    }
+    for (const std::string& file : args.shFiles) {
+        int lightingOrder = 0;
+        std::vector<float> read = readLightingJson(file, &lightingOrder);
+        if (lightingOrder < order)
+            throw Error(file, "order", "the lighting has " + std::to_string(lightingOrder) +
+                        " bands, fewer than the transfer's " + std::to_string(order) + ": its error would go unseen");
+        lightings.push_back(fitLighting(read.data(), lightingOrder * lightingOrder, order * order));
+        options.lightingNames.push_back(hashFile(file));
     }
     adapt::AdaptStats stats = adapt::adaptBundle(bundle, lightings, options, args.bundle);
     bundle.producer = {{"tool", "prt"}, {"version", PRT_VERSION}, {"stage", "adapt"}};
@@ -95,6 +103,15 @@ void runAdapt(const AdaptArgs& args, const CLI::App& command) {
                              {"layer_bytes", stats.layerBytes},
                              {"full_layer_bytes", stats.fullLayerBytes},
                              {"relative_rmse", stats.relativeRmse}};
+    nlohmann::json seams = nlohmann::json::array();
+    for (const adapt::SeamMeasure& seam : stats.seams)
+        seams.push_back({{"boundary_edges", seam.boundaryEdges},
+                         {"other_edges", seam.otherEdges},
+                         {"largest_boundary_excess", seam.largestBoundaryExcess},
+                         {"mean_boundary_excess", seam.meanBoundaryExcess},
+                         {"largest_other_jump", seam.largestOtherJump},
+                         {"mean_other_jump", seam.meanOtherJump}});
+    record["seams"] = seams;
     logEvent("adapt_stats", record.dump());
 
     StageCost cost;
@@ -117,6 +134,8 @@ void addAdaptCommand(CLI::App& app) {
                         "relative to each map's RMS radiance over the mesh)");
     command->add_option("--order", args->order, "Instead of --max-error: every vertex truncated to this order");
     command->add_option("--env", args->envs, "Lighting prior: environment maps (repeat; e.g. all eight)");
+    command->add_option("--sh", args->shFiles, "Lighting prior as prt-sh JSON from `prt envsh` (repeat; at least the "
+                        "transfer's order)");
     command->add_option("--prior", args->prior,
                         "maps: the maps as they are; worst: any rotation of them (per-band Cauchy-Schwarz bound)");
     command->add_option("--format", args->format, "Storage: float, half, u16, u8 (per-band codes) or cpca");

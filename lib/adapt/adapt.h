@@ -133,16 +133,17 @@ struct AdaptStats {
     int fullOrder = 0;
     double meanOrder = 0.0, meanCoefficients = 0.0;
     size_t raisedBySmoothing = 0;
-    double relativeRmse = 0.0;     // priorRelativeRmse of what the bundle stores against the input
+    double relativeRmse = 0.0;     // priorRelativeRmse of what the bundle stores against the input (full order)
     int components = 0;            // CPCA: the components used
     uint64_t layerBytes = 0;       // bytes of the transfer layers written (what a relight reads, before decoding)
     uint64_t fullLayerBytes = 0;   // the input's float32 transfer layer
     std::vector<int> orderHistogram; // [fullOrder + 1]
+    std::vector<SeamMeasure> seams;  // ragged formats, per lighting: the stored transfer against the input's
 };
 
 // Replaces the bundle's "transfer" layer (vertex, sh_transfer_rgb) by the adaptive layers of docs/bundle.md
-// ("Adaptive transfer"). `lightings` is the prior ([L*L][3] each, L the transfer's order, or options.order when
-// set); it may be empty only with options.order and CPCA components given. Throws prt::Error
+// ("Adaptive transfer"). `lightings` is the prior ([L*L][3] each, L the transfer's order); it may be empty only
+// with options.order (and, for CPCA, options.components) given. Errors in the stats are against the input. Throws prt::Error
 // naming `source` for a bundle without a usable transfer layer. Returns what it did.
 AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& lightings, const AdaptOptions& options,
                        const std::string& source);

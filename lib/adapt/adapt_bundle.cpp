@@ -60,7 +60,7 @@ const char* priorName(Prior prior) { return prior == Prior::Maps ? "maps" : "wor
 
 } // namespace
 
-AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& lightings, const AdaptOptions& options,
+AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& inputLightings, const AdaptOptions& options,
                        const std::string& source) {
     auto found = std::find_if(bundle.layers.begin(), bundle.layers.end(), [](const Layer& l) { return l.name == "transfer"; });
     if (found == bundle.layers.end())
@@ -76,6 +76,7 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& li
     for (float value : input.data)
         if (!std::isfinite(value)) throw Error(source, "layer \"transfer\"", "holds a value that is not finite");
     const uint64_t inputBytes = uint64_t(input.data.size()) * 4;
+    const std::vector<float> inputFull = input.data;
     const int inputOrder = order;
     if (options.order > 0 && options.order < order) { // uniform truncation first; everything below sees order N
         const size_t from = size_t(order) * order * 3, to = size_t(options.order) * options.order * 3;
@@ -84,11 +85,21 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& li
         order = options.order;
     }
     const bool adaptive = options.order <= 0;
-    if (lightings.empty() && (adaptive || (options.format == Format::Cpca && options.components <= 0)))
+    if (inputLightings.empty() && (adaptive || (options.format == Format::Cpca && options.components <= 0)))
         throw Error(source, "--env", "the lighting prior needs at least one map", kExitUsage);
-    for (const std::vector<float>& lighting : lightings)
-        if (lighting.size() != size_t(order) * order * 3)
+    for (const std::vector<float>& lighting : inputLightings)
+        if (lighting.size() != size_t(inputOrder) * inputOrder * 3)
             throw Error(source, "--env", "lighting of the wrong order for the transfer", kExitFailure);
+    // The prior at the working order (its first bands), and the error of what is stored against the input itself.
+    std::vector<std::vector<float>> lightings;
+    for (const std::vector<float>& lighting : inputLightings)
+        lightings.push_back(std::vector<float>(lighting.begin(), lighting.begin() + size_t(order) * order * 3));
+    auto errorAgainstInput = [&](const std::vector<float>& dense) {
+        std::vector<float> padded(inputFull.size(), 0.0f);
+        const size_t from = size_t(order) * order * 3, to = size_t(inputOrder) * inputOrder * 3;
+        for (size_t v = 0; v < V; ++v) std::copy_n(dense.begin() + v * from, from, padded.begin() + v * to);
+        return priorRelativeRmse(padded.data(), inputFull.data(), V, inputOrder, inputLightings);
+    };
 
     AdaptStats stats;
     stats.vertexCount = V;
@@ -116,12 +127,12 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& li
             for (int m = 1;; m = std::min<int>(m * 2, int(dim))) {
                 cpca = clusteredPca(full.data(), V, dim, clusters, m);
                 std::vector<float> approx = reconstruct(cpca);
-                if (m == int(dim) || priorRelativeRmse(approx.data(), full.data(), V, order, lightings) <= options.maxError)
+                if (m == int(dim) || errorAgainstInput(approx) <= options.maxError)
                     break;
             }
         }
         std::vector<float> approx = reconstruct(cpca);
-        stats.relativeRmse = priorRelativeRmse(approx.data(), full.data(), V, order, lightings);
+        stats.relativeRmse = errorAgainstInput(approx);
         stats.components = cpca.components;
         stats.meanOrder = order;
         stats.meanCoefficients = double(order) * order;
@@ -213,7 +224,21 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& li
             added.push_back(std::move(data));
         }
         std::vector<float> dense = denseTransfer(ragged, &stored);
-        stats.relativeRmse = priorRelativeRmse(dense.data(), full.data(), V, order, lightings);
+        stats.relativeRmse = errorAgainstInput(dense);
+        const size_t coefficients = size_t(order) * order;
+        for (const std::vector<float>& lighting : lightings) {
+            std::vector<float> a(V * 3, 0.0f), f(V * 3, 0.0f);
+            for (size_t v = 0; v < V; ++v)
+                for (int c = 0; c < 3; ++c) {
+                    double sa = 0.0, sf = 0.0;
+                    for (size_t j = 0; j < coefficients; ++j) {
+                        sa += double(dense[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
+                        sf += double(full[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
+                    }
+                    a[v * 3 + c] = float(sa), f[v * 3 + c] = float(sf);
+                }
+            stats.seams.push_back(seamMeasure(bundle.mesh.indices, orders, a.data(), f.data()));
+        }
     }
     for (Layer& layer : added) {
         stats.layerBytes += layerBytes(layer);
