@@ -18,7 +18,7 @@ struct AdaptArgs {
     double maxError = 0.0;
     int order = 0;
     std::vector<std::string> envs, shFiles;
-    std::string prior = "maps", format = "float", scales = "per-vertex";
+    std::string prior = "maps", format = "float", scales = "per-vertex", budget = "rms";
     int clusters = 64, components = 0, maxStep = 1;
 };
 
@@ -39,6 +39,8 @@ void runAdapt(const AdaptArgs& args, const CLI::App& command) {
     if (args.components < 0) throw Error("", "--components", "must be >= 0", kExitUsage);
     if (args.prior != "maps" && args.prior != "worst")
         throw Error("", "--prior", "\"" + args.prior + "\" is not maps or worst", kExitUsage);
+    if (args.budget != "rms" && args.budget != "vertex")
+        throw Error("", "--budget", "\"" + args.budget + "\" is not rms or vertex", kExitUsage);
     if (args.scales != "per-vertex" && args.scales != "per-cluster")
         throw Error("", "--scales", "\"" + args.scales + "\" is not per-vertex or per-cluster", kExitUsage);
     if (haveError && args.envs.empty() && args.shFiles.empty())
@@ -48,6 +50,7 @@ void runAdapt(const AdaptArgs& args, const CLI::App& command) {
     adapt::AdaptOptions options;
     options.maxError = haveError ? args.maxError : 0.0;
     options.order = haveOrder ? args.order : 0;
+    options.perVertexBudget = args.budget == "vertex";
     options.prior = args.prior == "worst" ? adapt::Prior::Worst : adapt::Prior::Maps;
     options.format = adapt::parseFormat(args.format);
     options.perClusterScales = args.scales == "per-cluster";
@@ -130,8 +133,10 @@ void addAdaptCommand(CLI::App& app) {
     command->add_option("bundle", args->bundle, "Bundle (.glb) with a full-order \"transfer\" layer")->required();
     command->add_option("-o,--output", args->output, "Adaptive bundle (.glb)")->required();
     command->add_option("--max-error", args->maxError,
-                        "Largest relative radiance error truncation may add at any vertex under the prior (> 0; "
-                        "relative to each map's RMS radiance over the mesh)");
+                        "Relative error truncation may add (> 0): with --budget rms the relight's relative RMSE under "
+                        "every prior map, with --budget vertex each vertex's error over the map's RMS radiance");
+    command->add_option("--budget", args->budget,
+                        "rms (default): fewest coefficients overall; vertex: each vertex within --max-error");
     command->add_option("--order", args->order, "Instead of --max-error: every vertex truncated to this order");
     command->add_option("--env", args->envs, "Lighting prior: environment maps (repeat; e.g. all eight)");
     command->add_option("--sh", args->shFiles, "Lighting prior as prt-sh JSON from `prt envsh` (repeat; at least the "

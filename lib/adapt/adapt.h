@@ -35,6 +35,18 @@ std::vector<float> truncationError(const float* transfer, size_t vertexCount, in
 // everywhere (lossless: relighting equals the full order bit for bit).
 std::vector<uint8_t> selectOrders(const std::vector<float>& error, size_t vertexCount, int order, double maxError);
 
+// Per map k, vertex v and order n = 1..order: the squared truncation error of vertex v at order n, summed over the
+// three channels and divided by 3 V s_k^2 (s_k the map's RMS full-order radiance), so that summing over vertices
+// gives the squared relative RMSE of the whole relight under map k. [maps][V][order]; Worst uses the bound.
+std::vector<double> truncationErrorSquared(const float* transfer, size_t vertexCount, int order,
+                                           const std::vector<std::vector<float>>& lightings, Prior prior);
+
+// The fewest coefficients overall whose relight keeps the relative RMSE under every map within maxRmse: each
+// vertex takes the order minimising (its summed weighted squared error) + lambda * n^2, with lambda the largest
+// (found by bisection on log lambda) that keeps every map's total within maxRmse^2. maxRmse <= 0 gives `order`.
+std::vector<uint8_t> budgetOrders(const std::vector<double>& errorSquared, size_t mapCount, size_t vertexCount,
+                                  int order, double maxRmse);
+
 // Grades the orders so that the ends of every mesh edge differ by at most `maxStep` bands, only ever raising an
 // order (so every vertex stays within its error bound). Needs indices < orders.size(). Deterministic.
 // Returns the number of vertices raised.
@@ -117,7 +129,9 @@ Format parseFormat(const std::string& name); // throws prt::Error(kExitUsage) fo
 const char* formatName(Format format);
 
 struct AdaptOptions {
-    double maxError = 0.0; // relative truncation error per vertex (truncationError); must be > 0 from the CLI
+    double maxError = 0.0; // the bound (budget below); must be > 0 from the CLI
+    bool perVertexBudget = false; // true: every vertex within maxError (truncationError); false: the relight's
+                                  // relative RMSE under every prior map within maxError (budgetOrders)
     int order = 0;         // > 0: every vertex truncated to this order (no adaptivity; maxError unused)
     Prior prior = Prior::Maps;
     Format format = Format::Float;

@@ -113,6 +113,7 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
                              {"max_error", adaptive ? nlohmann::json(options.maxError) : nlohmann::json()},
                              {"uniform_order", adaptive ? nlohmann::json() : nlohmann::json(order)},
                              {"prior", priorName(options.prior)},
+                             {"budget", options.perVertexBudget ? "vertex" : "rms"},
                              {"lightings", options.lightingNames},
                              {"transfer", input.params}};
     std::vector<Layer> added;
@@ -156,8 +157,13 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
     } else {
         std::vector<uint8_t> orders(V, uint8_t(order));
         if (adaptive) {
-            std::vector<float> error = truncationError(full.data(), V, order, lightings, options.prior);
-            orders = selectOrders(error, V, order, options.maxError);
+            if (options.perVertexBudget) {
+                std::vector<float> error = truncationError(full.data(), V, order, lightings, options.prior);
+                orders = selectOrders(error, V, order, options.maxError);
+            } else {
+                std::vector<double> error = truncationErrorSquared(full.data(), V, order, lightings, options.prior);
+                orders = budgetOrders(error, lightings.size(), V, order, options.maxError);
+            }
             stats.raisedBySmoothing = smoothOrders(bundle.mesh.indices, orders, options.maxStep);
         }
         RaggedTransfer ragged = raggedTransfer(full.data(), V, order, orders);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace prt::adapt {
 
@@ -138,6 +139,93 @@ double priorRelativeRmse(const float* approx, const float* full, size_t vertexCo
         worst = std::max(worst, reference > 0.0 ? std::sqrt(error / reference) : 0.0);
     }
     return worst;
+}
+
+} // namespace prt::adapt
+
+namespace prt::adapt {
+
+std::vector<double> truncationErrorSquared(const float* transfer, size_t vertexCount, int order,
+                                           const std::vector<std::vector<float>>& lightings, Prior prior) {
+    const size_t coefficients = size_t(order) * order;
+    std::vector<double> out(lightings.size() * vertexCount * order, 0.0);
+    std::vector<double> partial(size_t(order) * 3);
+    for (size_t k = 0; k < lightings.size(); ++k) {
+        const std::vector<float>& lighting = lightings[k];
+        std::vector<double> lightingNorm(size_t(order) * 3, 0.0);
+        for (int l = 0; l < order; ++l)
+            for (int j = l * l; j < (l + 1) * (l + 1); ++j)
+                for (int c = 0; c < 3; ++c) lightingNorm[l * 3 + c] += double(lighting[j * 3 + c]) * lighting[j * 3 + c];
+        for (double& value : lightingNorm) value = std::sqrt(value);
+        double sumSquares = 0.0;
+        for (size_t v = 0; v < vertexCount; ++v)
+            for (int c = 0; c < 3; ++c) {
+                double radiance = 0.0;
+                for (size_t j = 0; j < coefficients; ++j)
+                    radiance += double(transfer[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
+                sumSquares += radiance * radiance;
+            }
+        if (!(sumSquares > 0.0))
+            throw Error("", "lighting " + std::to_string(k), "relights the mesh to black at full order, so no "
+                        "relative error can be measured under it", kExitInput);
+        for (size_t v = 0; v < vertexCount; ++v) {
+            const float* row = transfer + v * coefficients * 3;
+            for (int l = 0; l < order; ++l)
+                for (int c = 0; c < 3; ++c) {
+                    double value = 0.0;
+                    if (prior == Prior::Maps) {
+                        for (int j = l * l; j < (l + 1) * (l + 1); ++j) value += double(row[j * 3 + c]) * lighting[j * 3 + c];
+                    } else {
+                        double norm = 0.0;
+                        for (int j = l * l; j < (l + 1) * (l + 1); ++j) norm += double(row[j * 3 + c]) * row[j * 3 + c];
+                        value = std::sqrt(norm) * lightingNorm[l * 3 + c];
+                    }
+                    partial[l * 3 + c] = value;
+                }
+            double* slots = out.data() + (k * vertexCount + v) * order;
+            for (int c = 0; c < 3; ++c) {
+                double tail = 0.0;
+                for (int n = order; n >= 1; --n) {
+                    slots[n - 1] += tail * tail / sumSquares; // sumSquares = 3 V s^2
+                    tail += partial[(n - 1) * 3 + c];
+                }
+            }
+        }
+    }
+    return out;
+}
+
+std::vector<uint8_t> budgetOrders(const std::vector<double>& errorSquared, size_t mapCount, size_t vertexCount,
+                                  int order, double maxRmse) {
+    std::vector<uint8_t> orders(vertexCount, uint8_t(order));
+    if (!(maxRmse > 0.0) || mapCount == 0) return orders;
+    const double budget = maxRmse * maxRmse;
+    std::vector<uint8_t> trial(vertexCount);
+    auto choose = [&](double lambda) { // returns the worst map's squared relative RMSE
+        std::vector<double> total(mapCount, 0.0);
+        for (size_t v = 0; v < vertexCount; ++v) {
+            double best = std::numeric_limits<double>::infinity();
+            int bestOrder = order;
+            for (int n = 1; n <= order; ++n) {
+                double cost = lambda * double(n) * n;
+                for (size_t k = 0; k < mapCount; ++k) cost += errorSquared[(k * vertexCount + v) * order + n - 1];
+                if (cost < best) best = cost, bestOrder = n;
+            }
+            trial[v] = uint8_t(bestOrder);
+            for (size_t k = 0; k < mapCount; ++k) total[k] += errorSquared[(k * vertexCount + v) * order + bestOrder - 1];
+        }
+        return *std::max_element(total.begin(), total.end());
+    };
+    // lambda is in squared relative error per coefficient; the feasible ones form an interval [0, lambda*].
+    double low = -40.0, high = 5.0; // log10 lambda
+    if (choose(std::pow(10.0, high)) <= budget) return trial;
+    for (int iteration = 0; iteration < 60; ++iteration) {
+        double middle = 0.5 * (low + high);
+        if (choose(std::pow(10.0, middle)) <= budget) low = middle;
+        else high = middle;
+    }
+    choose(std::pow(10.0, low));
+    return trial;
 }
 
 } // namespace prt::adapt

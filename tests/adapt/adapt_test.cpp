@@ -294,3 +294,28 @@ TEST(Adapt, RuntimeRefusesBandsItLacks) {
         if (layer.name == "transfer_offsets") layer.integers[1] = 5;
     EXPECT_THROW(relightModel(bundle, "c.glb"), Error);
 }
+
+TEST(Adapt, RmsBudgetKeepsEveryMapWithinTheBoundWithFewerCoefficients) {
+    const int order = 6;
+    const size_t V = 140;
+    std::vector<float> transfer = decayingTransfer(V, order, 21);
+    std::vector<std::vector<float>> lightings = {randomLighting(order, 1), randomLighting(order, 2)};
+    const double maxError = 0.01;
+    std::vector<double> squared = adapt::truncationErrorSquared(transfer.data(), V, order, lightings, adapt::Prior::Maps);
+    std::vector<uint8_t> orders = adapt::budgetOrders(squared, lightings.size(), V, order, maxError);
+    std::vector<uint8_t> perVertex = adapt::selectOrders(
+        adapt::truncationError(transfer.data(), V, order, lightings, adapt::Prior::Maps), V, order, maxError);
+    adapt::RaggedTransfer ragged = adapt::raggedTransfer(transfer.data(), V, order, orders);
+    std::vector<float> dense = adapt::denseTransfer(ragged);
+    double worst = 0.0;
+    for (const auto& lighting : lightings) { // each map on its own, as prt compare would score it
+        double rmse = adapt::priorRelativeRmse(dense.data(), transfer.data(), V, order, {lighting});
+        EXPECT_LE(rmse, maxError * (1 + 1e-6));
+        worst = std::max(worst, rmse);
+    }
+    EXPECT_GT(worst, 0.5 * maxError); // it spends the budget rather than keep every band
+    size_t budgetCoefficients = 0, vertexCoefficients = 0;
+    for (size_t v = 0; v < V; ++v) budgetCoefficients += orders[v] * orders[v], vertexCoefficients += perVertex[v] * perVertex[v];
+    EXPECT_LT(budgetCoefficients, vertexCoefficients);
+    EXPECT_EQ(adapt::budgetOrders(squared, lightings.size(), V, order, 0.0), std::vector<uint8_t>(V, uint8_t(order)));
+}
