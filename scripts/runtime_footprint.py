@@ -20,12 +20,13 @@ HEAVY = ["OpenImageIO", "tbb", "embree", "ceres", "OpenCL", "OpenEXR", "xxhash"]
 
 
 def median_seconds(command, runs):
+    """(median, minimum) wall seconds of `runs` runs; on a shared machine the minimum is the steadier figure."""
     times = []
     for _ in range(runs):
         start = time.perf_counter()
         subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
         times.append(time.perf_counter() - start)
-    return statistics.median(times)
+    return statistics.median(times), min(times)
 
 
 def libraries(binary):
@@ -46,13 +47,19 @@ def measure(build, runs):
                 "heavy": [h for h in HEAVY if any(h.lower() in lib.lower() for lib in libs)],
                 "libraries": libs,
                 "bytes": consumer.stat().st_size,
-                "run_seconds_median": median_seconds([str(consumer), scratch + "/c.glb"], runs),
+                "run_seconds_median_min": median_seconds([str(consumer), scratch + "/c.glb"], runs),
             }
+    driver = build / "prt-driver"
+    if driver.exists():  # the real driver behind the `prt` launcher: what every stage still loads
+        row["prt_driver"] = {
+            "shared_libraries": len(libraries(driver)),
+            "version_seconds_median_min": median_seconds([str(driver), "--version"], runs),
+        }
     if prt.exists():
         row["prt"] = {
             "shared_libraries": len(libraries(prt)),
             "bytes": prt.stat().st_size,
-            "version_seconds_median": median_seconds([str(prt), "--version"], runs),
+            "version_seconds_median_min": median_seconds([str(prt), "--version"], runs),
         }
     return row
 
@@ -76,10 +83,17 @@ def main():
         c, p = row.get("consumer"), row.get("prt")
         line = row["build"] + ":"
         if c:
+            med, low = c["run_seconds_median_min"]
             line += (f" consumer {c['shared_libraries']} shared libraries (heavy: {', '.join(c['heavy']) or 'none'}),"
-                     f" {c['bytes']} bytes, run {1e3 * c['run_seconds_median']:.1f} ms;")
+                     f" {c['bytes']} bytes, run median {1e3 * med:.1f} ms (min {1e3 * low:.1f});")
         if p:
-            line += (f" prt {p['shared_libraries']} shared libraries, --version {1e3 * p['version_seconds_median']:.1f} ms")
+            med, low = p["version_seconds_median_min"]
+            line += (f" prt {p['shared_libraries']} shared libraries, --version median {1e3 * med:.1f} ms"
+                     f" (min {1e3 * low:.1f});")
+        d = row.get("prt_driver")
+        if d:
+            med, low = d["version_seconds_median_min"]
+            line += f" prt-driver {d['shared_libraries']} shared libraries, --version median {1e3 * med:.1f} ms (min {1e3 * low:.1f})"
         print(line)
     if out:
         Path(out).write_text(json.dumps({"runs": runs, "builds": rows}, indent=2) + "\n")
