@@ -303,11 +303,17 @@ void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, si
             float distance = std::sqrt(dot3(offset, offset));
             for (int c = 0; c < 3; ++c) h.direction[c] = distance > 0.0f ? offset[c] / distance : 0.0f;
             h.angularRadius = distance > o.radius ? std::asin(o.radius / distance) : float(kPi / 2);
+            float green = std::sqrt(dot3(&fiv[3], &fiv[3]));
+            if (options.overlap == FivOverlap::Cap && green > 0.0f && power[1] > 0.0f) {
+                float cosSigma = std::clamp(2.0f * green / power[1] - 1.0f, 0.0f, 1.0f);
+                h.angularRadius = std::max(std::acos(cosSigma), 1e-4f);
+                for (int c = 0; c < 3; ++c) h.direction[c] = fiv[3 + c] / green;
+            }
             h.disc = float(kPi) * h.angularRadius * h.angularRadius;
             ++used;
         }
         float occluded[3] = {0, 0, 0};
-        if (options.overlap == FivOverlap::Paper) {
+        if (options.overlap == FivOverlap::Paper || options.overlap == FivOverlap::Cap) {
             float largest[3] = {0, 0, 0};
             for (size_t a = 0; a < used; ++a)
                 for (int c = 0; c < 3; ++c) occluded[c] += hidden[a].value[c], largest[c] = std::max(largest[c], hidden[a].value[c]);
