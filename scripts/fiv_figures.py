@@ -37,18 +37,24 @@ def chart(path):
     with open(path) as f:
         report = json.load(f)
     os.makedirs(charts, exist_ok=True)
-    rows = [r for r in report["results"] if r["mode"] == "cap+paper" and r["storage"] == "float16"]
+    # The defaults: partial "cap", overlap "cap" (equal to "cap+paper" where there is one occluder).
+    multi = {(r["scene"], r["map"], r["grid"]) for r in report["results"] if r["mode"] == "cap+cap"}
+    rows = [r for r in report["results"] if r["storage"] == "float16" and
+            (r["mode"] == "cap+cap" or (r["mode"] == "cap+paper" and (r["scene"], r["map"], r["grid"]) not in multi))]
     lines = {}
     for r in rows:
         lines.setdefault((r["scene"], r["map"]), []).append(r)
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.5))
+    fig, axes = plt.subplots(1, 2, figsize=(15, 5.5))
+    scenes = sorted({scene for scene, _ in lines})
+    styles = {"courtyard": "-", "sunrise": "--", "constant": ":"}
     for (scene, env), points in sorted(lines.items()):
         if len(points) < 2:
             continue
         points.sort(key=lambda r: r["samples"])
         label = f"{scene}, {env}"
-        axes[0].plot([p["samples"] for p in points], [p["nrmse"] for p in points], marker="o", label=label)
-        axes[1].plot([p["visibility_seconds"] for p in points], [p["nrmse"] for p in points], marker="o", label=label)
+        style = dict(marker="o", label=label, color=f"C{scenes.index(scene)}", linestyle=styles.get(env, "-"))
+        axes[0].plot([p["samples"] for p in points], [p["nrmse"] for p in points], **style)
+        axes[1].plot([p["visibility_seconds"] for p in points], [p["nrmse"] for p in points], **style)
     for ax, xlabel in zip(axes, ["grid samples (NT x NP x NR)", "precompute (visibility) seconds, 2 threads"]):
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -58,7 +64,7 @@ def chart(path):
     for seed, label in [(0.023, "seed 32x17x15"), (0.008, "seed 64x33x30")]:
         axes[0].axhline(seed, color="grey", linestyle=":", linewidth=1)
         axes[0].text(axes[0].get_xlim()[0], seed, " " + label, fontsize=7, color="grey", va="bottom")
-    axes[1].legend(fontsize=7, loc="best")
+    axes[1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.suptitle("FIV shadows of the bunny: error against grid size and precompute time")
     fig.tight_layout()
     fig.savefig(os.path.join(charts, "fiv_nrmse.png"), dpi=110)

@@ -15,7 +15,7 @@ namespace prt::cli {
 namespace {
 
 struct FivshadeArgs {
-    std::string receiver, env, output, self, albedo, partial = "cap", overlap = "paper";
+    std::string receiver, env, output, self, albedo, partial = "cap", overlap = "cap";
     std::vector<std::string> occluders, at;
 };
 

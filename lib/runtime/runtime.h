@@ -137,7 +137,7 @@ enum class FivOverlap {
 };
 struct FivShadeOptions {
     FivPartial partial = FivPartial::Cap;
-    FivOverlap overlap = FivOverlap::Paper;
+    FivOverlap overlap = FivOverlap::Cap; // the lowest measured error (docs/results.md)
 };
 
 // An occluder placed in the world: its vertex p sits at p + translation.
