@@ -107,7 +107,9 @@ def main():
 
         full_rad = {e: relight(full, e, "full8") for e in envs}
         reference, noise = {}, {}
-        for e in envs:
+        # The box room is closed, so no environment light reaches its inside: its path-traced reference is black
+        # (checked: 0 at every vertex under city and courtyard) and there is nothing to score against.
+        for e in (envs if scene != "box-room" else []):
             stem = os.path.join(work, f"{scene}_reference_{e}_b3_a0.8_s{paths}_seed0")
             key = {"mesh": mesh_key, "env": file_hash(env_path[e]), "samples": paths}
             record = None
@@ -129,6 +131,8 @@ def main():
             noise[e] = record["rms_relative_stderr"]
 
         def rel(a, b):
+            if b is None:
+                return float("nan")
             return float(np.sqrt(np.mean((a - b) ** 2) / np.mean(b ** 2)))
 
         def psnr(a, b):
@@ -155,19 +159,19 @@ def main():
                 rows.append(dict(scene=scene, prior="eight maps", env=e, max_error=E, mean_order=stats["mean_order"],
                                  bytes_per_vertex=(stats["layer_bytes"]) / V, full_bytes_per_vertex=stats["full_layer_bytes"] / V,
                                  speedup=ratio, psnr_vs_full=psnr(a, full_rad[e]), rel_vs_full=rel(a, full_rad[e]),
-                                 rel_vs_reference=rel(a, reference[e]), full_rel_vs_reference=rel(full_rad[e], reference[e]),
-                                 reference_noise=noise[e], seam_ratio=seam,
+                                 rel_vs_reference=rel(a, reference.get(e)), full_rel_vs_reference=rel(full_rad[e], reference.get(e)),
+                                 reference_noise=noise.get(e, float('nan')), seam_ratio=seam,
                                  boundary_edges=stats["seams"][0]["boundary_edges"] if stats["seams"] else 0))
-            # The prior of one given map: each map's own adaptive bundle, relit under it.
-            for e in envs:
+            # The prior of one given map: each map's own adaptive bundle, relit under it (two bounds, for time).
+            for e in (envs if E in max_errors[-2:] else []):
                 own, st = adapt(f"own_{e}_{E}", ["--max-error", str(E), "--sh", sh[e]])
                 a = relight(own, e, f"own_{E}")
                 s0 = st["seams"][0]
                 rows.append(dict(scene=scene, prior="own map", env=e, max_error=E, mean_order=st["mean_order"],
                                  bytes_per_vertex=st["layer_bytes"] / V, full_bytes_per_vertex=st["full_layer_bytes"] / V,
                                  speedup=speedup(own, 0.1), psnr_vs_full=psnr(a, full_rad[e]), rel_vs_full=rel(a, full_rad[e]),
-                                 rel_vs_reference=rel(a, reference[e]), full_rel_vs_reference=rel(full_rad[e], reference[e]),
-                                 reference_noise=noise[e],
+                                 rel_vs_reference=rel(a, reference.get(e)), full_rel_vs_reference=rel(full_rad[e], reference.get(e)),
+                                 reference_noise=noise.get(e, float('nan')),
                                  seam_ratio=s0["largest_boundary_excess"] / s0["largest_other_jump"],
                                  boundary_edges=s0["boundary_edges"]))
         # Grading off, for the seam measure.
