@@ -22,6 +22,7 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
+void addEnvlightCommand(CLI::App& app);
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);

@@ -38,6 +38,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addBenchCommand(app);
     addRunCommand(app);
     addMergeCommand(app);
+    addEnvlightCommand(app);
 
     try {
         app.parse(int(args.size()), args.data());
