@@ -13,6 +13,7 @@ namespace prt::envlight {
 namespace {
 
 constexpr double kDegree = M_PI / 180.0;
+constexpr size_t kFitTexels = 6000; // at most this many texels per light fit
 
 double luminanceOf(const double* rgb) { return kLuminance[0] * rgb[0] + kLuminance[1] * rgb[1] + kLuminance[2] * rgb[2]; }
 double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -216,6 +217,19 @@ Decomposition decompose(const EnvironmentMap& env, const Options& options) {
                     fitTexels.directions.insert(fitTexels.directions.end(), w, w + 3);
                     fitTexels.solidAngles.push_back(texels.solidAngles[i]);
                     for (int c = 0; c < 3; ++c) fitTexels.target.push_back(texels.rgb[i * 3 + c] - background[c]);
+                }
+                // Large windows (a big soft source near a pole) are thinned to about kFitTexels texels, each
+                // standing for `stride` of them: every stride-th in texel order, so the fit stays deterministic.
+                const size_t stride = (fitTexels.solidAngles.size() + kFitTexels - 1) / kFitTexels;
+                if (stride > 1) {
+                    FitTexels thinned;
+                    for (size_t i = 0; i < fitTexels.solidAngles.size(); i += stride) {
+                        thinned.directions.insert(thinned.directions.end(), &fitTexels.directions[i * 3],
+                                                  &fitTexels.directions[i * 3] + 3);
+                        thinned.solidAngles.push_back(fitTexels.solidAngles[i] * double(stride));
+                        thinned.target.insert(thinned.target.end(), &fitTexels.target[i * 3], &fitTexels.target[i * 3] + 3);
+                    }
+                    fitTexels = std::move(thinned);
                 }
                 double edge = 0.3 * std::sqrt(texels.solidAngles[centre]);
                 LightFit fit = fitLight(fitTexels, light, options.minRadius, upperRadius[k], edge);

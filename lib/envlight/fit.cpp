@@ -67,7 +67,7 @@ LightFit fitLight(const FitTexels& texels, const ConeLight& initial, double minR
     ceres::Solver::Options options;
     options.linear_solver_type = ceres::DENSE_QR;
     options.num_threads = 1; // deterministic
-    options.max_num_iterations = 100;
+    options.max_num_iterations = 50;
     options.function_tolerance = 1e-10;
     options.parameter_tolerance = 1e-10;
     options.logging_type = ceres::SILENT;
