@@ -27,6 +27,7 @@ struct RelightOptions {
     bool texels = false;
     std::string lights;
     int lightSamples = 64;
+    std::string bounceWindow = "hann";
 };
 
 // The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
@@ -59,6 +60,7 @@ void runHybridRelight(const RelightOptions& options, double start) {
         lighting = rotateHybridLighting(lighting, R);
     }
     sh::applyWindow(window, lighting.order, lighting.residual.data(), 3);
+    lighting.bounceWindow = sh::parseWindow(options.bounceWindow);
 
     double visibilityStart = nowSeconds();
     std::vector<envlight::ConeLight> cones;
@@ -192,6 +194,8 @@ void addRelightCommand(CLI::App& app) {
                       "image");
     command->add_option("--light-samples", options->lightSamples,
                         "Occlusion rays per vertex and light over each cone, for --lights (default 64; 0: unshadowed)");
+    command->add_option("--bounce-window", options->bounceWindow,
+                        "With --lights: window on the lights' SH where they meet the bounce layer: none, hann (default), lanczos");
     command->add_option("-o,--output", options->output,
                         "Per-vertex radiance [V,3]: .npy (float32) or .csv; with --texels an RGB float .exr atlas")
         ->required();

@@ -172,6 +172,7 @@ void relightHybrid(const HybridModel& model, const HybridLighting& lighting, con
     if (lighting.lights.empty()) return;
     if (!model.bounce.empty()) {
         std::vector<float> lit = coneLightsProjection(lighting.lights, model.total.order), bounced(count * 3);
+        sh::applyWindow(lighting.bounceWindow, model.total.order, lit.data(), 3);
         relight(model.bounce.data() + begin * rowValues, count, coefficients, lit.data(), bounced.data());
         for (size_t i = 0; i < count * 3; ++i) radiance[i] += bounced[i];
     }

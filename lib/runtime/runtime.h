@@ -188,6 +188,11 @@ struct HybridLighting {
     int order = 0;
     std::vector<float> residual; // [order^2][3] RGB SH radiance
     std::vector<HybridConeLight> lights;
+    // Window on the lights' projection where it meets the bounce part (B . proj(light)): a small bright cone rings
+    // at low order, and B truncated to L bands rings too, so their product can go negative at vertices that see
+    // the light directly (docs/envlight.md, "Hybrid relight"). Hann removed 86% of such vertices on sunrise at no
+    // measurable error.
+    sh::Window bounceWindow = sh::Window::Hann;
 };
 
 // Reads prt-lights JSON as `prt envlight` writes it. Throws prt::Error naming the file and the member for a wrong
