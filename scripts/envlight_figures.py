@@ -275,8 +275,15 @@ def main():
     temporal = {}
     if not opts.skip_temporal:
         for env in (opts.temporal_envs.split(",") if opts.temporal_envs else envs):
-            _, text, _ = run([opts.temporal, bundles[5], env_path(env), "5", "4", str(opts.frames), str(opts.step)])
-            temporal[env] = json.loads(text)
+            # Cached by map, frames and step (the bundle is rebuilt identically each run: same mesh and seed).
+            cached = os.path.join(opts.work, f"temporal_{env}_f{opts.frames}_s{opts.step:g}.json")
+            if not os.path.exists(cached):
+                _, text, _ = run([opts.temporal, bundles[5], env_path(env), "5", "4", str(opts.frames), str(opts.step)])
+                with open(cached + ".tmp", "w") as f:
+                    f.write(text)
+                os.replace(cached + ".tmp", cached)
+            with open(cached) as f:
+                temporal[env] = json.load(f)
             t = temporal[env]
             print(f"temporal {env:10s}: jump {t['largest_direction_jump_degrees']:.3f} deg, count changes "
                   f"{t['light_count_changes']}, change hybrid {100 * t['hybrid_largest_change_rms']:.2f}% plain "

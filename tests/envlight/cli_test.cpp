@@ -162,3 +162,53 @@ TEST_F(EnvlightCli, HybridRelightBeatsPlainSh) {
     EXPECT_EQ(r.exitCode, 3) << r.stderrText;
     EXPECT_FALSE(fs::exists(out));
 }
+
+// The pipeline stage: envlight's lights feed relight; a second run is served from the cache with the same bytes.
+TEST_F(EnvlightCli, PipelineStageFeedsRelight) {
+    ASSERT_EQ(run("scene two-spheres -o " + (dir / "two.glb").string()).exitCode, 0);
+    writeMap("sun.exr", discMap(128, 0.5, {Disc{unit(0.3, 0.8, -0.5), 6.0, {100.0, 100.0, 100.0}}}));
+    std::ofstream(dir / "hybrid.toml") << R"([pipeline]
+name = "hybrid"
+[inputs]
+scene = { mesh = "two.glb" }
+sun = { env = "sun.exr" }
+[stages.transfer]
+run = "transfer"
+inputs = { mesh = "scene" }
+mode = "interreflected"
+order = 3
+samples = 64
+bounces = 1
+albedo = [0.8, 0.8, 0.8]
+[stages.lights]
+run = "envlight"
+inputs = { env = "sun" }
+order = 3
+max-lights = 2
+icosphere-level = 5
+[stages.relight]
+run = "relight"
+inputs = { bundle = "transfer", lights = "lights" }
+light-samples = 16
+[outputs]
+radiance = { from = "relight", path = "out/radiance.npy" }
+lights = { from = "lights", path = "out/lights.json" }
+)";
+    std::string cd = "cd " + dir.string() + " && ";
+    auto runIn = [&](const std::string& arguments) {
+        int status = std::system((cd + PRT_EXECUTABLE + " " + arguments + " 2> " + (dir / "run.txt").string()).c_str());
+        std::stringstream text;
+        text << std::ifstream(dir / "run.txt").rdbuf();
+        return CliRun{WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+    };
+    CliRun first = runIn("run hybrid.toml");
+    ASSERT_EQ(first.exitCode, 0) << first.stderrText;
+    nlohmann::json lights = nlohmann::json::parse(std::ifstream(dir / "out" / "lights.json"));
+    EXPECT_EQ(lights["lights"].size(), 1u);
+    std::string radiance = prt::hashFile((dir / "out" / "radiance.npy").string());
+    CliRun second = runIn("run hybrid.toml --plan");
+    EXPECT_EQ(second.exitCode, 0) << second.stderrText;
+    CliRun third = runIn("run hybrid.toml");
+    ASSERT_EQ(third.exitCode, 0) << third.stderrText;
+    EXPECT_EQ(prt::hashFile((dir / "out" / "radiance.npy").string()), radiance);
+}
