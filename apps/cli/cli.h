@@ -27,6 +27,7 @@ void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
+void addEnvlightCommand(CLI::App& app);
 void addAdaptCommand(CLI::App& app);
 void addFivCommand(CLI::App& app);
 void addFivVisibilityCommand(CLI::App& app);

@@ -42,6 +42,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addRunCommand(app);
     addMergeCommand(app);
     addRenderCommand(app);
+    addEnvlightCommand(app);
     addAdaptCommand(app);
 
     try {

@@ -6,7 +6,9 @@
 #include "core.h"
 #include "image.h"
 #include "raycast.h"
+#include "envlight.h"
 #include "reference.h"
+#include "runtime.h"
 
 #include <algorithm>
 #include <charconv>
@@ -30,9 +32,29 @@ struct ReferenceCommandOptions {
     std::string albedo; // "R,G,B"
     std::string imageSize; // "W,H"
     std::string camera;    // "EYE,TARGET,UP,FOVY"
+    std::string lights;    // prt-lights JSON: render the decomposed lighting instead of --env
+    int lightsWidth = 2048;
     std::vector<std::string> occluders, at; // brute-force direct lighting with occluders (FIV ground truth)
     bool bruteForce = false, unshadowed = false;
 };
+
+// The decomposed lighting of a prt-lights file (residual SH plus cones) as a map the path tracer samples.
+EnvironmentMap lightsEnvironment(const std::string& path, int width) {
+    HybridLighting lighting = readHybridLightingJson(path);
+    std::vector<envlight::ConeLight> cones;
+    for (const HybridConeLight& light : lighting.lights)
+        cones.push_back({{light.direction[0], light.direction[1], light.direction[2]},
+                         {light.radiance[0], light.radiance[1], light.radiance[2]},
+                         light.angularRadius});
+    std::vector<double> residual(lighting.residual.begin(), lighting.residual.end());
+    double clamped = 0.0;
+    EnvironmentMap env = envlight::renderLighting(cones, residual, lighting.order, width, 8, &clamped);
+    char line[200];
+    std::snprintf(line, sizeof line, "reference: %s rendered as a %dx%d map; negative residual clamped to 0: %.3g%% of "
+                                     "its luminance energy", path.c_str(), width, width / 2, 100.0 * clamped);
+    (clamped > 1e-3 ? logWarn : logInfo)(line);
+    return env;
+}
 
 void requireExtension(const std::string& path, const char* option, std::initializer_list<const char*> extensions) {
     std::string extension = fileExtension(path);
@@ -93,7 +115,12 @@ void runReference(const ReferenceCommandOptions& options) {
     const TriMesh& mesh = bundle.mesh;
     if (mesh.normals.empty()) throw Error(options.mesh, "", "mesh has no vertex normals (prt meshprep adds them)");
     for (size_t j = 0; j < occluders.size(); ++j) occluders[j].mesh = readBundle(options.occluders[j]).mesh;
-    EnvironmentMap env = readEnvironmentMap(options.env);
+    if (options.env.empty() == options.lights.empty())
+        throw Error("", "--env", "give --env or --lights (exactly one)", kExitUsage);
+    if (options.lightsWidth < 4 || options.lightsWidth > 16384 || options.lightsWidth % 2 != 0)
+        throw Error("", "--lights-width", "must be even, 4..16384", kExitUsage);
+    EnvironmentMap env = options.lights.empty() ? readEnvironmentMap(options.env)
+                                                : lightsEnvironment(options.lights, options.lightsWidth);
     if (direct) {
         DirectOptions directOptions;
         directOptions.albedo = reference.albedo;
@@ -114,7 +141,7 @@ void runReference(const ReferenceCommandOptions& options) {
     }
     std::string albedoSource = reference.albedo ? "constant" : mesh.albedo.empty() ? "white" : "per vertex";
     logInfo("reference: " + options.mesh + " (" + std::to_string(mesh.vertexCount()) + " vertices) under " +
-            options.env + ", " + std::to_string(options.samples) + " samples, " + std::to_string(options.bounces) +
+            (options.lights.empty() ? options.env : options.lights) + ", " + std::to_string(options.samples) + " samples, " + std::to_string(options.bounces) +
             " bounces, albedo " + albedoSource + ", " + std::to_string(reference.threads) + " threads");
 
     uint64_t rays = 0;
@@ -153,7 +180,11 @@ void addReferenceCommand(CLI::App& app) {
         "reference", "Ground-truth outgoing radiance by path tracing (diffuse, environment lighting), per vertex or "
                      "as an image");
     command->add_option("mesh", options->mesh, "Mesh (.glb/.gltf) with vertex normals")->required();
-    command->add_option("--env", options->env, "Environment map: 2:1 equirectangular or 1:6 cube strip")->required();
+    command->add_option("--env", options->env, "Environment map: 2:1 equirectangular or 1:6 cube strip");
+    command->add_option("--lights", options->lights,
+                        "Instead of --env: the decomposed lighting of `prt envlight` (prt-lights JSON), its SH residual "
+                        "plus its cones, rendered into an equirectangular map");
+    command->add_option("--lights-width", options->lightsWidth, "Width of that map (default 2048)");
     command->add_option("-o,--output", options->output,
                         "Radiance per vertex (.npy [V,3] or .csv), in the mesh's vertex order; with --image an .exr")
         ->required();

@@ -4,7 +4,10 @@
 
 #include "compare.h"
 #include "core.h"
+#include "envlight.h"
 #include "runtime.h"
+
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -22,7 +25,84 @@ struct RelightOptions {
     std::string window = "none";
     std::string output;
     bool texels = false;
+    std::string lights;
+    int lightSamples = 64;
+    std::string bounceWindow = "hann";
 };
+
+// The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
+// an engine's shadow maps.
+void runHybridRelight(const RelightOptions& options, double start) {
+    if (options.texels)
+        throw Error("", "--lights", "the texel variant of the hybrid needs per-texel normals and bounce layers, which "
+                                    "bake bundles do not carry yet", kExitUsage);
+    if (!options.shJson.empty()) throw Error("", "--lights", "give --lights or --sh, not both", kExitUsage);
+    if (options.lightSamples < 0 || options.lightSamples > 65536)
+        throw Error("", "--light-samples", "outside 0..65536", kExitUsage);
+    sh::Window window = sh::parseWindow(options.window);
+    Bundle bundle = readBundle(options.bundle);
+    TriMesh mesh = bundle.mesh;
+    HybridModel model = hybridModel(std::move(bundle), options.bundle);
+    HybridLighting lighting = readHybridLightingJson(options.lights);
+    checkHybridOrder(model, lighting, options.lights);
+    if (!options.env.empty()) {
+        // --env names the map the lights were made from: refuse lights made from another.
+        nlohmann::json document = nlohmann::json::parse(readFileBytes(options.lights));
+        std::string recorded = document.contains("input") ? document["input"].value("hash", "") : "";
+        std::string actual = hashFile(options.env);
+        if (recorded != actual)
+            throw Error(options.lights, "input.hash", "the lights were made from " + recorded + ", not from " +
+                                                          options.env + " (" + actual + ")");
+    }
+    if (options.rotateYDegrees != 0.0) {
+        double R[9];
+        sh::rotationY(options.rotateYDegrees, R);
+        lighting = rotateHybridLighting(lighting, R);
+    }
+    sh::applyWindow(window, lighting.order, lighting.residual.data(), 3);
+    lighting.bounceWindow = sh::parseWindow(options.bounceWindow);
+
+    double visibilityStart = nowSeconds();
+    std::vector<envlight::ConeLight> cones;
+    for (const HybridConeLight& light : lighting.lights)
+        cones.push_back({{light.direction[0], light.direction[1], light.direction[2]},
+                         {light.radiance[0], light.radiance[1], light.radiance[2]},
+                         light.angularRadius});
+    uint64_t rays = 0;
+    std::vector<float> visibility =
+        options.lightSamples == 0
+            ? std::vector<float>(size_t(model.total.vertexCount) * cones.size(), 1.0f)
+            : envlight::coneVisibility(mesh, mesh.positions.data(), model.normals.data(), model.total.vertexCount,
+                                       cones, options.lightSamples, &rays);
+    double visibilitySeconds = nowSeconds() - visibilityStart;
+
+    double relightStart = nowSeconds();
+    std::vector<float> radiance(size_t(model.total.vertexCount) * 3);
+    relightHybrid(model, lighting, visibility.data(), 0, model.total.vertexCount, radiance.data());
+    double relightSeconds = nowSeconds() - relightStart;
+    char line[240];
+    std::snprintf(line, sizeof line,
+                  "relight: hybrid, %u vertices, order %d, %zu lights, %s bounce layer: relight %.3f ms, cone "
+                  "visibility %.1f ms (%llu rays)",
+                  model.total.vertexCount, model.total.order, cones.size(), model.bounce.empty() ? "no" : "with",
+                  relightSeconds * 1e3, visibilitySeconds * 1e3, (unsigned long long)rays);
+    logInfo(line);
+    if (model.bounce.empty() && !cones.empty())
+        logWarn("relight: the bundle has no \"transfer_bounce\" layer, so the lights light only directly (their "
+                "interreflected light is lost); make it with `prt transfer --mode interreflected`");
+    writeVertexRadiance(options.output, radiance);
+    logInfo("relight: wrote " + options.output);
+    nlohmann::json record = {{"relight_seconds", relightSeconds}, {"visibility_seconds", visibilitySeconds},
+                             {"visibility_rays", rays}, {"lights", cones.size()}};
+    logEvent("relight_stats", record.dump());
+
+    StageCost cost;
+    cost.stage = "relight";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = rays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
 
 void runRelight(const RelightOptions& options) {
     double start = nowSeconds();
@@ -34,6 +114,9 @@ void runRelight(const RelightOptions& options) {
                     kExitUsage);
     if (!options.texels && outputExtension != "npy" && outputExtension != "csv")
         throw Error(options.output, "-o", "output must end in .npy or .csv", kExitUsage);
+    if (!options.lights.empty()) return runHybridRelight(options, start);
+    if (options.env.empty() && options.shJson.empty()) throw Error("", "--env", "give --env, --sh or --lights", kExitUsage);
+    if (!options.env.empty() && !options.shJson.empty()) throw Error("", "--env", "give --env or --sh, not both", kExitUsage);
 
     TexelRelightModel texelModel;
     if (options.texels) texelModel = loadTexelRelightModel(options.bundle);
@@ -99,13 +182,20 @@ void addRelightCommand(CLI::App& app) {
     lighting->add_option("--env", options->env, "Environment map: 2:1 equirect or 1:6 cube strip");
     lighting->add_option("--sh", options->shJson, "SH lighting as `prt envsh` writes it (prt-sh JSON), any order: the bands it shares with the "
                          "transfer are used");
-    lighting->require_option(1);
+    lighting->add_option("--lights", options->lights,
+                         "Cone lights plus SH residual as `prt envlight` writes them (prt-lights JSON, the bundle's "
+                         "order): the hybrid relight. With --env, the lights must have been made from that map");
+    lighting->require_option(1, 2);
     command->add_option("--rotate-y", options->rotateYDegrees,
                         "Turn the lighting by this many degrees about +Y (right-handed)");
     command->add_option("--window", options->window, "Band window against ringing: none, hann or lanczos");
     command->add_flag("--texels", options->texels,
                       "Relight the bundle's per-texel transfer (\"texel_transfer\", from `prt bake`) into an atlas "
                       "image");
+    command->add_option("--light-samples", options->lightSamples,
+                        "Occlusion rays per vertex and light over each cone, for --lights (default 64; 0: unshadowed)");
+    command->add_option("--bounce-window", options->bounceWindow,
+                        "With --lights: window on the lights' SH where they meet the bounce layer: none, hann (default), lanczos");
     command->add_option("-o,--output", options->output,
                         "Per-vertex radiance [V,3]: .npy (float32) or .csv; with --texels an RGB float .exr atlas")
         ->required();

@@ -82,6 +82,8 @@ void runTransfer(const TransferArgs& args) {
             (options.bounces > 0 ? ", " + std::to_string(options.bounces) + " bounces" : "") +
             (shardCount > 1 ? ", shard " + args.shard : ""));
 
+    // The bounce part travels as its own layer, so a hybrid relight can send cone lights through it.
+    options.keepDirect = options.mode == TransferMode::Interreflected && options.bounces > 0;
     Transfer transfer;
     try {
         transfer = computeTransfer(mesh, options);
@@ -126,9 +128,22 @@ void runTransfer(const TransferArgs& args) {
         layer.domain = "vertex";
     }
 
+    Layer bounceLayer;
+    if (!transfer.direct.empty()) {
+        bounceLayer.name = "transfer_bounce";
+        bounceLayer.domain = "vertex";
+        bounceLayer.semantic = "sh_transfer_bounce_rgb";
+        bounceLayer.shape = layer.shape;
+        bounceLayer.data.resize(layer.data.size());
+        for (size_t i = 0; i < layer.data.size(); ++i) bounceLayer.data[i] = layer.data[i] - transfer.direct[i];
+        bounceLayer.params = layer.params;
+        bounceLayer.params["part"] = "bounces 1..B: transfer minus its direct (shadowed) pass";
+    }
+
     Bundle output;
     output.mesh = std::move(mesh);
     output.layers.push_back(std::move(layer));
+    if (!bounceLayer.name.empty()) output.layers.push_back(std::move(bounceLayer));
     output.producer = {{"tool", "prt"}, {"version", PRT_VERSION}, {"stage", "transfer"}};
     output.inputs = {{"mesh", hashFile(args.input)}};
     output.convention = conventionRecord();

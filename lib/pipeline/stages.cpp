@@ -57,7 +57,7 @@ std::vector<StageSpec> makeCatalogue() {
     envsh.params = {{"order", ParamType::Integer, 1.0, kMaxOrder}, kRotateY, kWindow};
     stages.push_back(envsh);
 
-    StageSpec transfer{"transfer", 1, "per-vertex SH transfer by ray casting"};
+    StageSpec transfer{"transfer", 2, "per-vertex SH transfer by ray casting"}; // 2: transfer_bounce layer
     transfer.inputs = {{"mesh", FileKind::Mesh, "", ""}};
     transfer.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
     transfer.params = {{"mode", ParamType::String, 0.0, 0.0, {"unshadowed", "shadowed", "interreflected"}},
@@ -100,24 +100,49 @@ std::vector<StageSpec> makeCatalogue() {
     bake.mergeFlag = "--merge";
     stages.push_back(bake);
 
+    // Cone lights plus SH residual (prt-lights JSON). Lights files travel as FileKind::Sh: SH lighting in JSON,
+    // read only by the ports named "lights".
+    StageSpec envlight{"envlight", 1, "split an environment map into cone lights plus an SH residual"};
+    envlight.inputs = {{"env", FileKind::Env, "", ""}};
+    envlight.outputs = {{"lights", FileKind::Sh, "-o", "json"}};
+    envlight.params = {{"order", ParamType::Integer, 1.0, kMaxOrder},
+                       {"max-lights", ParamType::Integer, 0.0, 64.0},
+                       {"min-lights", ParamType::Integer, 0.0, 64.0},
+                       kRotateY,
+                       {"elbow", ParamType::Number, 0.0, 0.999},
+                       {"min-contrast", ParamType::Number, 0.0, 1e30},
+                       {"icosphere-level", ParamType::Integer, 3.0, 8.0},
+                       {"smoothing", ParamType::Number, 1e-3, 20.0},
+                       {"min-radius", ParamType::Number, 1e-3, 89.0},
+                       {"max-radius", ParamType::Number, 1e-3, 89.0},
+                       {"detection-window", ParamType::String, 0.0, 0.0, {"none", "hann", "lanczos"}},
+                       {"thesis-lights", ParamType::Boolean},
+                       {"fixed-radius", ParamType::Number, 1e-3, 89.0}};
+    stages.push_back(envlight);
+
     StageSpec reference{"reference", 1, "ground-truth radiance by path tracing"};
-    reference.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"env", FileKind::Env, "--env", ""}};
+    reference.inputs = {{"mesh", FileKind::Mesh, "", ""},
+                        {"env", FileKind::Env, "--env", "", true},
+                        {"lights", FileKind::Sh, "--lights", "", true}};
+    reference.exactlyOneInput = {"env", "lights"};
     reference.outputs = {{"radiance", FileKind::Radiance, "-o", "npy"},
                          {"standard-error", FileKind::Radiance, "--stderr-out", "npy"}};
     reference.params = {{"bounces", ParamType::Integer, 0.0, 64.0},
                         {"samples", ParamType::Integer, 2.0, 16777216.0},
                         kAlbedo,
-                        kSeed};
+                        kSeed,
+                        {"lights-width", ParamType::Integer, 4.0, 16384.0}};
     reference.takesThreads = true;
     stages.push_back(reference);
 
     StageSpec relight{"relight", 1, "per-vertex radiance of a bundle under new lighting"};
     relight.inputs = {{"bundle", FileKind::Bundle, "", ""},
                       {"env", FileKind::Env, "--env", "", true},
-                      {"sh", FileKind::Sh, "--sh", "", true}};
-    relight.exactlyOneInput = {"env", "sh"};
+                      {"sh", FileKind::Sh, "--sh", "", true},
+                      {"lights", FileKind::Sh, "--lights", "", true}};
+    relight.exactlyOneInput = {"env", "sh", "lights"};
     relight.outputs = {{"radiance", FileKind::Radiance, "-o", "npy"}};
-    relight.params = {kRotateY, kWindow};
+    relight.params = {kRotateY, kWindow, {"light-samples", ParamType::Integer, 0.0, 65536.0}};
     stages.push_back(relight);
 
     StageSpec compare{"compare", 1, "error metrics of a result against a reference"};

@@ -39,6 +39,13 @@ SphereQuadrature sphereQuadrature(int degree);
 // Irradiance coefficient E_lm = A_l * L_lm.
 double clampedCosine(int l);
 
+// ---- spherical caps (lib/sh/cap.cpp) ---------------------------------------------------------------------------
+// SH coefficients of the indicator of the spherical cap {w : w . d >= cosRadius} about the unit direction d:
+// out_lm = 2 pi I_l Y_lm(d), with I_l = integral of the Legendre polynomial P_l over [cosRadius, 1] (exact, by
+// the recurrence; out_00 = solid angle * Y_00). Needs 1 <= order <= kMaxOrder, cosRadius in [-1, 1], d unit and
+// out sized order*order. A cone light of uniform radiance L projects to L * out.
+void capProjection(int order, const double d[3], double cosRadius, double* out);
+
 // ---- rotation ----------------------------------------------------------------------------------------------
 // A rotation of SH coefficient vectors: block diagonal, one (2l+1)^2 block per band, stored band after band.
 struct Rotation {

@@ -386,6 +386,7 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
         stats.backFaceHits = counts.backFaceHits;
         stats.hitRecordBytes = hitRecordBytes(hitBlocks);
         if (options.bounces == 0) return;
+        if (options.keepDirect) result.direct = total;
 
         // Jacobi iteration: bounce b gathers bounce b-1 everywhere before anything overwrites it.
         if (channels == 3) previous = total;

@@ -61,6 +61,7 @@ struct TransferOptions {
     size_t vertexBegin = 0;            // the vertex range [begin, end) to compute, clipped to the mesh
     size_t vertexEnd = SIZE_MAX;
     bool progress = true;
+    bool keepDirect = false; // interreflected with bounces: also return the direct pass's rows (Transfer::direct)
 };
 
 struct TransferStats {
@@ -81,6 +82,9 @@ struct Transfer {
     int order = 0;
     size_t vertexBegin = 0, vertexEnd = 0;
     std::vector<float> coefficients; // [vertexEnd - vertexBegin][order^2][3]
+    // With options.keepDirect, interreflected and bounces > 0: the direct (shadowed) part alone, same layout, so
+    // coefficients - direct is what the bounces add (what a hybrid relight sends the cone lights through).
+    std::vector<float> direct;
     TransferStats stats;
 };
 

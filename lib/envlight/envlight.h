@@ -1,0 +1,199 @@
+// Environment lighting as a few cone lights plus a low-order SH residual (thesis chapter 4, with its errata fixed;
+// docs/envlight.md records every choice and measurement).
+//
+// The chain, one source file per step:
+//   texels.cpp     the map as (direction, solid angle, RGB radiance) samples, optionally rotated
+//   icosphere.cpp  a subdivided icosahedron (the thesis's spherical quadtree) with vertex neighbours
+//   smoothing.cpp  spherical-Gaussian pre-smoothing of the luminance, sampled at the icosphere vertices
+//   maxima.cpp     hill-climbing local maxima and their quadric (tangent-plane) refinement
+//   elbow.cpp      the Weber-law elbow threshold on the sorted candidates
+//   fit.cpp        bounded Ceres refinement of each light's direction, radiance and angular radius
+//   decompose.cpp  the whole chain, and the residual SH: the projection of what the lights do not explain
+//   document.cpp   the prt-lights JSON document
+//   render.cpp     the decomposed lighting back as an equirectangular map (for `prt reference --lights`)
+//   visibility.cpp each light's soft (cone-sampled) visibility at surface points, by Embree rays (lib/raycast):
+//                  what `prt relight --lights` uses in place of an engine's shadow maps
+//
+// Conventions (docs/conventions.md): world right-handed Y-up; a light's direction points from the scene TOWARDS
+// the light; radiance is RGB W/(sr m^2) (the map's units), uniform inside the cone of half-angle angularRadius
+// (radians) about the direction, so its solid angle is 2 pi (1 - cos r) and its power per unit area at normal
+// incidence is radiance * solid angle. Luminance is Rec.709 (0.2126, 0.7152, 0.0722).
+#pragma once
+
+#include "bundle.h"
+#include "image.h"
+#include "sh.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt::envlight {
+
+inline constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722};
+
+struct ConeLight {
+    std::array<double, 3> direction{0, 1, 0}; // unit, towards the light
+    std::array<double, 3> radiance{0, 0, 0};  // RGB, >= 0
+    double angularRadius = 0.0;              // radians, > 0
+};
+double coneSolidAngle(double angularRadius);
+
+// ---- texels ---------------------------------------------------------------------------------------------------
+// The environment as samples: texel i has the unit direction directions[3i..], exact solid angle solidAngles[i]
+// and radiance rgb[3i..], in the map's row-major order. With `rotation` (row-major 3x3, d' = R d, as
+// sh::rotation takes it) every direction is turned, which turns the environment exactly (no resampling).
+struct Texels {
+    std::vector<double> directions;
+    std::vector<double> solidAngles;
+    std::vector<float> rgb;
+    size_t count() const { return solidAngles.size(); }
+};
+Texels environmentTexels(const EnvironmentMap& env, const double* rotation = nullptr);
+// SH projection of the texels onto `order` bands, [order^2][3], accumulated in double in texel order.
+std::vector<double> projectTexels(const Texels& texels, int order);
+
+// ---- icosphere ------------------------------------------------------------------------------------------------
+// Level k: 10 * 4^k + 2 unit vertices, 20 * 4^k triangles; the 12 original vertices have 5 neighbours, all others
+// 6. neighbours of vertex v are neighbours[neighbourOffsets[v] .. neighbourOffsets[v + 1]).
+struct Icosphere {
+    std::vector<double> vertices; // [V][3]
+    std::vector<uint32_t> triangles;
+    std::vector<uint32_t> neighbourOffsets, neighbours;
+    size_t vertexCount() const { return vertices.size() / 3; }
+};
+// Needs 0 <= level <= 8.
+Icosphere icosphere(int level);
+
+// ---- smoothing ------------------------------------------------------------------------------------------------
+// Luminance of the texels convolved with the normalised spherical Gaussian exp(kappa (w . x - 1)) whose full width
+// at half maximum is `fwhm` radians, truncated where the kernel falls below 1e-3 of its peak, at each of `count`
+// unit directions. A constant map stays that constant. Needs fwhm in (0, 0.5].
+std::vector<double> smoothLuminance(const Texels& texels, const double* directions, size_t count, double fwhm);
+// The same kernel's Funk-Hecke factors g_0 .. g_{order-1} (g_0 = 1): smoothing multiplies band l by g_l.
+std::vector<double> gaussianBandFactors(double fwhm, int order);
+
+// ---- maxima ---------------------------------------------------------------------------------------------------
+// Hill climbing: from every vertex, step to the largest larger neighbour until none is larger (ties broken by the
+// lower index). Returns the local maxima reached, ascending; basin[v] (when not null, sized V) is the maximum
+// vertex v climbs to, so every vertex belongs to exactly one basin.
+std::vector<uint32_t> localMaxima(const Icosphere& sphere, const std::vector<double>& values,
+                                  std::vector<uint32_t>* basin = nullptr);
+// Sub-vertex position of the maximum at `vertex`: a least-squares quadric a u^2 + b uv + c v^2 + d u + e v + f
+// over the vertex and its two-ring in the tangent plane, and the quadric's stationary point. Keeps the vertex when
+// the quadric is not concave or the point leaves the one-ring. Returns a unit direction.
+std::array<double, 3> refineMaximum(const Icosphere& sphere, const std::vector<double>& values, uint32_t vertex);
+
+// ---- elbow ----------------------------------------------------------------------------------------------------
+// The thesis's FIND-ELBOW-POINT, fixed: `values` sorted non-increasing and >= 0; keeps candidate k while its share
+// of the running total values[0] + ... + values[k] exceeds `threshold`. Returns how many lead candidates to keep:
+// 0 for an empty list, 1 for one candidate, never more than `count`, never reads past the end.
+size_t elbowCount(const double* values, size_t count, double threshold);
+
+// ---- the fit --------------------------------------------------------------------------------------------------
+// What one light is fitted against: the texels near it, with the radiance that everything else (the residual SH
+// and the other lights) puts there.
+struct FitTexels {
+    std::vector<double> directions;  // [n][3] unit
+    std::vector<double> solidAngles; // [n]
+    std::vector<double> target;      // [n][3]: E minus the background, per channel
+};
+struct LightFit {
+    ConeLight light;
+    double initialCost = 0.0, finalCost = 0.0;
+    int iterations = 0;
+    std::string termination;
+};
+// Bounded Ceres (Levenberg-Marquardt, one thread): minimises sum_i solidAngle_i |target_i - radiance cover_i|^2
+// over the direction (on the sphere), radiance (>= 0 per channel) and angular radius (in [minRadius, maxRadius]),
+// where cover_i = erfc((chord_i - 2 sin(r / 2)) / (sqrt 2 edge)) / 2 is the cone's soft-edged coverage of texel i
+// (chord_i = |direction - w_i|, edge ~ a third of a texel). The returned radiance is rescaled so that radiance *
+// coneSolidAngle(r) equals the fitted soft cone's energy sum_i radiance cover_i solidAngle_i: the light keeps the
+// energy the fit gave it. Needs `initial` inside the bounds, edge > 0.
+LightFit fitLight(const FitTexels& texels, const ConeLight& initial, double minRadius, double maxRadius, double edge);
+
+// ---- the decomposition ----------------------------------------------------------------------------------------
+struct Options {
+    int order = 5;                      // residual SH bands
+    int maxLights = 4;                  // K, >= 0
+    int minLights = 0;                  // fail unless at least this many lights are found
+    int icosphereLevel = 6;             // 40962 vertices, ~1.0 degree apart
+    double smoothingFwhm = 0.0349;      // 2 degrees, for detection only; the fit uses the raw texels
+    sh::Window detectionWindow = sh::Window::Hann; // window of the detection SH P in the ranking E - P
+    double elbowThreshold = 0.05;       // Weber fraction
+    double minContrast = 1.0;           // a candidate's smoothed residual E - P must reach this times mean luminance
+    double minRadius = 0.00175;         // 0.1 degree
+    double maxRadius = 0.349;           // 20 degrees
+    int outerIterations = 3;            // alternations of the light fit and the residual projection
+    bool refine = true;                 // false: the thesis's lights (fixed radius, peak residual), no Ceres
+    double fixedRadius = 0.0524;        // 3 degrees, the thesis's common radius when refine is false
+    const double* rotation = nullptr;   // turn the environment first (d' = R d, row-major 3x3)
+};
+
+// A detected peak, before the fit.
+struct Candidate {
+    std::array<double, 3> direction{};  // refined by the quadric
+    double smoothedResidual = 0.0;      // luminance of (smoothed E) - P at the direction
+    double power = 0.0;                 // estimated luminance power (residual radiance * solid angle), for ranking
+    double initialRadius = 0.0;
+    std::array<double, 3> initialRadiance{};
+};
+
+struct FitReport {
+    int ceresIterations = 0;
+    double initialCost = 0.0, finalCost = 0.0; // summed over lights and outer iterations' last pass
+    std::string termination;                  // Ceres's, of the last solve
+    int droppedLights = 0;                    // lights the fit drove to zero power
+};
+
+struct Decomposition {
+    int order = 0;
+    std::vector<ConeLight> lights;       // sorted by non-increasing luminance power
+    std::vector<double> residual;        // [order^2][3]: projection of E minus the lights' exact projections
+    std::vector<Candidate> candidates;   // every significant candidate, ranked
+    size_t elbow = 0;                    // candidates the elbow kept (before maxLights)
+    double meanLuminance = 0.0;          // of the map
+    double environmentPower = 0.0;       // luminance integral of E over the sphere
+    FitReport fit;
+};
+
+// Splits the environment into cone lights and an SH residual.
+// Needs a map whose size matches its layout with finite radiance >= 0 (readEnvironmentMap guarantees it) and
+// options in range. Throws prt::Error: kExitInput (file "", place "radiance") when the map is zero everywhere,
+// kExitUsage for bad options (maxLights 0 with minLights > 0 among them), kExitInput when fewer than minLights
+// lights are found. Guarantees: every light finite, radiance >= 0, radius within [minRadius, maxRadius];
+// residual energy plus lights' energy equals the map's (sqrt(4 pi) residual_00 + sum radiance * solid angle =
+// integral of E, per channel, to rounding); deterministic (same input, same bits; single-threaded Ceres).
+Decomposition decompose(const EnvironmentMap& env, const Options& options);
+
+// The exact SH projection of uniform cone lights onto `order` bands (sh::capProjection), [order^2][3].
+std::vector<double> lightsProjection(const std::vector<ConeLight>& lights, int order);
+
+// The prt-lights JSON document (docs/envlight.md): lights, residual SH, conventions, options and the input's
+// path and hash.
+nlohmann::ordered_json lightsDocument(const Decomposition& decomposition, const Options& options,
+                                      const std::string& inputPath, const std::string& inputHash);
+
+// ---- rendering the decomposition ------------------------------------------------------------------------------
+// The lighting residual SH + cones as a width x width/2 equirectangular map: each texel the residual at its centre
+// plus each cone's exact coverage of the texel, estimated with `supersample`^2 stratified points. The SH residual
+// can dip below zero where the map had less light than the lights' cones; a path tracer needs radiance >= 0, so
+// negative texels become 0 and *clampedEnergy (when not null) receives the clamped luminance energy over the
+// rendered map's total. Needs width even and >= 4, residual sized order^2 * 3.
+EnvironmentMap renderLighting(const std::vector<ConeLight>& lights, const std::vector<double>& residual, int order,
+                              int width, int supersample, double* clampedEnergy = nullptr);
+
+// ---- visibility -----------------------------------------------------------------------------------------------
+// For each point p_i with unit normal n_i and each light k: the cosine-weighted visible fraction of cone k,
+//   sum_s V(p_i, w_s) max(0, n_i . w_s) / sum_s max(0, n_i . w_s)
+// over `samples` directions w_s spread over the cone (a Hammersley set on the cap, uniform in solid angle, the same
+// for every point), each an occlusion ray against `mesh` from p + offset n with tnear offset (lib/raycast's
+// offset). 0 where the whole cone is below the horizon. Returns [points][lights]. Deterministic for any thread
+// count. Needs finite points and unit normals, samples >= 1, a mesh Embree accepts. *rays counts the rays cast.
+std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals, size_t count,
+                                  const std::vector<ConeLight>& lights, int samples, uint64_t* rays = nullptr);
+
+} // namespace prt::envlight

@@ -1,0 +1,96 @@
+// Soft visibility of cone lights at surface points, standing in for an engine's filtered shadow maps: occlusion
+// rays over a fixed sample set on each cone, weighted by the receiver's cosine.
+#include "envlight.h"
+
+#include "raycast.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace prt::envlight {
+
+namespace {
+
+double radicalInverse2(uint32_t k) {
+    k = (k << 16) | (k >> 16);
+    k = ((k & 0x00ff00ffu) << 8) | ((k & 0xff00ff00u) >> 8);
+    k = ((k & 0x0f0f0f0fu) << 4) | ((k & 0xf0f0f0f0u) >> 4);
+    k = ((k & 0x33333333u) << 2) | ((k & 0xccccccccu) >> 2);
+    k = ((k & 0x55555555u) << 1) | ((k & 0xaaaaaaaau) >> 1);
+    return double(k) * (1.0 / 4294967296.0);
+}
+
+// Directions uniform in solid angle over the cone about `light`'s direction: [samples][3].
+std::vector<float> coneSamples(const ConeLight& light, int samples) {
+    const double* d = light.direction.data();
+    double helper[3] = {std::abs(d[0]) < 0.9 ? 1.0 : 0.0, std::abs(d[0]) < 0.9 ? 0.0 : 1.0, 0.0};
+    double t1[3] = {d[1] * helper[2] - d[2] * helper[1], d[2] * helper[0] - d[0] * helper[2],
+                    d[0] * helper[1] - d[1] * helper[0]};
+    double length = std::sqrt(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]);
+    for (double& x : t1) x /= length;
+    double t2[3] = {d[1] * t1[2] - d[2] * t1[1], d[2] * t1[0] - d[0] * t1[2], d[0] * t1[1] - d[1] * t1[0]};
+    const double cosRadius = std::cos(light.angularRadius);
+    std::vector<float> out(size_t(samples) * 3);
+    for (int s = 0; s < samples; ++s) {
+        double cosTheta = 1.0 - (s + 0.5) / samples * (1.0 - cosRadius);
+        double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
+        double phi = 2.0 * M_PI * radicalInverse2(uint32_t(s));
+        for (int c = 0; c < 3; ++c)
+            out[s * 3 + c] = float(cosTheta * d[c] + sinTheta * (std::cos(phi) * t1[c] + std::sin(phi) * t2[c]));
+    }
+    return out;
+}
+
+} // namespace
+
+std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals, size_t count,
+                                  const std::vector<ConeLight>& lights, int samples, uint64_t* rays) {
+    std::vector<float> visibility(count * lights.size(), 0.0f);
+    if (lights.empty() || count == 0) return visibility;
+    std::vector<std::vector<float>> directions;
+    for (const ConeLight& light : lights) directions.push_back(coneSamples(light, samples));
+    EmbreeScene scene(mesh);
+    const float offset = rayOffset(mesh);
+    std::atomic<uint64_t> cast{0};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 256), [&](const tbb::blocked_range<size_t>& range) {
+        uint64_t local = 0;
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            const float* p = points + i * 3;
+            const float* n = normals + i * 3;
+            for (size_t k = 0; k < lights.size(); ++k) {
+                double visible = 0.0, total = 0.0;
+                for (int s = 0; s < samples; ++s) {
+                    const float* w = &directions[k][s * 3];
+                    float cosine = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
+                    if (cosine <= 0.0f) continue;
+                    total += cosine;
+                    RTCRay ray{};
+                    ray.org_x = p[0] + offset * n[0];
+                    ray.org_y = p[1] + offset * n[1];
+                    ray.org_z = p[2] + offset * n[2];
+                    ray.dir_x = w[0];
+                    ray.dir_y = w[1];
+                    ray.dir_z = w[2];
+                    ray.tnear = offset;
+                    ray.tfar = std::numeric_limits<float>::infinity();
+                    ray.mask = 0xFFFFFFFFu;
+                    rtcOccluded1(scene.scene, &context, &ray);
+                    ++local;
+                    if (ray.tfar >= 0.0f) visible += cosine; // occluded rays come back with tfar = -inf
+                }
+                visibility[i * lights.size() + k] = total > 0.0 ? float(visible / total) : 0.0f;
+            }
+        }
+        cast += local;
+    });
+    if (rays) *rays = cast.load();
+    return visibility;
+}
+
+} // namespace prt::envlight
