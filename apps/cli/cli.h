@@ -22,6 +22,7 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
+void addGlossyCommand(CLI::App& app);
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
@@ -33,6 +34,13 @@ std::array<double, 3> parseAlbedo(const std::string& text);
 // Parses --shard "I/N" with 0 <= I < N into index I and count N. Throws prt::Error(kExitUsage) naming --shard
 // otherwise.
 void parseShard(const std::string& text, int& index, int& count);
+
+// Parses --brdf "phong:EXPONENT,KS" (EXPONENT > 0, KS in [0, 1]) into exponent and ks. Throws
+// prt::Error(kExitUsage) naming --brdf otherwise.
+void parsePhongBrdf(const std::string& text, double& exponent, double& ks);
+
+// Parses a point "X,Y,Z" of finite numbers for `flag` (e.g. --eye). Throws prt::Error(kExitUsage) otherwise.
+std::array<float, 3> parsePoint(const std::string& text, const char* flag);
 
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);

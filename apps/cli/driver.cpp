@@ -32,6 +32,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addEnvshCommand(app);
     addTransferCommand(app);
     addBakeCommand(app);
+    addGlossyCommand(app);
     addReferenceCommand(app);
     addRelightCommand(app);
     addCompareCommand(app);

@@ -29,6 +29,8 @@ struct ReferenceCommandOptions {
     std::string albedo; // "R,G,B"
     std::string imageSize; // "W,H"
     std::string camera;    // "EYE,TARGET,UP,FOVY"
+    std::string brdf;      // "phong:N,KS"
+    std::string eye;       // "X,Y,Z"
 };
 
 // Parses exactly `count` comma-separated finite numbers.
@@ -96,6 +98,15 @@ void runReference(const ReferenceCommandOptions& options) {
         std::array<double, 3> albedo = parseAlbedo(options.albedo);
         reference.albedo = std::array<float, 3>{float(albedo[0]), float(albedo[1]), float(albedo[2])};
     }
+    if (!options.brdf.empty()) {
+        PhongBrdf phong;
+        parsePhongBrdf(options.brdf, phong.exponent, phong.ks);
+        reference.phong = phong;
+        if (!imageMode && options.eye.empty())
+            throw Error("", "--eye", "--brdf in vertex mode needs --eye X,Y,Z (radiance toward that point)",
+                        kExitUsage);
+    }
+    if (!options.eye.empty()) reference.eye = parsePoint(options.eye, "--eye");
     PinholeCamera camera;
     if (imageMode) {
         std::vector<float> size = parseNumbers(options.imageSize, 2, "--image");
@@ -175,6 +186,11 @@ void addReferenceCommand(CLI::App& app) {
     command->add_option("--camera", options->camera,
                         "With --image: EYE,TARGET,UP,FOVY as 10 comma-separated numbers (three x,y,z triples, then "
                         "the vertical field of view in degrees), e.g. 0,1,3,0,0.5,0,0,1,0,40");
+    command->add_option("--brdf", options->brdf,
+                        "Glossy surfaces: phong:EXPONENT,KS, normalised Phong on top of the diffuse albedo "
+                        "(docs/conventions.md); vertex mode then needs --eye");
+    command->add_option("--eye", options->eye,
+                        "Eye point X,Y,Z: each vertex's radiance toward it (view-dependent with --brdf)");
     command->callback([options] { runReference(*options); });
 }
 
