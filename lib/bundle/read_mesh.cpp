@@ -253,6 +253,18 @@ void visitNode(MeshBuilder& builder, int nodeIndex, const Matrix& parent, std::v
 
 } // namespace
 
+// What every reader does once the primitives are gathered: drop arrays not every primitive had, refuse no triangles.
+static TriMesh finishMesh(MeshBuilder& builder, const std::string& noTriangles) {
+    if (builder.skippedPrimitives > 0)
+        logWarn(builder.file + ": skipped primitives that are not triangle lists: " + std::to_string(builder.skippedPrimitives));
+    TriMesh& mesh = builder.mesh;
+    if (mesh.indices.empty()) throw Error(builder.file, "", noTriangles);
+    if (!builder.allNormals) mesh.normals.clear();
+    if (!builder.allTexcoords) mesh.texcoords.clear();
+    if (!builder.anyAlbedo) mesh.albedo.clear();
+    return std::move(mesh);
+}
+
 TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
     MeshBuilder builder{model, file, TriMesh{}};
     if (model.scenes.empty()) {
@@ -262,14 +274,13 @@ TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
         std::vector<char> onPath(model.nodes.size(), 0);
         for (int root : model.scenes[sceneIndex].nodes) visitNode(builder, root, kIdentity, onPath);
     }
-    if (builder.skippedPrimitives > 0)
-        logWarn(file + ": skipped primitives that are not triangle lists: " + std::to_string(builder.skippedPrimitives));
-    TriMesh& mesh = builder.mesh;
-    if (mesh.indices.empty()) throw Error(file, "", "no triangles: no TRIANGLES primitive is reachable from the scene");
-    if (!builder.allNormals) mesh.normals.clear();
-    if (!builder.allTexcoords) mesh.texcoords.clear();
-    if (!builder.anyAlbedo) mesh.albedo.clear();
-    return std::move(mesh);
+    return finishMesh(builder, "no triangles: no TRIANGLES primitive is reachable from the scene");
+}
+
+TriMesh readGltfMeshAt(const tinygltf::Model& model, int meshIndex, const std::string& file) {
+    MeshBuilder builder{model, file, TriMesh{}};
+    addMesh(builder, meshIndex, kIdentity, "meshes");
+    return finishMesh(builder, "no triangles in meshes[" + std::to_string(meshIndex) + "]");
 }
 
 } // namespace prt::detail
