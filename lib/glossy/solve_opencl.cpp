@@ -9,7 +9,6 @@
 #include <CL/cl.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -115,8 +114,7 @@ void solveOpenCl(const DirectionGrid& grid, FitBatch& batch, const FitWeights& w
                  const SolverOptions& options) {
     std::lock_guard lock(deviceMutex);
     Device& dev = device();
-    std::string buildOptions = "-D NL=" + std::to_string(batch.lobes) + " -D real=float";
-    if (const char* extra = std::getenv("PRT_GLOSSY_CL")) buildOptions = "-D NL=" + std::to_string(batch.lobes) + " " + extra;
+    const std::string buildOptions = "-D NL=" + std::to_string(batch.lobes) + " -D real=float";
     cl_program& program = dev.programs[buildOptions];
     if (!program) program = build(dev, kLmKernelSource, buildOptions);
     cl_int status;
