@@ -22,6 +22,9 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
+void addFivCommand(CLI::App& app);
+void addFivVisibilityCommand(CLI::App& app);
+void addFivshadeCommand(CLI::App& app);
 void addGlossyCommand(CLI::App& app);
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
@@ -39,8 +42,8 @@ void parseShard(const std::string& text, int& index, int& count);
 // prt::Error(kExitUsage) naming --brdf otherwise.
 void parsePhongBrdf(const std::string& text, double& exponent, double& ks);
 
-// Parses a point "X,Y,Z" of finite numbers for `flag` (e.g. --eye). Throws prt::Error(kExitUsage) otherwise.
-std::array<float, 3> parsePoint(const std::string& text, const char* flag);
+// Parses "X,Y,Z": exactly three finite numbers. Throws prt::Error(kExitUsage) naming `option` otherwise.
+std::array<float, 3> parsePoint(const std::string& text, const char* option);
 
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);

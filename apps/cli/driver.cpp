@@ -32,6 +32,9 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addEnvshCommand(app);
     addTransferCommand(app);
     addBakeCommand(app);
+    addFivCommand(app);
+    addFivVisibilityCommand(app);
+    addFivshadeCommand(app);
     addGlossyCommand(app);
     addReferenceCommand(app);
     addRelightCommand(app);

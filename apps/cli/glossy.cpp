@@ -38,6 +38,8 @@ struct GlossyArgs {
     int iterations = 100;
     std::string stats;
     size_t compareSolvers = 0;
+    std::string vertexStats;
+    std::string lobeType = "float16";
 };
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
@@ -98,6 +100,9 @@ void runGlossy(const GlossyArgs& args) {
     options.solverOptions.threads = resolveThreads(args.threads);
     options.solverOptions.maxIterations = args.iterations;
     options.progress = !logOptions().quiet;
+    if (args.lobeType != "float16" && args.lobeType != "float32")
+        throw usage("--lobe-type", "must be float16 or float32");
+    options.lobeType = args.lobeType;
     std::array<double, 3> albedo = parseAlbedo(args.albedo);
     if (options.solver == glossy::Solver::OpenCl) logInfo("glossy: OpenCL device " + glossy::openClDeviceName());
 
@@ -144,7 +149,22 @@ void runGlossy(const GlossyArgs& args) {
                              {"mean_cost", stats.meanCost},
                              {"mean_relative_error", stats.meanRelativeError},
                              {"solver", args.solver},
-                             {"lobes", args.lobes}};
+                             {"lobes", args.lobes},
+                             {"grid", args.grid},
+                             {"brdf", args.brdf},
+                             {"coherence", !args.noCoherence},
+                             {"view_pairs", stats.viewPairs},
+                             {"view_flips", stats.viewFlips},
+                             {"vertex_pairs", stats.vertexPairs},
+                             {"vertex_flips", stats.vertexFlips},
+                             {"seconds", nowSeconds() - start},
+                             {"peak_memory_bytes", peakMemoryBytes()},
+                             {"vertices", output.mesh.vertexCount()},
+                             {"lobe_layer_bytes_per_vertex",
+                              double(output.layers[0].shape[1] * output.layers[0].shape[2] * output.layers[0].shape[3]) *
+                                  (args.lobeType == "float16" ? 2.0 : 4.0)}};
+    if (!args.vertexStats.empty())
+        writeNpy(args.vertexStats, lobes.vertexStats, {lobes.vertexEnd - lobes.vertexBegin, size_t(glossy::kVertexStatColumns)});
     logEvent("glossy_stats", record.dump());
     if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
 
@@ -184,6 +204,10 @@ void addGlossyCommand(CLI::App& app) {
     command->add_option("--compare-solvers", args->compareSolvers,
                         "Instead of a bundle: solve the first N fit problems with both solvers and report time, "
                         "cost and agreement (JSON on stderr and in --stats)");
+    command->add_option("--vertex-stats", args->vertexStats,
+                        "Also write per-vertex diagnostics [V,6] (.npy): normal, visible share, mean and worst "
+                        "relative fit error");
+    command->add_option("--lobe-type", args->lobeType, "Lobe layer storage: float16 (default) or float32");
     command->callback([args] { runGlossy(*args); });
 }
 

@@ -79,10 +79,25 @@ void parsePhongBrdf(const std::string& text, double& exponent, double& ks) {
     ks = values[1];
 }
 
-std::array<float, 3> parsePoint(const std::string& text, const char* flag) {
-    std::vector<double> values = parseNumberList(text, flag, "X,Y,Z");
-    if (values.size() != 3) throw usage(flag, "'" + text + "' is not X,Y,Z");
-    return {float(values[0]), float(values[1]), float(values[2])};
+std::array<float, 3> parsePoint(const std::string& text, const char* option) {
+    std::vector<float> values;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        size_t used = 0;
+        double value = 0.0;
+        try {
+            value = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size() || !std::isfinite(value) || std::abs(value) > 3e38)
+            throw usage(option, "'" + text + "' is not three finite numbers X,Y,Z");
+        values.push_back(float(value));
+    }
+    if (values.size() != 3 || (!text.empty() && text.back() == ','))
+        throw usage(option, "'" + text + "' is not three finite numbers X,Y,Z");
+    return {values[0], values[1], values[2]};
 }
 
 int resolveThreads(int requested) {

@@ -104,6 +104,7 @@ struct Chunk {
     std::vector<std::vector<int>> slot;
     std::vector<size_t> first; // [chunk + 1]: vertex i's problems are first[i] .. first[i + 1]
     std::vector<std::array<float, 3>> normals;
+    std::vector<float> visibleShare; // [chunk]: visible solid angle over the upper hemisphere's
 };
 
 Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const GlossyOptions& options,
@@ -120,6 +121,7 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
     auto& batch = result.batch;
     slot.assign(chunk, std::vector<int>(kViewCount, -1));
     normals.resize(chunk);
+    result.visibleShare.assign(chunk, 0.0f);
     for (size_t i = 0; i < chunk; ++i) {
         const float* n = &mesh.normals[(chunkBegin + i) * 3];
         double length = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
@@ -180,6 +182,41 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
     return result;
 }
 
+bool allLobesLit(const float* lobes, int count) {
+    for (int k = 0; k < count; ++k)
+        if (!(lobes[k * kLobeParams] > 0.0f)) return false;
+    return true;
+}
+
+// Lobe-order flips between neighbouring views of each vertex and between mesh neighbours at each view.
+void countFlips(const TriMesh& mesh, GlossyLobes& result) {
+    if (result.lobes < 2) return;
+    const ViewSet& views = viewSet();
+    const size_t width = size_t(result.lobes) * kLobeParams;
+    auto lobesOf = [&](size_t vertex, int view) {
+        return &result.values[((vertex - result.vertexBegin) * kViewCount + size_t(view)) * width];
+    };
+    for (size_t v = result.vertexBegin; v < result.vertexEnd; ++v)
+        for (int a = 0; a < kViewCount; ++a)
+            for (uint32_t b : views.neighbours[a]) {
+                if (int(b) <= a || !allLobesLit(lobesOf(v, a), result.lobes) || !allLobesLit(lobesOf(v, int(b)), result.lobes))
+                    continue;
+                ++result.stats.viewPairs;
+                result.stats.viewFlips += lobesFlipped(lobesOf(v, a), lobesOf(v, int(b)), result.lobes);
+            }
+    for (size_t t = 0; t < mesh.triangleCount(); ++t)
+        for (int e = 0; e < 3; ++e) {
+            size_t p = mesh.indices[t * 3 + e], q = mesh.indices[t * 3 + (e + 1) % 3];
+            // Each undirected edge once: from its smaller end, in the triangle that lists it ascending.
+            if (p >= q || p < result.vertexBegin || q >= result.vertexEnd) continue;
+            for (int view = 0; view < kViewCount; ++view) {
+                if (!allLobesLit(lobesOf(p, view), result.lobes) || !allLobesLit(lobesOf(q, view), result.lobes)) continue;
+                ++result.stats.vertexPairs;
+                result.stats.vertexFlips += lobesFlipped(lobesOf(p, view), lobesOf(q, view), result.lobes);
+            }
+        }
+}
+
 } // namespace
 
 GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options) {
@@ -194,6 +231,7 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
     result.vertexEnd = std::clamp(options.vertexEnd, result.vertexBegin, mesh.vertexCount());
     const size_t vertices = result.vertexEnd - result.vertexBegin;
     result.values.assign(vertices * kViewCount * width, 0.0f);
+    result.vertexStats.assign(vertices * kVertexStatColumns, 0.0f);
     const bool coherence = options.weights.beta > 0 || options.weights.gamma > 0 || options.weights.delta > 0;
 
     tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
@@ -260,10 +298,21 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
             for (size_t p = 0; p < batch.problems; ++p) toOutput(&batch.params[p * width], &fitted[p * width], lobes);
         }
         result.stats.fitSeconds += nowSeconds() - fitStart;
-        for (size_t p = 0; p < batch.problems; ++p) {
-            double energy = dataEnergy(grid, &batch.kernel[p * count]);
-            costSum += batch.cost[p];
-            errorSum += energy > 0 ? std::sqrt(batch.cost[p] / energy) : 0.0;
+        for (size_t i = 0; i < chunk; ++i) {
+            float* stat = &result.vertexStats[(chunkBegin - result.vertexBegin + i) * kVertexStatColumns];
+            std::copy_n(normals[i].data(), 3, stat);
+            stat[3] = tabulated.visibleShare[i];
+            double mean = 0, worst = 0;
+            for (size_t p = first[i]; p < first[i + 1]; ++p) {
+                double energy = dataEnergy(grid, &batch.kernel[p * count]);
+                double error = energy > 0 ? std::sqrt(batch.cost[p] / energy) : 0.0;
+                costSum += batch.cost[p];
+                errorSum += error;
+                mean += error;
+                worst = std::max(worst, error);
+            }
+            stat[4] = first[i + 1] > first[i] ? float(mean / double(first[i + 1] - first[i])) : 0.0f;
+            stat[5] = float(worst);
         }
         result.stats.problems += batch.problems;
 
@@ -289,6 +338,7 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
         if (progress) progress->add(chunk);
     }
     if (progress) progress->finish();
+    countFlips(mesh, result);
     result.stats.rays = rays;
     result.stats.meanCost = result.stats.problems ? costSum / double(result.stats.problems) : 0.0;
     result.stats.meanRelativeError = result.stats.problems ? errorSum / double(result.stats.problems) : 0.0;
@@ -326,7 +376,9 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
     bool whole = lobes.vertexBegin == 0 && lobes.vertexEnd == vertexCount;
     layer.domain = whole ? "vertex" : "vertex_range";
     layer.semantic = "sg_lobes";
-    layer.componentType = "float16";
+    if (options.lobeType != "float16" && options.lobeType != "float32")
+        throw Error("", "--lobe-type", "must be float16 or float32", kExitUsage);
+    layer.componentType = options.lobeType;
     layer.shape = {uint64_t(lobes.vertexEnd - lobes.vertexBegin), uint64_t(kViewCount), uint64_t(lobes.lobes),
                    uint64_t(kLobeParams)};
     layer.data = lobes.values;

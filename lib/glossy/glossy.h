@@ -148,6 +148,7 @@ struct GlossyOptions {
     size_t chunkVertices = 64;    // vertices tabulated and fitted together; results do not depend on it
     size_t vertexBegin = 0, vertexEnd = SIZE_MAX;
     bool progress = true;
+    std::string lobeType = "float16"; // the bundle layer's componentType: "float16" or "float32"
 };
 
 struct GlossyStats {
@@ -158,7 +159,14 @@ struct GlossyStats {
     double meanCost = 0.0;       // mean final objective over fitted problems
     double meanRelativeError = 0.0; // mean over problems of sqrt(data cost / E)
     uint64_t peakMemoryBytes = 0;
+    // Lobe-order flips (lobesFlipped, lobes >= 2): pairs of fitted neighbouring views of one vertex, and pairs of
+    // mesh-edge neighbours at one view, both fitted with every lobe's amplitude > 0.
+    uint64_t viewPairs = 0, viewFlips = 0, vertexPairs = 0, vertexFlips = 0;
 };
+
+// Per-vertex diagnostics of a fit, [rows][6]: unit normal xyz, the visible share of the upper hemisphere's grid
+// solid angle, and the mean and the largest over fitted views of sqrt(cost / E), the relative fit error.
+inline constexpr int kVertexStatColumns = 6;
 
 // Per-vertex lobes for the vertex range: [vertexEnd - vertexBegin][kViewCount][lobes][kLobeParams] as
 // (a, mu x, mu y, mu z, lambda) with unit mu and a in radiance per steradian of the lighting; views below a
@@ -168,6 +176,7 @@ struct GlossyLobes {
     size_t vertexBegin = 0, vertexEnd = 0;
     std::vector<float> values;
     GlossyStats stats;
+    std::vector<float> vertexStats; // [rows][kVertexStatColumns]
 };
 
 // Needs normals per vertex and options in range (throws prt::Error kExitUsage / kExitInput otherwise).
