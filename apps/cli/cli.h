@@ -22,6 +22,7 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
+void addAdaptCommand(CLI::App& app);
 void addFivCommand(CLI::App& app);
 void addFivVisibilityCommand(CLI::App& app);
 void addFivshadeCommand(CLI::App& app);

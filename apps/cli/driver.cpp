@@ -42,6 +42,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addBenchCommand(app);
     addRunCommand(app);
     addMergeCommand(app);
+    addAdaptCommand(app);
 
     try {
         app.parse(int(args.size()), args.data());

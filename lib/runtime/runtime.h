@@ -23,10 +23,13 @@ struct RelightModel {
     uint32_t vertexCount = 0;
     int order = 0;               // SH bands; order * order coefficients per vertex
     std::vector<float> transfer; // [vertexCount][order * order][3], the mesh's vertex order
+    // Adaptive models (`prt adapt`, below): when not empty, vertex v has its own order n_v <= order and its
+    // n_v^2 coefficients are rows offsets[v] .. offsets[v+1] - 1 of transfer ([offsets[vertexCount]][3]).
+    std::vector<uint32_t> offsets;
 };
 
-// Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying). `source` names the
-// bundle in errors.
+// Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying), or, in a bundle without
+// one, the adaptive layers `prt adapt` writes (adaptiveRelightModel, below). `source` names the bundle in errors.
 // Needs a vertex-domain layer of semantic "sh_transfer_rgb", shape [V, L*L, 3] with L = params.order when that
 // is set, V equal to the mesh's vertex count, finite values. Throws prt::Error naming `source` otherwise.
 RelightModel relightModel(Bundle bundle, const std::string& source);
@@ -164,6 +167,27 @@ double discOverlap(double r1, double r2, double s);
 // Irradiance of a uniform cap of half-angle sigma (sin^2 sigma given) at angle theta (cos given) from the normal,
 // clipped by the tangent plane, per unit radiance: integral over the cap of max(0, N . w) dw.
 double clippedCapIrradiance(double cosTheta, double sinSigmaSquared);
+
+// ---- adaptive transfer (bundles from `prt adapt`; docs/bundle.md "Adaptive transfer", docs/adapt.md) ---------
+// The highest order this runtime evaluates; a bundle asking for more bands is refused with an error saying so.
+inline constexpr int kMaxRuntimeOrder = sh::kMaxOrder;
+
+// The adaptive transfer of a bundle as a RelightModel: the ragged layer "transfer_ragged" (float32, float16, or
+// uint8/uint16 codes with per-band scales, decoded here) with its offsets, or the clustered-PCA layers
+// "transfer_cpca_*" (reconstructed here to full order). Needs the layers and params docs/bundle.md lists, offsets
+// ascending from 0 whose every difference is n^2 with 1 <= n <= params.order <= kMaxRuntimeOrder, codes and
+// cluster indices in range, finite values. Throws prt::Error naming `source`, the layer and the problem
+// otherwise (for a vertex asking for more bands than the runtime has, naming the vertex and both orders).
+RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source);
+
+// True when the bundle holds adaptive transfer layers (and so relightModel reads them).
+bool hasAdaptiveTransfer(const Bundle& bundle);
+
+// Relights vertices [begin, end) of an adaptive model (model.offsets not empty): each vertex with its own bands,
+// the lighting's first n_v^2 coefficients. Runs of equal order go through the same kernel as full-order rows, so
+// a model whose every vertex has the full order relights bit for bit like the full-order model. Single-threaded.
+// relight(model, ...) above calls it for adaptive models.
+void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance);
 
 } // namespace prt
 
