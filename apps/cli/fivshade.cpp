@@ -15,7 +15,7 @@ namespace prt::cli {
 namespace {
 
 struct FivshadeArgs {
-    std::string receiver, env, output, self, albedo, partial = "cap", overlap = "paper";
+    std::string receiver, env, output, self, albedo, partial = "cap", overlap = "cap";
     std::vector<std::string> occluders, at;
 };
 
@@ -30,7 +30,8 @@ FivOverlap parseOverlap(const std::string& text) {
     if (text == "none") return FivOverlap::None;
     if (text == "paper") return FivOverlap::Paper;
     if (text == "shared") return FivOverlap::Shared;
-    throw Error("", "--overlap", "'" + text + "' is not none, paper or shared", kExitUsage);
+    if (text == "cap") return FivOverlap::Cap;
+    throw Error("", "--overlap", "'" + text + "' is not none, paper, shared or cap", kExitUsage);
 }
 
 void runFivshade(const FivshadeArgs& args) {
@@ -129,7 +130,7 @@ void addFivshadeCommand(CLI::App& app) {
     command->add_option("--self", args->self, "FIV bundle of the receiver itself, for self-shadowing");
     command->add_option("--albedo", args->albedo, "Diffuse albedo R,G,B or one grey value (default: COLOR_0, else 1)");
     command->add_option("--partial", args->partial, "Straddling occluders (case B): none, literal or cap")->capture_default_str();
-    command->add_option("--overlap", args->overlap, "Overlapping occluders: none, paper or shared")->capture_default_str();
+    command->add_option("--overlap", args->overlap, "Overlapping occluders: none, paper, shared or cap")->capture_default_str();
     command->add_option("-o,--output", args->output, "Radiance per vertex (.npy [V,3] or .csv)")->required();
     command->callback([args] { runFivshade(*args); });
 }

@@ -12,10 +12,10 @@ namespace {
 using nlohmann::json;
 
 Layer integerLayer(const std::string& name, const std::string& semantic, const char* type,
-                   std::vector<uint32_t> values, json params) {
+                   std::vector<uint32_t> values, json params, const char* domain = "grid") {
     Layer layer;
     layer.name = name;
-    layer.domain = "grid";
+    layer.domain = domain;
     layer.semantic = semantic;
     layer.componentType = type;
     layer.shape = {values.size()};
@@ -62,12 +62,16 @@ Bundle visibilityBundle(const TriMesh& occluder, const Visibility& vis, const js
     bundle.producer = {{"tool", "prt"}, {"stage", "fiv"}};
     bundle.inputs = inputs;
     bundle.convention = conventionRecord();
+    // Rows row_begin .. row_end - 1 of the grid (all of it unless sharded): ragged bytes per row.
     bundle.layers.push_back(integerLayer("fiv_mask_offsets", "fiv_mask_offsets", "uint32",
-                                         std::vector<uint32_t>(vis.offsets.begin(), vis.offsets.end()), params));
+                                         std::vector<uint32_t>(vis.offsets.begin(), vis.offsets.end()), params,
+                                         "grid_offsets"));
     bundle.layers.push_back(integerLayer("fiv_mask_bits", "fiv_mask_bits", "uint8",
-                                         std::vector<uint32_t>(vis.bits.begin(), vis.bits.end()), json::object()));
+                                         std::vector<uint32_t>(vis.bits.begin(), vis.bits.end()),
+                                         {{"offsets", "fiv_mask_offsets"}}, "grid_ragged"));
     bundle.layers.push_back(integerLayer("fiv_mask_valid", "fiv_valid", "uint8",
-                                         std::vector<uint32_t>(vis.valid.begin(), vis.valid.end()), json::object()));
+                                         std::vector<uint32_t>(vis.valid.begin(), vis.valid.end()),
+                                         {{"row_begin", vis.rowBegin}, {"row_end", vis.rowEnd}}));
     return bundle;
 }
 
@@ -159,12 +163,14 @@ Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector
     power.shape = {samples, 3};
     power.componentType = options.half ? "float16" : "float32";
     power.data = grid.power;
-    power.params = {{"grid", "fiv"}, {"layout", "[row][channel]: sum of L dw over the occluded texels"}};
+    power.params = {{"grid", "fiv"}, {"resolution", {grid.grid.shells, grid.grid.polar, grid.grid.azimuth}},
+                    {"layout", "[row][channel]: sum of L dw over the occluded texels"}};
     bundle.layers.push_back(std::move(power));
 
     bundle.layers.push_back(integerLayer("fiv_valid", "fiv_valid", "uint8",
                                          std::vector<uint32_t>(grid.valid.begin(), grid.valid.end()),
-                                         {{"grid", "fiv"}, {"meaning", "1 usable, 0 receiver inside the occluder"}}));
+                                         {{"grid", "fiv"}, {"resolution", {grid.grid.shells, grid.grid.polar, grid.grid.azimuth}},
+                                          {"meaning", "1 usable, 0 receiver inside the occluder"}}));
 
     Layer cube;
     cube.name = "difmap";
@@ -173,6 +179,8 @@ Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector
     cube.shape = {difmap.size() / 3, 3};
     cube.data = difmap;
     cube.params = {{"size", options.difmapSize},
+                   {"resolution", {6, options.difmapSize, options.difmapSize}},
+                   {"axes", {"face", "row", "column"}},
                    {"layout", "cube strip texels face * size^2 + row * size + column, faces +X -X +Y -Y +Z -Z"},
                    {"env", options.envHash}};
     bundle.layers.push_back(std::move(cube));
@@ -184,7 +192,7 @@ Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector
     env.shape = {1, 3, 3};
     env.data.resize(9);
     for (int e = 0; e < 9; ++e) env.data[size_t(e)] = float(fivEnv[size_t(e)]);
-    env.params = {{"env", options.envHash}, {"layout", "[1][channel][x,y,z]"}};
+    env.params = {{"env", options.envHash}, {"resolution", {1}}, {"axes", {"single"}}, {"layout", "[1][channel][x,y,z]"}};
     bundle.layers.push_back(std::move(env));
     return bundle;
 }

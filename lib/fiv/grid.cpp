@@ -71,7 +71,9 @@ BoundingSphere boundingSphere(const TriMesh& mesh) {
 }
 
 nlohmann::json gridParams(const GridSpec& grid, const BoundingSphere& sphere) {
-    return {{"azimuth", grid.azimuth},
+    return {{"resolution", {grid.shells, grid.polar, grid.azimuth}},
+            {"axes", {"shell", "polar", "azimuth"}},
+            {"azimuth", grid.azimuth},
             {"polar", grid.polar},
             {"shells", grid.shells},
             {"shell_radii", shellRadii(grid)},

@@ -22,6 +22,13 @@ constexpr float kFaces[6][3][3] = {
 
 float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+// Angle between unit vectors, accurate for tiny angles (acos of a dot product is not): 0 for equal vectors.
+double angleBetween(const float* a, const float* b) {
+    double d[3] = {double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]};
+    double chord = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    return 2.0 * std::asin(std::min(1.0, 0.5 * chord));
+}
+
 const Layer& requireLayer(const Bundle& bundle, const char* name, const char* semantic, const std::string& source) {
     const Layer* layer = findLayer(bundle, name);
     if (!layer) throw Error(source, name, "layer is missing (not a FIV bundle from `prt fiv`)");
@@ -303,11 +310,17 @@ void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, si
             float distance = std::sqrt(dot3(offset, offset));
             for (int c = 0; c < 3; ++c) h.direction[c] = distance > 0.0f ? offset[c] / distance : 0.0f;
             h.angularRadius = distance > o.radius ? std::asin(o.radius / distance) : float(kPi / 2);
+            float green = std::sqrt(dot3(&fiv[3], &fiv[3]));
+            if (options.overlap == FivOverlap::Cap && green > 0.0f && power[1] > 0.0f) {
+                float cosSigma = std::clamp(2.0f * green / power[1] - 1.0f, 0.0f, 1.0f);
+                h.angularRadius = std::max(std::acos(cosSigma), 1e-4f);
+                for (int c = 0; c < 3; ++c) h.direction[c] = fiv[3 + c] / green;
+            }
             h.disc = float(kPi) * h.angularRadius * h.angularRadius;
             ++used;
         }
         float occluded[3] = {0, 0, 0};
-        if (options.overlap == FivOverlap::Paper) {
+        if (options.overlap == FivOverlap::Paper || options.overlap == FivOverlap::Cap) {
             float largest[3] = {0, 0, 0};
             for (size_t a = 0; a < used; ++a)
                 for (int c = 0; c < 3; ++c) occluded[c] += hidden[a].value[c], largest[c] = std::max(largest[c], hidden[a].value[c]);
@@ -316,7 +329,8 @@ void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, si
                     float cosine = std::clamp(dot3(hidden[a].direction, hidden[b].direction), -1.0f, 1.0f);
                     float reach = hidden[a].angularRadius + hidden[b].angularRadius;
                     if (reach < float(kPi) && cosine <= std::cos(reach)) continue;
-                    double lens = discOverlap(hidden[a].angularRadius, hidden[b].angularRadius, std::acos(cosine));
+                    double lens = discOverlap(hidden[a].angularRadius, hidden[b].angularRadius,
+                                              angleBetween(hidden[a].direction, hidden[b].direction));
                     float share = float(lens / (hidden[a].disc + hidden[b].disc));
                     for (int c = 0; c < 3; ++c) occluded[c] -= share * (hidden[a].value[c] + hidden[b].value[c]);
                 }
@@ -330,7 +344,8 @@ void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, si
                         float cosine = std::clamp(dot3(hidden[a].direction, hidden[b].direction), -1.0f, 1.0f);
                         float reach = hidden[a].angularRadius + hidden[b].angularRadius;
                         if (reach < float(kPi) && cosine <= std::cos(reach)) continue;
-                        covered += float(discOverlap(hidden[a].angularRadius, hidden[b].angularRadius, std::acos(cosine)) /
+                        covered += float(discOverlap(hidden[a].angularRadius, hidden[b].angularRadius,
+                                                     angleBetween(hidden[a].direction, hidden[b].direction)) /
                                          hidden[a].disc);
                     }
                 for (int c = 0; c < 3; ++c) occluded[c] += hidden[a].value[c] / (1.0f + covered);

@@ -135,10 +135,12 @@ enum class FivOverlap {
     Paper,  // the seed's Eq. 13-14 pairwise: sum I_j - sum_pairs O_jk (I_j + I_k), O_jk = lens / (disc_j + disc_k),
             // discs of angular radius asin(R / |v|) around each direction; never below the largest single I_j
     Shared, // each occluder weighted by 1 / (1 + sum_k lens_jk / disc_j): coverage shared evenly, any count
+    Cap,    // Paper's pairwise rule on the discs of the hidden light itself: the cap of the partial correction
+            // (half-angle from |FIV| / power, around FIV's direction, green channel) instead of the bounding sphere
 };
 struct FivShadeOptions {
     FivPartial partial = FivPartial::Cap;
-    FivOverlap overlap = FivOverlap::Paper;
+    FivOverlap overlap = FivOverlap::Cap; // the lowest measured error (docs/results.md)
 };
 
 // An occluder placed in the world: its vertex p sits at p + translation.

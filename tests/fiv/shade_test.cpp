@@ -149,7 +149,7 @@ TEST(FivShade, OverlapCorrectionCountsCoincidentOccludersOnceAndIsSymmetric) {
     float origin[3] = {0, 0, 0}, up[3] = {0, 1, 0};
     FivInstance a{&s.occluder, {0.3f, 3.0f, 0.0f}}, b{&s.occluder, {-0.4f, 3.2f, 0.2f}};
     float one = shade(s, {a}, origin, up);
-    for (FivOverlap overlap : {FivOverlap::Paper, FivOverlap::Shared}) {
+    for (FivOverlap overlap : {FivOverlap::Paper, FivOverlap::Shared, FivOverlap::Cap}) {
         FivShadeOptions options;
         options.overlap = overlap;
         EXPECT_NEAR(shade(s, {a, a}, origin, up, options), one, 1e-5);
