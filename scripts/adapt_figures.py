@@ -66,7 +66,15 @@ def main():
     parser.add_argument("--max-errors", default="0.0025,0.005,0.01,0.02")
     parser.add_argument("--targets", default="0.005,0.01,0.02")
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--plot-only", action="store_true", help="redraw the chart from docs/charts/adapt_storage.csv")
     opts = parser.parse_args()
+    if opts.plot_only:
+        out = os.path.join(ROOT, "docs", "charts")
+        rows = list(csv.DictReader(open(os.path.join(out, "adapt_storage.csv"))))
+        for r in rows:
+            r["bytes_per_vertex"], r["rel_vs_full"] = float(r["bytes_per_vertex"]), float(r["rel_vs_full"])
+        plot(rows, list(dict.fromkeys(r["scene"] for r in rows)), out)
+        return
     import numpy as np
 
     envs = ENVS[:2] if opts.quick else ENVS
@@ -254,14 +262,22 @@ def main():
     open(os.path.join(out, "adapt.md"), "w").write("\n".join(lines) + "\n")
     print("\n".join(lines))
 
+    plot(storage, list(scenes), out)
+
+
+def plot(storage, scenes, out):
+    """docs/charts/adapt_storage.png from the storage rows (also: --plot-only, from adapt_storage.csv)."""
+    families = sorted({s["family"] for s in storage})
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    plt.rcParams["axes.prop_cycle"] = plt.cycler(color=plt.get_cmap("tab20").colors)
     fig, axes = plt.subplots(1, len(scenes), figsize=(6 * len(scenes), 4.5), squeeze=False)
     for ax, scene in zip(axes[0], scenes):
         for fam in families:
             pts = sorted((s["bytes_per_vertex"], s["rel_vs_full"]) for s in storage if s["scene"] == scene and s["family"] == fam)
-            ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", ms=3, label=fam)
+            style = "o--" if fam.startswith("uniform") else ("s-" if fam == "cpca" else "o-")
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], style, ms=3, label=fam)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("bytes per vertex")

@@ -12,6 +12,7 @@ packages=(
   libxxhash-dev libgtest-dev libbenchmark-dev
   python3-numpy python3-matplotlib python3-openimageio
   slurm-wlm munge
+  chromium
 )
 missing=()
 for p in "${packages[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
@@ -22,6 +23,9 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
+# The browser viewer's npm packages (three, playwright-core) at the versions of viewer/package-lock.json; its test
+# drives Debian's chromium above, never a downloaded browser.
+[ -d viewer/node_modules/three ] && [ -d viewer/node_modules/playwright-core ] || (cd viewer && npm ci --no-audit --no-fund)
 # npm packages the tests use (package-lock.json pins them): the Khronos glTF validator.
 [ -d tests/bundle/gltf_validator/node_modules/gltf-validator ] ||
   npm ci --prefix tests/bundle/gltf_validator --no-audit --no-fund --loglevel=error

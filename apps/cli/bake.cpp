@@ -75,7 +75,8 @@ void addBakeCommand(CLI::App& app) {
     command->add_option("--uv-set", o.uvSet, "Bake into TEXCOORD_K of the input (default 0)");
     command->add_option("--format", args->format,
                         "Coefficient storage: half or float (one multi-channel OpenEXR) or u8 (8-bit PNG per "
-                        "coefficient with a per-layer [min, max] JSON sidecar); default half");
+                        "coefficient with a per-layer [min, max] JSON sidecar) or bundle (float32 rows in the bundle's own "
+                        "buffer, no texture: what the thin runtime and the viewer read); default half");
     command->add_option("--wrap", args->wrap, "UVs outside [0, 1]: none (an error, default) or repeat");
     command->add_flag("--allow-overlap", o.allowOverlap,
                       "Accept overlapping UVs (the lowest triangle keeps a shared texel) instead of failing");

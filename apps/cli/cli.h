@@ -7,6 +7,10 @@
 #include <array>
 #include <string>
 
+namespace prt {
+struct PinholeCamera; // raycast.h
+}
+
 namespace prt::cli {
 
 // Adds one subcommand to `app`. The subcommand's callback does the work and throws prt::Error on bad input;
@@ -22,6 +26,7 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
+void addRenderCommand(CLI::App& app);
 void addAdaptCommand(CLI::App& app);
 void addFivCommand(CLI::App& app);
 void addFivVisibilityCommand(CLI::App& app);
@@ -43,6 +48,11 @@ void parseShard(const std::string& text, int& index, int& count);
 // prt::Error(kExitUsage) naming --brdf otherwise.
 void parsePhongBrdf(const std::string& text, double& exponent, double& ks);
 
+// Parses a pinhole camera as `prt reference --image` and `prt render` take it: `size` "W,H" (given by the option
+// `sizeOption`) and `view` "EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY" (--camera, FOVY in degrees).
+// Throws prt::Error(kExitUsage) naming the option for anything else, eye == target or up along the view.
+void parsePinholeCamera(const std::string& size, const char* sizeOption, const std::string& view,
+                        PinholeCamera& camera);
 // Parses "X,Y,Z": exactly three finite numbers. Throws prt::Error(kExitUsage) naming `option` otherwise.
 std::array<float, 3> parsePoint(const std::string& text, const char* option);
 

@@ -42,6 +42,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addBenchCommand(app);
     addRunCommand(app);
     addMergeCommand(app);
+    addRenderCommand(app);
     addAdaptCommand(app);
 
     try {

@@ -2,6 +2,11 @@
 #include "cli.h"
 
 #include "core.h"
+#include "raycast.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
 
 #include <cmath>
 #include <exception>
@@ -15,7 +20,46 @@ namespace {
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
 
+// Parses exactly `count` comma-separated finite numbers.
+std::vector<float> parseNumbers(const std::string& text, size_t count, const char* option) {
+    std::vector<float> numbers;
+    const char* cursor = text.data();
+    const char* end = text.data() + text.size();
+    for (;;) {
+        const char* comma = std::find(cursor, end, ',');
+        float value;
+        auto [parsed, error] = std::from_chars(cursor, comma, value);
+        if (error != std::errc() || parsed != comma || !std::isfinite(value))
+            throw Error("", option, "\"" + text + "\" is not " + std::to_string(count) + " comma-separated numbers",
+                        kExitUsage);
+        numbers.push_back(value);
+        if (comma == end) break;
+        cursor = comma + 1;
+    }
+    if (numbers.size() != count)
+        throw Error("", option, "expected " + std::to_string(count) + " numbers, got " + std::to_string(numbers.size()),
+                    kExitUsage);
+    return numbers;
+}
+
 } // namespace
+
+void parsePinholeCamera(const std::string& size, const char* sizeOption, const std::string& view,
+                        PinholeCamera& camera) {
+    std::vector<float> wh = parseNumbers(size, 2, sizeOption);
+    std::vector<float> numbers = parseNumbers(view, 10, "--camera");
+    if (wh[0] < 1 || wh[1] < 1 || wh[0] != std::floor(wh[0]) || wh[1] != std::floor(wh[1]) || wh[0] > 65536 ||
+        wh[1] > 65536)
+        throw Error("", sizeOption, "width and height must be positive integers up to 65536", kExitUsage);
+    if (!(numbers[9] > 0.0f && numbers[9] < 180.0f)) throw Error("", "--camera", "FOVY must lie in (0, 180)", kExitUsage);
+    camera.width = int(wh[0]);
+    camera.height = int(wh[1]);
+    std::copy(numbers.begin(), numbers.begin() + 3, camera.eye.begin());
+    std::copy(numbers.begin() + 3, numbers.begin() + 6, camera.target.begin());
+    std::copy(numbers.begin() + 6, numbers.begin() + 9, camera.up.begin());
+    camera.fovyDegrees = numbers[9];
+    pinholeRays(camera); // throws for eye == target or up along the view
+}
 
 std::array<double, 3> parseAlbedo(const std::string& text) {
     std::vector<double> values;

@@ -5,6 +5,7 @@
 #include "compare.h"
 #include "core.h"
 #include "image.h"
+#include "raycast.h"
 #include "reference.h"
 
 #include <algorithm>
@@ -34,28 +35,6 @@ struct ReferenceCommandOptions {
     std::string brdf;      // "phong:N,KS"
     std::string eye;       // "X,Y,Z"
 };
-
-// Parses exactly `count` comma-separated finite numbers.
-std::vector<float> parseNumbers(const std::string& text, size_t count, const char* option) {
-    std::vector<float> numbers;
-    const char* cursor = text.data();
-    const char* end = text.data() + text.size();
-    for (;;) {
-        const char* comma = std::find(cursor, end, ',');
-        float value;
-        auto [parsed, error] = std::from_chars(cursor, comma, value);
-        if (error != std::errc() || parsed != comma || !std::isfinite(value))
-            throw Error("", option, "\"" + text + "\" is not " + std::to_string(count) + " comma-separated numbers",
-                        kExitUsage);
-        numbers.push_back(value);
-        if (comma == end) break;
-        cursor = comma + 1;
-    }
-    if (numbers.size() != count)
-        throw Error("", option, "expected " + std::to_string(count) + " numbers, got " + std::to_string(numbers.size()),
-                    kExitUsage);
-    return numbers;
-}
 
 void requireExtension(const std::string& path, const char* option, std::initializer_list<const char*> extensions) {
     std::string extension = fileExtension(path);
@@ -110,19 +89,7 @@ void runReference(const ReferenceCommandOptions& options) {
     }
     if (!options.eye.empty()) reference.eye = parsePoint(options.eye, "--eye");
     PinholeCamera camera;
-    if (imageMode) {
-        std::vector<float> size = parseNumbers(options.imageSize, 2, "--image");
-        std::vector<float> view = parseNumbers(options.camera, 10, "--camera");
-        if (size[0] < 1 || size[1] < 1 || size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]))
-            throw Error("", "--image", "width and height must be positive integers", kExitUsage);
-        if (!(view[9] > 0.0f && view[9] < 180.0f)) throw Error("", "--camera", "FOVY must lie in (0, 180)", kExitUsage);
-        camera.width = int(size[0]);
-        camera.height = int(size[1]);
-        std::copy(view.begin(), view.begin() + 3, camera.eye.begin());
-        std::copy(view.begin() + 3, view.begin() + 6, camera.target.begin());
-        std::copy(view.begin() + 6, view.begin() + 9, camera.up.begin());
-        camera.fovyDegrees = view[9];
-    }
+    if (imageMode) parsePinholeCamera(options.imageSize, "--image", options.camera, camera);
 
     bool direct = options.bruteForce || options.unshadowed || !options.occluders.empty();
     if (direct && reference.phong)

@@ -366,41 +366,47 @@ void runBake(const BakeOptions& options) {
     layer.params["format"] = texelFormatName(options.format);
     uint64_t storedBytes = 0;
     std::string transferPath;
-    if (options.format == TexelFormat::U8) {
-        RangeCompressed compressed = rangeCompress(baked.transfer.data(), texelCount, coefficients, 3);
-        nlohmann::json layers = nlohmann::json::array();
-        std::vector<uint8_t> plane(texelCount * 3);
-        for (int j = 0; j < coefficients; ++j) {
-            for (size_t t = 0; t < texelCount; ++t)
-                for (int c = 0; c < 3; ++c) plane[3 * t + c] = compressed.values[t * channels + 3 * j + c];
-            char suffix[32];
-            std::snprintf(suffix, sizeof suffix, ".transfer.T%03d.png", j);
-            std::string path = base + suffix;
-            written.paths.push_back(path);
-            writeImagePixels(path, size, size, {"R", "G", "B"}, plane.data());
-            storedBytes += std::filesystem::file_size(path);
-            layers.push_back({{"coefficient", j}, {"uri", fileName(path)}, {"hash", hashFile(path)},
-                              {"min", compressed.range[2 * j]}, {"max", compressed.range[2 * j + 1]}});
-        }
-        nlohmann::json sidecar = {{"format", "prt-texel-u8"}, {"version", 1}, {"width", size}, {"height", size},
-                                  {"order", options.order},
-                                  {"decode", "value = min + q * (max - min) / 255, per coefficient layer"},
-                                  {"layers", layers}};
-        transferPath = base + ".transfer.json";
-        written.paths.push_back(transferPath);
-        writeBytesAtomic(transferPath, sidecar.dump(2) + "\n");
+    if (options.format == TexelFormat::Bundle) {
+        // The rows in the bundle's own buffer: the thin runtime (texelRelightModel) and the viewer read them.
+        layer.data = baked.transfer;
+        storedBytes = layer.data.size() * sizeof(float);
     } else {
-        transferPath = base + ".transfer.exr";
-        written.paths.push_back(transferPath);
-        writeCoefficientExr(transferPath, baked.transfer.data(), size, size, coefficients,
-                            options.format == TexelFormat::Half);
-        layer.params["channels"] = "T{j:03d}.{R,G,B} for coefficient j";
+        if (options.format == TexelFormat::U8) {
+            RangeCompressed compressed = rangeCompress(baked.transfer.data(), texelCount, coefficients, 3);
+            nlohmann::json layers = nlohmann::json::array();
+            std::vector<uint8_t> plane(texelCount * 3);
+            for (int j = 0; j < coefficients; ++j) {
+                for (size_t t = 0; t < texelCount; ++t)
+                    for (int c = 0; c < 3; ++c) plane[3 * t + c] = compressed.values[t * channels + 3 * j + c];
+                char suffix[32];
+                std::snprintf(suffix, sizeof suffix, ".transfer.T%03d.png", j);
+                std::string path = base + suffix;
+                written.paths.push_back(path);
+                writeImagePixels(path, size, size, {"R", "G", "B"}, plane.data());
+                storedBytes += std::filesystem::file_size(path);
+                layers.push_back({{"coefficient", j}, {"uri", fileName(path)}, {"hash", hashFile(path)},
+                                  {"min", compressed.range[2 * j]}, {"max", compressed.range[2 * j + 1]}});
+            }
+            nlohmann::json sidecar = {{"format", "prt-texel-u8"}, {"version", 1}, {"width", size}, {"height", size},
+                                      {"order", options.order},
+                                      {"decode", "value = min + q * (max - min) / 255, per coefficient layer"},
+                                      {"layers", layers}};
+            transferPath = base + ".transfer.json";
+            written.paths.push_back(transferPath);
+            writeBytesAtomic(transferPath, sidecar.dump(2) + "\n");
+        } else {
+            transferPath = base + ".transfer.exr";
+            written.paths.push_back(transferPath);
+            writeCoefficientExr(transferPath, baked.transfer.data(), size, size, coefficients,
+                                options.format == TexelFormat::Half);
+            layer.params["channels"] = "T{j:03d}.{R,G,B} for coefficient j";
+        }
+        storedBytes += std::filesystem::file_size(transferPath);
+        layer.params["files"] = nlohmann::json::array();
+        for (const std::string& path : written.paths) layer.params["files"].push_back(fileName(path));
+        layer.params["uri"] = fileName(transferPath);
+        layer.params["hash"] = hashFile(transferPath);
     }
-    storedBytes += std::filesystem::file_size(transferPath);
-    layer.params["files"] = nlohmann::json::array();
-    for (const std::string& path : written.paths) layer.params["files"].push_back(fileName(path));
-    layer.params["uri"] = fileName(transferPath);
-    layer.params["hash"] = hashFile(transferPath);
 
     std::vector<uint8_t> normalBytes(baked.normals.size());
     for (size_t i = 0; i < normalBytes.size(); ++i)

@@ -199,9 +199,10 @@ void sampleBilinear(const float* texels, int width, int height, int channels, fl
 // ---- texture files ----------------------------------------------------------------------------------------------
 
 // Storage of coefficient textures: one multi-channel OpenEXR (half or float), or one 8-bit RGB PNG per
-// coefficient with the per-layer [min, max] in a JSON sidecar.
-enum class TexelFormat { Half, Float, U8 };
-// Parses "half" | "float" | "u8"; throws prt::Error(kExitUsage) otherwise.
+// coefficient with the per-layer [min, max] in a JSON sidecar; or none: "bundle" keeps the float32 rows in the
+// bundle's own buffer, which the thin runtime (texelRelightModel) and the browser viewer read without images.
+enum class TexelFormat { Half, Float, U8, Bundle }; // Bundle: float32 rows in the bundle's own buffer, no texture
+// Parses "half" | "float" | "u8" | "bundle"; throws prt::Error(kExitUsage) otherwise.
 TexelFormat parseTexelFormat(const std::string& name);
 const char* texelFormatName(TexelFormat format);
 

@@ -16,7 +16,8 @@ TexelFormat parseTexelFormat(const std::string& name) {
     if (name == "half") return TexelFormat::Half;
     if (name == "float") return TexelFormat::Float;
     if (name == "u8") return TexelFormat::U8;
-    throw Error("", "--format", "'" + name + "' is not one of half, float, u8", kExitUsage);
+    if (name == "bundle") return TexelFormat::Bundle;
+    throw Error("", "--format", "'" + name + "' is not one of half, float, u8, bundle", kExitUsage);
 }
 
 const char* texelFormatName(TexelFormat format) {
@@ -24,6 +25,7 @@ const char* texelFormatName(TexelFormat format) {
     case TexelFormat::Half: return "half";
     case TexelFormat::Float: return "float";
     case TexelFormat::U8: return "u8";
+    case TexelFormat::Bundle: return "bundle";
     }
     return "?";
 }

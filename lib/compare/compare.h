@@ -42,4 +42,38 @@ void writeVertexRadiance(const std::string& path, const std::vector<float>& rgb)
 // or a value that is not a finite number.
 std::vector<float> readVertexRadiance(const std::string& path);
 
+// ---- images (`prt compare --image`) ----------------------------------------------------------------------------
+// Two linear RGB images ([pixel][3], row 0 at the top) compared over a mask: `metrics` as compareRadiance over the
+// mask's pixels, and per pixel the relative luminance error |Y(a) - Y(b)| / max(Y(b), relativeFloor), where the
+// floor is 1e-3 of the reference's mean luminance over the mask (so near-black pixels do not dominate).
+struct ImageComparison {
+    int width = 0, height = 0;
+    uint64_t maskPixels = 0;
+    ErrorMetrics metrics;
+    double relativeFloor = 0.0;
+    double meanRelativeError = 0.0, p95RelativeError = 0.0, maxRelativeError = 0.0; // over the mask
+    std::vector<float> relativeError; // per pixel; -1 outside the mask
+};
+// Needs result and reference of width * height * 3 values; mask of width * height values (> 0.5 is inside), or
+// null for every pixel.
+ImageComparison compareImages(const float* result, const float* reference, const float* mask, int width, int height);
+
+// An 8-bit RGB picture, row 0 at the top.
+struct Picture {
+    int width = 0, height = 0;
+    std::vector<uint8_t> rgb;
+};
+// The relative error in false colour (viridis from 0 to `scaleTop`, saturated above; grey outside the mask) with a
+// legend bar and its end labels under the image. Needs scaleTop > 0.
+Picture relativeErrorPicture(const ImageComparison& comparison, double scaleTop);
+// The tone map of every 8-bit picture prt writes (`prt render` PNGs, `prt compare --image` strips) and of the browser
+// viewer (viewer/): x = radiance * 2^exposure per channel, then Reinhard x / (1 + x), then the sRGB transfer
+// function (x <= 0.0031308: 12.92 x, else 1.055 x^(1/2.4) - 0.055), rounded to the nearest of 256 levels.
+// Negative and NaN radiance map to 0. Linear outputs (EXR) are never tone mapped.
+uint8_t toneMap(float radiance, float exposure);
+// Linear radiance (width * height * 3 values) through toneMap, `exposure` in stops.
+Picture tonemappedPicture(const float* radiance, int width, int height, float exposure);
+// result | reference | error side by side, 4 pixels apart, each labelled at its top.
+Picture comparisonStrip(const Picture& result, const Picture& reference, const Picture& error);
+
 } // namespace prt

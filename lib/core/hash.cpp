@@ -5,6 +5,9 @@
 #include <cstring>
 #include <memory>
 #include <vector>
+// Header-only xxHash (XXH_INLINE_ALL): the digest code compiles into prt_core, so nothing that links prt (the
+// installed runtime included) needs libxxhash at run time.
+#define XXH_INLINE_ALL
 #include <xxhash.h>
 
 namespace prt {

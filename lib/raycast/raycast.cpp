@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 namespace prt {
@@ -68,6 +69,48 @@ float rayOffset(const TriMesh& mesh) {
     double diagonal = 0.0;
     for (int a = 0; a < 3; ++a) diagonal += double(hi[a] - lo[a]) * (hi[a] - lo[a]);
     return float(1e-4 * std::sqrt(diagonal));
+}
+
+namespace {
+
+void cross(const float a[3], const float b[3], float out[3]) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+float length(const float a[3]) { return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+
+void normalize(float a[3]) {
+    float n = length(a);
+    for (int c = 0; c < 3; ++c) a[c] /= n;
+}
+
+} // namespace
+
+PinholeRays pinholeRays(const PinholeCamera& camera) {
+    if (camera.width <= 0 || camera.height <= 0) throw Error("", "camera", "image size must be positive", kExitUsage);
+    PinholeRays rays;
+    for (int c = 0; c < 3; ++c) rays.forward[c] = camera.target[c] - camera.eye[c];
+    cross(rays.forward, camera.up.data(), rays.right);
+    cross(rays.right, rays.forward, rays.up);
+    if (!(length(rays.right) > 0.0f))
+        throw Error("", "camera", "eye equals target or up is parallel to the view direction", kExitUsage);
+    normalize(rays.forward);
+    normalize(rays.right);
+    normalize(rays.up);
+    rays.halfHeight = std::tan(camera.fovyDegrees * std::numbers::pi_v<float> / 360.0f);
+    rays.halfWidth = rays.halfHeight * float(camera.width) / float(camera.height);
+    rays.width = camera.width;
+    rays.height = camera.height;
+    return rays;
+}
+
+void pinholeRayDirection(const PinholeRays& rays, size_t pixel, float d[3]) {
+    float sx = (2.0f * (float(pixel % rays.width) + 0.5f) / float(rays.width) - 1.0f) * rays.halfWidth;
+    float sy = (1.0f - 2.0f * (float(pixel / rays.width) + 0.5f) / float(rays.height)) * rays.halfHeight;
+    for (int c = 0; c < 3; ++c) d[c] = rays.forward[c] + sx * rays.right[c] + sy * rays.up[c];
+    normalize(d);
 }
 
 } // namespace prt

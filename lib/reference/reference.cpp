@@ -80,17 +80,6 @@ auto withThreads(int threads, const Work& work) {
     return arena.execute(work);
 }
 
-void normalize(float v[3]) {
-    float length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    for (int c = 0; c < 3; ++c) v[c] /= length;
-}
-
-void cross(const float a[3], const float b[3], float out[3]) {
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 } // namespace
 
 ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const EnvironmentMap& env,
@@ -124,18 +113,7 @@ ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const Environment
 ReferenceImage referenceImage(const TriMesh& mesh, const EnvironmentMap& env, const PinholeCamera& camera,
                               const ReferenceOptions& options) {
     checkInputs(mesh, options);
-    if (camera.width <= 0 || camera.height <= 0) throw Error("", "camera", "image size must be positive", kExitUsage);
-    float forward[3], right[3], up[3];
-    for (int c = 0; c < 3; ++c) forward[c] = camera.target[c] - camera.eye[c];
-    cross(forward, camera.up.data(), right);
-    cross(right, forward, up);
-    if (!(std::sqrt(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]) > 0.0f))
-        throw Error("", "camera", "eye equals target or up is parallel to the view direction", kExitUsage);
-    normalize(forward);
-    normalize(right);
-    normalize(up);
-    float halfHeight = std::tan(camera.fovyDegrees * std::numbers::pi_v<float> / 360.0f);
-    float halfWidth = halfHeight * float(camera.width) / float(camera.height);
+    const PinholeRays pinhole = pinholeRays(camera);
 
     EnvironmentSampler environment = makeEnvironmentSampler(env);
     return withThreads(options.threads, [&] {
@@ -148,11 +126,8 @@ ReferenceImage referenceImage(const TriMesh& mesh, const EnvironmentMap& env, co
         }
         auto shadePixels = [&](size_t begin, size_t end, uint64_t& rays) {
             for (size_t pixel = begin; pixel < end; ++pixel) {
-                float sx = (2.0f * (float(pixel % camera.width) + 0.5f) / float(camera.width) - 1.0f) * halfWidth;
-                float sy = (1.0f - 2.0f * (float(pixel / camera.width) + 0.5f) / float(camera.height)) * halfHeight;
                 float d[3];
-                for (int c = 0; c < 3; ++c) d[c] = forward[c] + sx * right[c] + sy * up[c];
-                normalize(d);
+                pinholeRayDirection(pinhole, pixel, d);
                 ++rays;
                 ShadingPoint hit;
                 HitKind kind = scene.intersect(camera.eye.data(), d, &hit);

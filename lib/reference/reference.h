@@ -11,6 +11,7 @@
 
 #include "bundle.h"
 #include "image.h"
+#include "raycast.h"
 
 #include <array>
 #include <cstdint>
@@ -53,17 +54,7 @@ struct ReferenceRadiance {
 ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const EnvironmentMap& env,
                                           const ReferenceOptions& options);
 
-// A pinhole camera. Pixel (x, y), row 0 at the top, looks through its centre: with f = forward (target - eye),
-// r = f x up and u = r x f normalised, the ray is f + (2 (x + 0.5) / width - 1) tan(fovy / 2) aspect r
-// + (1 - 2 (y + 0.5) / height) tan(fovy / 2) u, aspect = width / height.
-struct PinholeCamera {
-    std::array<float, 3> eye{0, 0, 1};
-    std::array<float, 3> target{0, 0, 0};
-    std::array<float, 3> up{0, 1, 0};
-    float fovyDegrees = 40.0f;
-    int width = 0;
-    int height = 0;
-};
+// PinholeCamera (lib/raycast) is the camera of referenceImage, shared with `prt render`.
 
 struct ReferenceImage {
     Image radiance;      // the first hit's outgoing radiance, or the environment's radiance where the ray escapes

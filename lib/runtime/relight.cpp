@@ -3,8 +3,10 @@
 
 #include "core.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include <algorithm>
+#include <atomic>
+#include <thread>
+#include <vector>
 
 namespace prt {
 
@@ -56,11 +58,23 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
     if (!model.offsets.empty()) return relightAdaptive(model, lighting, begin, end, radiance);
     const int coefficients = sh::coefficientCount(model.order);
     const size_t rowValues = size_t(coefficients) * 3;
-    // Blocks of a few thousand vertices keep the scheduling overhead far below the memory traffic.
-    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 4096), [&](const tbb::blocked_range<size_t>& range) {
-        relight(model.transfer.data() + range.begin() * rowValues, range.size(), coefficients, lighting,
-                radiance + (range.begin() - begin) * 3);
-    });
+    // Blocks of a few thousand vertices keep the scheduling overhead far below the memory traffic; std::threads
+    // rather than TBB keep the installed runtime free of it.
+    constexpr size_t kBlock = 4096;
+    const size_t count = end - begin, blocks = (count + kBlock - 1) / kBlock;
+    std::atomic<size_t> nextBlock{0};
+    auto relightBlocks = [&] {
+        for (size_t block; (block = nextBlock.fetch_add(1)) < blocks;) {
+            size_t first = begin + block * kBlock, last = std::min(end, first + kBlock);
+            relight(model.transfer.data() + first * rowValues, last - first, coefficients, lighting,
+                    radiance + (first - begin) * 3);
+        }
+    };
+    size_t workers = std::min<size_t>(blocks, std::max(1u, std::thread::hardware_concurrency()));
+    std::vector<std::thread> pool;
+    for (size_t i = 1; i < workers; ++i) pool.emplace_back(relightBlocks);
+    relightBlocks();
+    for (std::thread& thread : pool) thread.join();
 }
 
 } // namespace prt

@@ -1,6 +1,9 @@
 // The thin runtime: relights a bundle's precomputed transfer under new distant lighting, per vertex or per texel.
-// It needs no ray tracer or solver, only the bundle reader and SH; an engine links prt::runtime (see
-// tests/runtime/consumer for a complete find_package(prt) project).
+// It needs no ray tracer or solver, only the bundle reader (tinygltf) and SH; an engine links prt::runtime (see
+// tests/runtime/consumer for a complete find_package(prt) project). prt::runtime needs the C++ standard library and
+// tinygltf alone: no OpenImageIO, TBB, Embree, Ceres or OpenCL, and its threads are std::threads. The one function
+// that reads image files, loadTexelRelightModel, lives in the optional target prt::runtime_images (CMake component
+// runtime_images), which adds lib/image (OpenImageIO). image.h is included for its data types only.
 //
 // Outgoing radiance of vertex v in channel c is radiance[v][c] = sum_j transfer[v][j][c] * lighting[j][c]
 // (docs/conventions.md), with lighting as RGB SH radiance coefficients [coefficient][3].
@@ -46,12 +49,19 @@ struct TexelRelightModel {
     RelightModel rows; // rows.vertexCount = width * height texels
 };
 
-// Reads the bundle's "texel_transfer" layer and its texture: params.uri, relative to the bundle file (symlinks
-// resolved), is an OpenEXR with channels T000.R, T000.G, ... (params.format "half" or "float") or the JSON
-// sidecar of 8-bit PNG layers (format "u8": value = min + q * (max - min) / 255 per coefficient layer).
-// Needs: domain "texel", semantic "sh_transfer_rgb", shape [W*H, L*L, 3] with params width W and height H (and
-// params.order = L when set), texture files whose xxh128 equals the recorded hash and of W x H texels, finite
-// values. Throws prt::Error naming the bundle or the texture file, the place and the problem otherwise.
+// Takes the "texel_transfer" layer out of `bundle` when its rows are stored in the bundle's own buffers (layer data
+// present, no params.uri). Part of the thin prt::runtime. Needs: domain "texel", semantic "sh_transfer_rgb", shape
+// [W*H, L*L, 3] with params width W and height H (and params.order = L when set), W*H*L*L*3 finite values.
+// Throws prt::Error naming `source` otherwise, and for a layer whose texels live in a texture (params.uri), which
+// loadTexelRelightModel reads.
+TexelRelightModel texelRelightModel(Bundle bundle, const std::string& source);
+
+// prt::runtime_images only (links OpenImageIO). Reads the bundle's "texel_transfer" layer and its texture:
+// params.uri, relative to the bundle file (symlinks resolved), is an OpenEXR with channels T000.R, T000.G, ...
+// (params.format "half" or "float") or the JSON sidecar of 8-bit PNG layers (format "u8": value = min + q * (max -
+// min) / 255 per coefficient layer); a layer with no params.uri is read from the bundle as texelRelightModel does.
+// Needs what texelRelightModel needs, texture files whose xxh128 equals the recorded hash and of W x H texels,
+// finite values. Throws prt::Error naming the bundle or the texture file, the place and the problem otherwise.
 TexelRelightModel loadTexelRelightModel(const std::string& bundlePath);
 
 // Channel name of coefficient j, colour c (0..2) in coefficient textures: "T000.R", "T012.B".
@@ -83,7 +93,7 @@ std::vector<float> rotateLighting(const float* lighting, int order, const double
 void relight(const float* transfer, size_t vertexCount, int coefficientCount, const float* lighting,
              float* radiance);
 
-// Relights vertices [begin, end) of `model` across TBB's threads, bit-identical to the kernel on that range.
+// Relights vertices [begin, end) of `model` across the hardware's std::threads (blocks of 4096), bit-identical to the kernel on that range.
 // Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
 // radiance sized (end - begin) * 3: row 0 of radiance is vertex `begin`. Throws prt::Error for a range outside
 // the model.

@@ -22,4 +22,11 @@ int transferLayerOrder(const Layer& layer, const std::string& source, const std:
 void checkFiniteRows(const std::vector<float>& data, size_t rowValues, const std::string& source,
                      const std::string& place, const char* row);
 
+// The atlas size and SH order of a "texel_transfer" layer: params width and height, shape [W*H, L*L, 3].
+// Throws prt::Error(source, ...) naming the bad param or the row count otherwise.
+struct TexelLayerShape {
+    int width = 0, height = 0, order = 0;
+};
+TexelLayerShape texelLayerShape(const Layer& layer, const std::string& source);
+
 } // namespace prt

@@ -1,28 +1,17 @@
-// Loading a bundle's per-texel transfer (the "texel_transfer" layer of `prt bake`) from the texture it references.
+// Per-texel transfer held in the bundle's own buffers (the "texel_transfer" layer with its rows inline), and the
+// layer checks the texture reader of prt::runtime_images shares. No image library here: the thin runtime.
 #include "runtime.h"
 
 #include "core.h"
 #include "runtime_internal.h"
 
-#include <nlohmann/json.hpp>
-
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <limits>
+#include <utility>
 
 namespace prt {
 
 namespace {
-
-namespace fs = std::filesystem;
-
-// The string params[key], or an error naming the layer.
-std::string stringParam(const Layer& layer, const char* key, const std::string& source, const std::string& place) {
-    if (!layer.params.contains(key) || !layer.params[key].is_string())
-        throw Error(source, place, std::string("params.") + key + " is missing or not a string");
-    return layer.params[key].get<std::string>();
-}
 
 int sizeParam(const nlohmann::json& object, const char* key, const std::string& source, const std::string& place) {
     if (!object.contains(key) || !object[key].is_number_integer() || object[key].get<int64_t>() < 1 ||
@@ -31,73 +20,20 @@ int sizeParam(const nlohmann::json& object, const char* key, const std::string& 
     return int(object[key].get<int64_t>());
 }
 
-// A file referenced from `owner` by a relative uri: checked against its recorded hash.
-std::string referencedFile(const std::string& owner, const std::string& uri, const nlohmann::json& hash,
-                           const std::string& place) {
-    if (uri.empty() || fs::path(uri).is_absolute())
-        throw Error(owner, place, "uri '" + uri + "' is not a path relative to the bundle");
-    std::error_code error;
-    fs::path resolved = fs::canonical(owner, error); // a linked bundle's textures lie next to its target
-    fs::path path = (error ? fs::path(owner) : resolved).parent_path() / uri;
-    if (!fs::is_regular_file(path, error))
-        throw Error(path.string(), "", "referenced by " + owner + " (" + place + ") but not found");
-    if (!hash.is_string()) throw Error(owner, place, "no content hash recorded for " + uri);
-    std::string actual = hashFile(path.string());
-    if (actual != hash.get<std::string>())
-        throw Error(path.string(), "", "content hash " + actual + " differs from " + hash.get<std::string>() +
-                                           " recorded in " + owner + ": the texture was modified or belongs to "
-                                           "another bake");
-    return path.string();
-}
-
-void checkSize(const ImageChannels& image, int width, int height, const std::string& path) {
-    if (image.width != width || image.height != height)
-        throw Error(path, "", std::to_string(image.width) + "x" + std::to_string(image.height) +
-                                  " texels; the bundle's layer says " + std::to_string(width) + "x" +
-                                  std::to_string(height));
-}
-
-// Format "half" / "float": one OpenEXR with every coefficient's RGB as named channels.
-std::vector<float> readExrRows(const std::string& path, int width, int height, int coefficients) {
-    std::vector<std::string> names;
-    for (int j = 0; j < coefficients; ++j)
-        for (int c = 0; c < 3; ++c) names.push_back(texelCoefficientChannel(j, c));
-    ImageChannels image = readImageChannels(path, names);
-    checkSize(image, width, height, path);
-    return std::move(image.values);
-}
-
-// Format "u8": a JSON sidecar listing one 8-bit RGB image per coefficient with its [min, max].
-std::vector<float> readU8Rows(const std::string& sidecarPath, int width, int height, int coefficients) {
-    std::ifstream in(sidecarPath);
-    nlohmann::json sidecar = nlohmann::json::parse(in, nullptr, false);
-    if (!sidecar.is_object() || sidecar.value("format", "") != "prt-texel-u8" || !sidecar["layers"].is_array())
-        throw Error(sidecarPath, "", "not a prt-texel-u8 sidecar (JSON with format \"prt-texel-u8\" and layers)");
-    const nlohmann::json& layers = sidecar["layers"];
-    if (int(layers.size()) != coefficients)
-        throw Error(sidecarPath, "layers", std::to_string(layers.size()) + " layers for " +
-                                               std::to_string(coefficients) + " coefficients");
-    const size_t texels = size_t(width) * height, values = 3 * size_t(coefficients);
-    std::vector<float> rows(texels * values);
-    for (int j = 0; j < coefficients; ++j) {
-        const nlohmann::json& layer = layers[j];
-        std::string place = "layers[" + std::to_string(j) + "]";
-        if (!layer.is_object() || !layer.contains("uri") || !layer["uri"].is_string() || !layer.contains("min") ||
-            !layer["min"].is_number() || !layer.contains("max") || !layer["max"].is_number())
-            throw Error(sidecarPath, place, "needs uri, hash, min and max");
-        std::string path = referencedFile(sidecarPath, layer["uri"].get<std::string>(),
-                                          layer.value("hash", nlohmann::json()), place);
-        ImageChannels image = readImageChannels(path, {"R", "G", "B"});
-        checkSize(image, width, height, path);
-        float lo = layer["min"].get<float>(), span = layer["max"].get<float>() - lo;
-        // The file holds q / 255 as read; value = min + q * (max - min) / 255.
-        for (size_t t = 0; t < texels; ++t)
-            for (int c = 0; c < 3; ++c) rows[t * values + 3 * j + c] = lo + image.values[3 * t + c] * span;
-    }
-    return rows;
-}
-
 } // namespace
+
+TexelLayerShape texelLayerShape(const Layer& layer, const std::string& source) {
+    const std::string place = "layer \"texel_transfer\"";
+    TexelLayerShape shape;
+    shape.order = transferLayerOrder(layer, source, place);
+    shape.width = sizeParam(layer.params, "width", source, place + ", params");
+    shape.height = sizeParam(layer.params, "height", source, place + ", params");
+    uint64_t texels = uint64_t(shape.width) * uint64_t(shape.height);
+    if (layer.shape[0] != texels || texels > std::numeric_limits<uint32_t>::max())
+        throw Error(source, place, "has " + std::to_string(layer.shape[0]) + " rows for a " +
+                                       std::to_string(shape.width) + "x" + std::to_string(shape.height) + " atlas");
+    return shape;
+}
 
 std::string texelCoefficientChannel(int coefficient, int colour) {
     char name[16];
@@ -105,34 +41,24 @@ std::string texelCoefficientChannel(int coefficient, int colour) {
     return name;
 }
 
-TexelRelightModel loadTexelRelightModel(const std::string& bundlePath) {
-    Bundle bundle = readBundle(bundlePath);
-    const Layer* layer = &transferLayer(bundle, "texel_transfer", "texel", bundlePath, "bake");
-    const std::string place = "layer \"texel_transfer\"";
-    int order = transferLayerOrder(*layer, bundlePath, place);
-    int width = sizeParam(layer->params, "width", bundlePath, place + ", params");
-    int height = sizeParam(layer->params, "height", bundlePath, place + ", params");
-    uint64_t texels = uint64_t(width) * uint64_t(height);
-    if (layer->shape[0] != texels || texels > std::numeric_limits<uint32_t>::max())
-        throw Error(bundlePath, place, "has " + std::to_string(layer->shape[0]) + " rows for a " +
-                                           std::to_string(width) + "x" + std::to_string(height) + " atlas");
-
-    std::string format = stringParam(*layer, "format", bundlePath, place);
-    std::string path = referencedFile(bundlePath, stringParam(*layer, "uri", bundlePath, place),
-                                      layer->params.value("hash", nlohmann::json()), place + ", params.uri");
-    const int coefficients = order * order;
+TexelRelightModel texelRelightModel(Bundle bundle, const std::string& source) {
+    Layer& layer = transferLayer(bundle, "texel_transfer", "texel", source, "bake");
+    TexelLayerShape shape = texelLayerShape(layer, source);
+    const size_t rowValues = 3 * size_t(shape.order) * shape.order;
+    if (layer.data.size() != size_t(shape.width) * shape.height * rowValues)
+        throw Error(source, "layer \"texel_transfer\"",
+                    layer.params.contains("uri")
+                        ? "keeps its texels in the texture params.uri: read it with loadTexelRelightModel "
+                          "(prt::runtime_images)"
+                        : "holds " + std::to_string(layer.data.size()) + " values, not its shape's " +
+                              std::to_string(size_t(shape.width) * shape.height * rowValues));
     TexelRelightModel model;
-    model.width = width;
-    model.height = height;
-    model.rows.vertexCount = uint32_t(texels);
-    model.rows.order = order;
-    if (format == "half" || format == "float")
-        model.rows.transfer = readExrRows(path, width, height, coefficients);
-    else if (format == "u8")
-        model.rows.transfer = readU8Rows(path, width, height, coefficients);
-    else
-        throw Error(bundlePath, place + ", params.format", "'" + format + "' is not one of half, float, u8");
-    checkFiniteRows(model.rows.transfer, 3 * size_t(coefficients), path, "texture", "texel");
+    model.width = shape.width;
+    model.height = shape.height;
+    model.rows.vertexCount = uint32_t(size_t(shape.width) * shape.height);
+    model.rows.order = shape.order;
+    model.rows.transfer = std::move(layer.data);
+    checkFiniteRows(model.rows.transfer, rowValues, source, "layer \"texel_transfer\"", "texel");
     return model;
 }
 

@@ -3,10 +3,9 @@
 
 #include "core.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
+#include <atomic>
+#include <thread>
 #include <cmath>
 #include <numbers>
 
@@ -91,7 +90,7 @@ std::vector<double> texelSolidAngles(const EnvironmentMap& env) {
     return solidAngle;
 }
 
-std::vector<float> projectEnvironment(const EnvironmentMap& env, int order) {
+std::vector<float> projectEnvironment(const EnvironmentMap& env, int order, int threads) {
     if (order < 1 || order > kMaxOrder)
         throw Error("", "sh::projectEnvironment",
                     "order " + std::to_string(order) + " outside 1.." + std::to_string(kMaxOrder), kExitFailure);
@@ -100,14 +99,16 @@ std::vector<float> projectEnvironment(const EnvironmentMap& env, int order) {
     int width = image.width, height = image.height, count = coefficientCount(order);
 
     // Fixed row blocks, each summed in its own double buffer and reduced in block order: the result does not
-    // depend on how TBB schedules the blocks, so it is bit-identical for any thread count.
+    // depend on which thread takes which block, so it is bit-identical for any thread count.
     constexpr int kRowsPerBlock = 8;
     int blockCount = (height + kRowsPerBlock - 1) / kRowsPerBlock;
     std::vector<double> partial(size_t(blockCount) * count * 3, 0.0);
     Progress progress("project environment", uint64_t(height));
-    tbb::parallel_for(tbb::blocked_range<int>(0, blockCount), [&](const tbb::blocked_range<int>& blocks) {
+    // std::threads taking the next block in turn (no TBB: the thin runtime projects too).
+    std::atomic<int> nextBlock{0};
+    auto projectBlocks = [&] {
         std::vector<double> basis(count);
-        for (int block = blocks.begin(); block != blocks.end(); ++block) {
+        for (int block; (block = nextBlock.fetch_add(1)) < blockCount;) {
             double* sum = &partial[size_t(block) * count * 3];
             int yEnd = std::min(height, (block + 1) * kRowsPerBlock);
             for (int y = block * kRowsPerBlock; y < yEnd; ++y) {
@@ -128,7 +129,12 @@ std::vector<float> projectEnvironment(const EnvironmentMap& env, int order) {
             }
             progress.add(uint64_t(yEnd - block * kRowsPerBlock));
         }
-    });
+    };
+    int workers = std::clamp(threads > 0 ? threads : int(std::thread::hardware_concurrency()), 1, blockCount);
+    std::vector<std::thread> pool;
+    for (int i = 1; i < workers; ++i) pool.emplace_back(projectBlocks);
+    projectBlocks();
+    for (std::thread& thread : pool) thread.join();
     progress.finish();
 
     std::vector<double> total(size_t(count) * 3, 0.0);

@@ -93,9 +93,10 @@ void cubeStripDirection(int faceSize, double x, double y, double d[3]);
 // Exact solid angle of every pixel of the environment's layout, row-major. They sum to 4 pi.
 std::vector<double> texelSolidAngles(const EnvironmentMap& env);
 // Projects radiance onto `order` bands (1..kMaxOrder) with exact per-texel solid angles: the basis is evaluated
-// once at each texel centre and accumulated in double. Runs on TBB over fixed row blocks summed in a fixed order,
-// so the result is bit-identical for any thread count. Returns [order^2][3].
-std::vector<float> projectEnvironment(const EnvironmentMap& env, int order);
+// once at each texel centre and accumulated in double. Runs on `threads` std::threads (0 = all; no TBB, so the thin
+// runtime can project) over fixed row blocks summed in a fixed order, so the result is bit-identical for any
+// thread count. Returns [order^2][3].
+std::vector<float> projectEnvironment(const EnvironmentMap& env, int order, int threads = 0);
 // Irradiance at the unit normal n from RGB radiance coefficients ([order^2][3]) via the clamped-cosine
 // convolution: E(n) = sum A_l L_lm Y_lm(n).
 void irradiance(int order, const float* radianceCoeffs, const double n[3], double out[3]);

@@ -1,5 +1,6 @@
 # Run by ctest (see CMakeLists.txt): installs the runtime component of BUILD_DIR under WORK_DIR/prefix, then
-# configures, builds and runs the consumer project in SOURCE_DIR against that prefix alone.
+# configures, builds and runs the consumer project in SOURCE_DIR against that prefix alone, and checks with ldd that
+# the consumer loads none of the heavy libraries the thin runtime must not need.
 file(REMOVE_RECURSE ${WORK_DIR})
 
 function(run step)
@@ -20,3 +21,21 @@ run(configure ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -G ${GENERA
     -DEXPECTED_PRT_DIR=${WORK_DIR}/prefix/lib/cmake/prt)
 run(build ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(relight ${WORK_DIR}/build/consumer ${WORK_DIR}/consumer.glb)
+
+# The thin runtime's promise: the consumer needs the C++ standard library and tinygltf, nothing of the rest of prt.
+execute_process(COMMAND ldd ${WORK_DIR}/build/consumer RESULT_VARIABLE result OUTPUT_VARIABLE libraries
+                ERROR_VARIABLE libraries)
+if(NOT result EQUAL 0)
+  message(FATAL_ERROR "ldd failed (${result}):\n${libraries}")
+endif()
+foreach(forbidden OpenImageIO tbb embree ceres OpenCL OpenEXR xxhash)
+  string(TOLOWER "${libraries}" lower)
+  string(TOLOWER "${forbidden}" name)
+  if(lower MATCHES "lib${name}")
+    message(FATAL_ERROR "the consumer loads ${forbidden}:\n${libraries}")
+  endif()
+endforeach()
+string(REGEX MATCHALL "\n" lines "\n${libraries}")
+list(LENGTH lines count)
+file(SIZE ${WORK_DIR}/build/consumer bytes)
+message(STATUS "ldd: ${count} lines, none of OpenImageIO, TBB, Embree, Ceres, OpenCL, OpenEXR, xxhash; consumer ${bytes} bytes")

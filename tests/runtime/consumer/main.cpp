@@ -1,5 +1,5 @@
 // Writes a small bundle, loads its transfer with the installed runtime and relights it: exit 0 when the
-// radiance is the hand-computed one.
+// radiance is the hand-computed one, per vertex and per texel (texels in the bundle, no image library).
 #include <runtime.h>
 
 #include <cmath>
@@ -35,6 +35,22 @@ int main(int argc, char** argv) {
                                  (v + 1) * (c + 1));
                     return 1;
                 }
+        // Per-texel transfer stored in the bundle's own buffers: a 2x1 atlas, texel t has transfer t + 1.
+        prt::Layer texels;
+        texels.name = "texel_transfer";
+        texels.domain = "texel";
+        texels.semantic = "sh_transfer_rgb";
+        texels.shape = {2, 1, 3};
+        texels.data = {1, 1, 1, 2, 2, 2};
+        texels.params = {{"order", 1}, {"width", 2}, {"height", 1}};
+        bundle.layers.push_back(texels);
+        prt::TexelRelightModel atlas = prt::texelRelightModel(bundle, "in-memory bundle");
+        float texelRadiance[6];
+        prt::relight(atlas.rows, lighting, 0, atlas.rows.vertexCount, texelRadiance);
+        if (atlas.width != 2 || texelRadiance[5] != 6.0f) {
+            std::fprintf(stderr, "texel radiance %g, expected 6\n", texelRadiance[5]);
+            return 1;
+        }
     } catch (const prt::Error& e) {
         std::fprintf(stderr, "%s\n", e.what());
         return 1;

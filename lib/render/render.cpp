@@ -1,0 +1,125 @@
+// prt render: primary rays through the shared pinhole camera, relit radiance interpolated at each hit.
+#include "render.h"
+
+#include "core.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+namespace prt {
+
+namespace {
+
+// What a primary ray found: the triangle and the barycentrics of its vertices 1 and 2 (Embree's u, v).
+struct PrimaryHit {
+    enum Kind { Miss, Front, Back } kind = Miss;
+    uint32_t triangle = 0;
+    float u = 0, v = 0;
+};
+
+// Casts one ray per pixel (rows in parallel; each pixel is independent, so the image does not depend on the
+// thread count) and lets `shade` colour every front-face hit.
+RenderedImage castPrimaryRays(const TriMesh& mesh, const PinholeCamera& camera,
+                              const std::function<void(const PrimaryHit&, float*)>& shade) {
+    const PinholeRays rays = pinholeRays(camera);
+    EmbreeScene embree(mesh);
+    RenderedImage result;
+    result.radiance.width = camera.width;
+    result.radiance.height = camera.height;
+    const size_t pixels = size_t(camera.width) * camera.height;
+    result.radiance.rgb.assign(pixels * 3, 0.0f);
+    result.coverage.assign(pixels, 0.0f);
+    Progress progress("render", uint64_t(camera.height));
+    tbb::parallel_for(tbb::blocked_range<int>(0, camera.height), [&](const tbb::blocked_range<int>& rowRange) {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        for (int y = rowRange.begin(); y != rowRange.end(); ++y) {
+            for (int x = 0; x < camera.width; ++x) {
+                size_t pixel = size_t(y) * camera.width + x;
+                float d[3];
+                pinholeRayDirection(rays, pixel, d);
+                RTCRayHit rayHit{};
+                rayHit.ray.org_x = camera.eye[0], rayHit.ray.org_y = camera.eye[1], rayHit.ray.org_z = camera.eye[2];
+                rayHit.ray.dir_x = d[0], rayHit.ray.dir_y = d[1], rayHit.ray.dir_z = d[2];
+                rayHit.ray.tnear = 0.0f;
+                rayHit.ray.tfar = INFINITY;
+                rayHit.ray.mask = 0xFFFFFFFFu;
+                rayHit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                rtcIntersect1(embree.scene, &context, &rayHit);
+                if (rayHit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+                result.coverage[pixel] = 1.0f;
+                PrimaryHit hit;
+                hit.triangle = rayHit.hit.primID;
+                hit.u = rayHit.hit.u;
+                hit.v = rayHit.hit.v;
+                // Counter-clockwise fronts (docs/bundle.md): the face normal is (p1 - p0) x (p2 - p0).
+                const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
+                const float *p0 = &mesh.positions[corner[0] * 3], *p1 = &mesh.positions[corner[1] * 3],
+                            *p2 = &mesh.positions[corner[2] * 3];
+                float e1[3], e2[3];
+                for (int c = 0; c < 3; ++c) e1[c] = p1[c] - p0[c], e2[c] = p2[c] - p0[c];
+                float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                              e1[0] * e2[1] - e1[1] * e2[0]};
+                if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0.0f) continue; // a back face stays black
+                hit.kind = PrimaryHit::Front;
+                shade(hit, &result.radiance.rgb[pixel * 3]);
+            }
+            progress.add(1);
+        }
+    });
+    throwIfEmbreeFailed(embree.device, "render");
+    progress.finish();
+    result.rays = pixels;
+    return result;
+}
+
+} // namespace
+
+RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera) {
+    if (radiance.size() != mesh.vertexCount() * 3)
+        throw Error("", "render", std::to_string(radiance.size() / 3) + " radiance rows for " +
+                                      std::to_string(mesh.vertexCount()) + " vertices");
+    return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
+        const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
+        float w = 1.0f - hit.u - hit.v;
+        for (int c = 0; c < 3; ++c)
+            out[c] = w * radiance[corner[0] * 3 + c] + hit.u * radiance[corner[1] * 3 + c] +
+                     hit.v * radiance[corner[2] * 3 + c];
+    });
+}
+
+RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera) {
+    if (mesh.texcoords.size() != mesh.vertexCount() * 2)
+        throw Error("", "render", "the mesh has no TEXCOORD_0 for its texels (prt bake adds an atlas)");
+    if (atlas.width <= 0 || atlas.height <= 0 || atlas.rgb.size() != size_t(atlas.width) * atlas.height * 3)
+        throw Error("", "render", "the relit atlas has no texels or a wrong size");
+    return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
+        const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
+        float w = 1.0f - hit.u - hit.v;
+        float uv[2];
+        for (int a = 0; a < 2; ++a)
+            uv[a] = w * mesh.texcoords[corner[0] * 2 + a] + hit.u * mesh.texcoords[corner[1] * 2 + a] +
+                    hit.v * mesh.texcoords[corner[2] * 2 + a];
+        // The nearest texel: texel (x, y) covers u in [x, x + 1) / width, v in [y, y + 1) / height.
+        int x = std::clamp(int(std::floor(uv[0] * float(atlas.width))), 0, atlas.width - 1);
+        int y = std::clamp(int(std::floor(uv[1] * float(atlas.height))), 0, atlas.height - 1);
+        const float* texel = &atlas.rgb[(size_t(y) * atlas.width + x) * 3];
+        std::copy(texel, texel + 3, out);
+    });
+}
+
+void writeRenderedExr(const std::string& path, const Image& image, const std::vector<float>& coverage) {
+    const size_t pixels = size_t(image.width) * image.height;
+    std::vector<float> rgba(pixels * 4);
+    for (size_t p = 0; p < pixels; ++p) {
+        std::copy(&image.rgb[p * 3], &image.rgb[p * 3] + 3, &rgba[p * 4]);
+        rgba[p * 4 + 3] = coverage.empty() ? 1.0f : coverage[p];
+    }
+    writeImagePixels(path, image.width, image.height, {"R", "G", "B", "A"}, rgba.data(), PixelStorage::Float);
+}
+
+} // namespace prt

@@ -1,0 +1,37 @@
+// Pictures of relit bundles (`prt render`): one Embree primary ray per pixel through the pinhole camera that
+// `prt reference --image` uses (lib/raycast), so a render and a reference line up pixel for pixel. At a front-face
+// hit the pixel takes the relit radiance interpolated there: per vertex with the hit's barycentrics (what a
+// rasteriser does with a per-vertex colour), or per texel as the nearest texel of the relit atlas at the hit's
+// interpolated TEXCOORD_0 (glTF's u right, v down; texel row 0 at the top). A back-face hit is black, as it ends a
+// reference path; a ray that hits nothing is black with coverage 0.
+#pragma once
+
+#include "bundle.h"
+#include "image.h"
+#include "raycast.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace prt {
+
+struct RenderedImage {
+    Image radiance;              // linear RGB, row 0 at the top
+    std::vector<float> coverage; // per pixel: 1 where the ray hits the mesh (front or back face), 0 where it escapes
+    uint64_t rays = 0;
+};
+
+// Renders per-vertex radiance ([vertexCount][3], the mesh's vertex order, e.g. what the runtime relights).
+// Needs radiance sized mesh.vertexCount() * 3 and a camera pinholeRays accepts. Throws prt::Error otherwise
+// (kExitInput for a wrong radiance size, kExitUsage for a bad camera, kExitFailure for Embree).
+RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera);
+
+// Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0.
+// Needs mesh.uvs for every vertex, atlas.rgb sized width * height * 3. Throws prt::Error otherwise.
+RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera);
+
+// Writes `image` atomically as a linear float RGBA OpenEXR, A = coverage (empty coverage: 1). For a tone-mapped
+// PNG, `prt render` passes the radiance through compare.h's toneMap, the one tone map of prt's pictures.
+void writeRenderedExr(const std::string& path, const Image& image, const std::vector<float>& coverage);
+
+} // namespace prt

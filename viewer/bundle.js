@@ -1,0 +1,123 @@
+// Reads a prt bundle (.glb with the PRT_bundle extension, docs/bundle.md) without any glTF library: the mesh
+// attributes and the layers are plain views into the one binary buffer.
+
+const kComponentSize = { 5126: 4, 5125: 4, 5123: 2, 5121: 1 };
+const kTypeSize = { SCALAR: 1, VEC2: 2, VEC3: 3, VEC4: 4 };
+
+function halfToFloat(h) {
+  const sign = h & 0x8000 ? -1 : 1, exponent = (h >> 10) & 0x1f, fraction = h & 0x3ff;
+  if (exponent === 0) return sign * fraction * 2 ** -24;
+  if (exponent === 31) return fraction ? NaN : sign * Infinity;
+  return sign * (1 + fraction / 1024) * 2 ** (exponent - 15);
+}
+
+// Splits a GLB into its JSON and BIN chunk. Throws Error for anything that is not a glTF 2 binary.
+export function parseGlb(arrayBuffer) {
+  const view = new DataView(arrayBuffer);
+  if (view.getUint32(0, true) !== 0x46546c67 || view.getUint32(4, true) !== 2) throw new Error('not a glTF 2 binary');
+  const jsonLength = view.getUint32(12, true);
+  if (view.getUint32(16, true) !== 0x4e4f534a) throw new Error('first chunk is not JSON');
+  const json = JSON.parse(new TextDecoder().decode(new Uint8Array(arrayBuffer, 20, jsonLength)));
+  const binStart = 20 + jsonLength;
+  const binLength = view.getUint32(binStart, true);
+  if (view.getUint32(binStart + 4, true) !== 0x004e4942) throw new Error('second chunk is not BIN');
+  return { json, bin: arrayBuffer.slice(binStart + 8, binStart + 8 + binLength) };
+}
+
+function accessorArray(gltf, bin, index) {
+  const accessor = gltf.accessors[index];
+  const bufferView = gltf.bufferViews[accessor.bufferView];
+  const offset = (bufferView.byteOffset || 0) + (accessor.byteOffset || 0);
+  const count = accessor.count * kTypeSize[accessor.type];
+  if (bufferView.byteStride && bufferView.byteStride !== kComponentSize[accessor.componentType] * kTypeSize[accessor.type])
+    throw new Error('interleaved accessors are not supported');
+  switch (accessor.componentType) {
+    case 5126: return new Float32Array(bin.slice(offset, offset + count * 4));
+    case 5125: return new Uint32Array(bin.slice(offset, offset + count * 4));
+    case 5123: return Uint32Array.from(new Uint16Array(bin.slice(offset, offset + count * 2)));
+    case 5121: return Uint32Array.from(new Uint8Array(bin.slice(offset, offset + count)));
+    default: throw new Error(`accessor ${index}: component type ${accessor.componentType}`);
+  }
+}
+
+// A layer's values as a Float32Array (float32 or float16 layers).
+function layerData(gltf, bin, layer) {
+  if (layer.bufferView === undefined) return null;
+  const bufferView = gltf.bufferViews[layer.bufferView];
+  const offset = bufferView.byteOffset || 0;
+  const count = layer.shape.reduce((p, n) => p * n, 1);
+  const type = layer.componentType || 'float32';
+  if (type === 'float32') return new Float32Array(bin.slice(offset, offset + count * 4));
+  if (type === 'float16') {
+    const halves = new Uint16Array(bin.slice(offset, offset + count * 2));
+    const out = new Float32Array(count);
+    for (let i = 0; i < count; ++i) out[i] = halfToFloat(halves[i]);
+    return out;
+  }
+  throw new Error(`layer ${layer.name}: component type ${type} is not a float`);
+}
+
+// The bundle's mesh (object 0) and its transfer: `kind` "vertex" (layer "transfer") or "texel" (layer
+// "texel_transfer" with its rows in the bundle's buffer). Returns {positions, normals, texcoords, indices,
+// transfer: {rows, order, data, width, height}, extension}.
+export function readBundle(arrayBuffer, kind = 'vertex') {
+  const { json, bin } = parseGlb(arrayBuffer);
+  const extension = json.extensions && json.extensions.PRT_bundle;
+  if (!extension) throw new Error('no PRT_bundle extension: not a prt bundle');
+  const primitive = json.meshes[0].primitives[0];
+  const mesh = {
+    positions: accessorArray(json, bin, primitive.attributes.POSITION),
+    normals: primitive.attributes.NORMAL !== undefined ? accessorArray(json, bin, primitive.attributes.NORMAL) : null,
+    texcoords: primitive.attributes.TEXCOORD_0 !== undefined ? accessorArray(json, bin, primitive.attributes.TEXCOORD_0) : null,
+    indices: accessorArray(json, bin, primitive.indices),
+    extension,
+  };
+  const name = kind === 'texel' ? 'texel_transfer' : 'transfer';
+  const layer = (extension.layers || []).find((l) => l.name === name && (l.object || 0) === 0);
+  if (!layer || layer.semantic !== 'sh_transfer_rgb') throw new Error(`no "${name}" layer of semantic sh_transfer_rgb`);
+  const data = layerData(json, bin, layer);
+  if (!data)
+    throw new Error(`layer "${name}" keeps its texels in ${layer.params && layer.params.uri}: bake with ` +
+                    '--format bundle to store them in the bundle');
+  const order = Math.round(Math.sqrt(layer.shape[1]));
+  mesh.transfer = {
+    rows: layer.shape[0], order, data,
+    width: layer.params && layer.params.width, height: layer.params && layer.params.height,
+  };
+  return mesh;
+}
+
+// A stand-in bundle for frame-time figures: a UV sphere of about `vertexCount` vertices with the unshadowed
+// diffuse transfer of white albedo at `order` bands, T[v][j] = A_l Y_j(n) / pi (a closed form, docs/bundle.md).
+export async function syntheticBundle(vertexCount, order) {
+  const { evaluate } = await import('./sh.js');
+  const rings = Math.max(2, Math.round(Math.sqrt(vertexCount / 2))), segments = Math.max(3, Math.round(vertexCount / rings));
+  const rows = (rings + 1) * (segments + 1), C = order * order;
+  const positions = new Float32Array(rows * 3), data = new Float32Array(rows * C * 3);
+  const clampedCosine = (l) => {
+    if (l === 0) return Math.PI;
+    if (l === 1) return 2 * Math.PI / 3;
+    if (l % 2) return 0;
+    let binomial = 1;
+    for (let k = 0; k < l; k += 2) binomial *= (k + 1) / (k + 2);
+    return 2 * Math.PI * (((l / 2 - 1) % 2) ? -1 : 1) / ((l + 2) * (l - 1)) * binomial;
+  };
+  const band = Float64Array.from({ length: C }, (_, j) => clampedCosine(Math.floor(Math.sqrt(j))) / Math.PI);
+  const basis = new Float64Array(C);
+  for (let i = 0, v = 0; i <= rings; ++i)
+    for (let k = 0; k <= segments; ++k, ++v) {
+      const theta = Math.PI * i / rings, phi = 2 * Math.PI * k / segments;
+      const n = [Math.sin(theta) * Math.sin(phi), Math.cos(theta), Math.sin(theta) * Math.cos(phi)];
+      positions.set(n.map((x) => 0.5 * x), v * 3);
+      evaluate(order, n[0], n[1], n[2], basis);
+      for (let j = 0; j < C; ++j) data.fill(band[j] * basis[j], (v * C + j) * 3, (v * C + j) * 3 + 3);
+    }
+  const indices = new Uint32Array(rings * segments * 6);
+  for (let i = 0, t = 0; i < rings; ++i)
+    for (let k = 0; k < segments; ++k) {
+      const a = i * (segments + 1) + k, b = a + segments + 1;
+      indices.set([a, b, a + 1, a + 1, b, b + 1], t);
+      t += 6;
+    }
+  return { positions, normals: null, texcoords: null, indices, extension: {}, transfer: { rows, order, data } };
+}
