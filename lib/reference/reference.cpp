@@ -99,7 +99,9 @@ ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const Environment
                 float outgoing[3] = {0, 0, 1};
                 if (options.eye) {
                     for (int c = 0; c < 3; ++c) outgoing[c] = (*options.eye)[c] - point.position[c];
-                    normalize(outgoing);
+                    float length = std::sqrt(outgoing[0] * outgoing[0] + outgoing[1] * outgoing[1] +
+                                             outgoing[2] * outgoing[2]);
+                    for (float& c : outgoing) c /= length;
                 }
                 estimatePoint(scene, environment, point, v, options, &result.radiance[v * 3],
                               &result.standardError[v * 3], rays, options.eye ? outgoing : nullptr);
