@@ -32,6 +32,7 @@ void addAdaptCommand(CLI::App& app);
 void addFivCommand(CLI::App& app);
 void addFivVisibilityCommand(CLI::App& app);
 void addFivshadeCommand(CLI::App& app);
+void addGlossyCommand(CLI::App& app);
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
@@ -43,6 +44,10 @@ std::array<double, 3> parseAlbedo(const std::string& text);
 // Parses --shard "I/N" with 0 <= I < N into index I and count N. Throws prt::Error(kExitUsage) naming --shard
 // otherwise.
 void parseShard(const std::string& text, int& index, int& count);
+
+// Parses --brdf "phong:EXPONENT,KS" (EXPONENT > 0, KS in [0, 1]) into exponent and ks. Throws
+// prt::Error(kExitUsage) naming --brdf otherwise.
+void parsePhongBrdf(const std::string& text, double& exponent, double& ks);
 
 // Parses a pinhole camera as `prt reference --image` and `prt render` take it: `size` "W,H" (given by the option
 // `sizeOption`) and `view` "EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY" (--camera, FOVY in degrees).

@@ -35,6 +35,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     addFivCommand(app);
     addFivVisibilityCommand(app);
     addFivshadeCommand(app);
+    addGlossyCommand(app);
     addReferenceCommand(app);
     addRelightCommand(app);
     addCompareCommand(app);

@@ -89,6 +89,40 @@ void parseShard(const std::string& text, int& index, int& count) {
         throw usage("--shard", "'" + text + "' is not I/N with 0 <= I < N");
 }
 
+namespace {
+
+std::vector<double> parseNumberList(const std::string& text, const std::string& flag, const std::string& form) {
+    std::vector<double> values;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        size_t used = 0;
+        double value = 0.0;
+        try {
+            value = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size() || !std::isfinite(value))
+            throw usage(flag, "'" + text + "' is not " + form);
+        values.push_back(value);
+    }
+    return values;
+}
+
+} // namespace
+
+void parsePhongBrdf(const std::string& text, double& exponent, double& ks) {
+    const std::string form = "phong:EXPONENT,KS";
+    if (text.rfind("phong:", 0) != 0) throw usage("--brdf", "'" + text + "' is not " + form + " (the only model)");
+    std::vector<double> values = parseNumberList(text.substr(6), "--brdf", form);
+    if (values.size() != 2) throw usage("--brdf", "'" + text + "' is not " + form);
+    if (!(values[0] > 0.0)) throw usage("--brdf", "the Phong exponent must be > 0, got " + text.substr(6));
+    if (!(values[1] >= 0.0 && values[1] <= 1.0)) throw usage("--brdf", "KS must lie in [0, 1]");
+    exponent = values[0];
+    ks = values[1];
+}
+
 std::array<float, 3> parsePoint(const std::string& text, const char* option) {
     std::vector<float> values;
     std::stringstream in(text);

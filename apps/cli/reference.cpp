@@ -36,6 +36,8 @@ struct ReferenceCommandOptions {
     int lightsWidth = 2048;
     std::vector<std::string> occluders, at; // brute-force direct lighting with occluders (FIV ground truth)
     bool bruteForce = false, unshadowed = false;
+    std::string brdf;      // "phong:N,KS"
+    std::string eye;       // "X,Y,Z"
 };
 
 // The decomposed lighting of a prt-lights file (residual SH plus cones) as a map the path tracer samples.
@@ -99,10 +101,22 @@ void runReference(const ReferenceCommandOptions& options) {
         std::array<double, 3> albedo = parseAlbedo(options.albedo);
         reference.albedo = std::array<float, 3>{float(albedo[0]), float(albedo[1]), float(albedo[2])};
     }
+    if (!options.brdf.empty()) {
+        PhongBrdf phong;
+        parsePhongBrdf(options.brdf, phong.exponent, phong.ks);
+        reference.phong = phong;
+        if (!imageMode && options.eye.empty())
+            throw Error("", "--eye", "--brdf in vertex mode needs --eye X,Y,Z (radiance toward that point)",
+                        kExitUsage);
+    }
+    if (!options.eye.empty()) reference.eye = parsePoint(options.eye, "--eye");
     PinholeCamera camera;
     if (imageMode) parsePinholeCamera(options.imageSize, "--image", options.camera, camera);
 
     bool direct = options.bruteForce || options.unshadowed || !options.occluders.empty();
+    if (direct && reference.phong)
+        throw Error("", "--brdf", "the brute-force direct sum (--brute-force, --unshadowed, --occluder) is diffuse only",
+                    kExitUsage);
     if (direct && (imageMode || options.bounces != 0))
         throw Error("", "--occluder", "--occluder, --brute-force and --unshadowed need --bounces 0 and no --image",
                     kExitUsage);
@@ -210,6 +224,11 @@ void addReferenceCommand(CLI::App& app) {
     command->add_flag("--brute-force", options->bruteForce,
                       "Direct light (--bounces 0) as the exact sum over every texel of the map, one shadow ray each");
     command->add_flag("--unshadowed", options->unshadowed, "With the brute-force sum: no shadows at all");
+    command->add_option("--brdf", options->brdf,
+                        "Glossy surfaces: phong:EXPONENT,KS, normalised Phong on top of the diffuse albedo "
+                        "(docs/conventions.md); vertex mode then needs --eye");
+    command->add_option("--eye", options->eye,
+                        "Eye point X,Y,Z: each vertex's radiance toward it (view-dependent with --brdf)");
     command->callback([options] { runReference(*options); });
 }
 

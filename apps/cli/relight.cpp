@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 namespace prt::cli {
 
@@ -28,6 +29,8 @@ struct RelightOptions {
     std::string lights;
     int lightSamples = 64;
     std::string bounceWindow = "hann";
+    std::string eye; // "X,Y,Z": add the glossy lobes' radiance toward this point
+    bool glossyOnly = false;
 };
 
 // The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
@@ -118,9 +121,23 @@ void runRelight(const RelightOptions& options) {
     if (options.env.empty() && options.shJson.empty()) throw Error("", "--env", "give --env, --sh or --lights", kExitUsage);
     if (!options.env.empty() && !options.shJson.empty()) throw Error("", "--env", "give --env or --sh, not both", kExitUsage);
 
+    if (!options.eye.empty() && (options.texels || options.env.empty()))
+        throw Error("", "--eye", "needs --env (an equirectangular map) and per-vertex output", kExitUsage);
+    if (!options.eye.empty() && options.rotateYDegrees != 0.0)
+        throw Error("", "--eye", "does not combine with --rotate-y", kExitUsage);
     TexelRelightModel texelModel;
-    if (options.texels) texelModel = loadTexelRelightModel(options.bundle);
-    RelightModel model = options.texels ? std::move(texelModel.rows) : loadRelightModel(options.bundle);
+    std::optional<GlossyModel> glossy;
+    RelightModel model;
+    if (options.texels) {
+        texelModel = loadTexelRelightModel(options.bundle);
+        model = std::move(texelModel.rows);
+    } else if (!options.eye.empty()) {
+        Bundle bundle = readBundle(options.bundle);
+        glossy = glossyModel(bundle, options.bundle);
+        model = relightModel(std::move(bundle), options.bundle);
+    } else {
+        model = loadRelightModel(options.bundle);
+    }
     const int coefficients = sh::coefficientCount(model.order);
     double R[9];
     sh::rotationY(options.rotateYDegrees, R);
@@ -128,8 +145,10 @@ void runRelight(const RelightOptions& options) {
 
     // Same order of operations as `prt envsh`: project, rotate, window; windowed over the transfer's bands.
     std::vector<float> lighting;
+    EnvironmentMap environment;
     if (!options.env.empty()) {
-        lighting = environmentLighting(readEnvironmentMap(options.env), model.order, rotation, window);
+        environment = readEnvironmentMap(options.env);
+        lighting = environmentLighting(environment, model.order, rotation, window);
     } else {
         int lightingOrder = 0;
         std::vector<float> read = readLightingJson(options.shJson, &lightingOrder);
@@ -152,6 +171,22 @@ void runRelight(const RelightOptions& options) {
                   model.order, relightSeconds * 1e3,
                   relightSeconds > 0.0 ? model.vertexCount / relightSeconds / 1e6 : 0.0, rows);
     logInfo(rate);
+
+    if (glossy) {
+        if (environment.layout != EnvLayout::Equirectangular)
+            throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map");
+        std::array<float, 3> eye = parsePoint(options.eye, "--eye");
+        double glossyStart = nowSeconds();
+        PrefilteredEnvironment prefiltered = prefilterEnvironment(
+            environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height);
+        std::vector<float> glossyPart(radiance.size());
+        glossyRadiance(*glossy, prefiltered, eye.data(), glossyPart.data());
+        for (size_t i = 0; i < radiance.size(); ++i) radiance[i] = (options.glossyOnly ? 0.0f : radiance[i]) + glossyPart[i];
+        char line[160];
+        std::snprintf(line, sizeof line, "relight: glossy lobes (%d per view) toward the eye in %.3f ms", glossy->lobes,
+                      (nowSeconds() - glossyStart) * 1e3);
+        logInfo(line);
+    }
 
     if (options.texels) {
         Image image;
@@ -199,6 +234,9 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("-o,--output", options->output,
                         "Per-vertex radiance [V,3]: .npy (float32) or .csv; with --texels an RGB float .exr atlas")
         ->required();
+    command->add_option("--eye", options->eye,
+                        "Eye point X,Y,Z: add the bundle's glossy lobes (from `prt glossy`), radiance toward it");
+    command->add_flag("--glossy-only", options->glossyOnly, "With --eye: the glossy part alone, without the diffuse SH");
     command->callback([options] { runRelight(*options); });
 }
 

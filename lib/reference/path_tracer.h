@@ -103,4 +103,14 @@ private:
 void estimateRadiance(const SceneTracer& scene, const EnvironmentSampler& environment, const ShadingPoint& point,
                       int bounces, Pcg32& random, double radiance[3], uint64_t& rays);
 
+// The same for a glossy surface (diffuse albedo plus the Phong lobe of `phong`), seen from unit direction
+// `outgoing` (away from the point). BRDF sampling is a mixture of the cosine and Phong lobes, combined with
+// next-event estimation by the power heuristic; every further vertex is glossy too, seen along the path.
+void estimateGlossyRadiance(const SceneTracer& scene, const EnvironmentSampler& environment,
+                            const ShadingPoint& point, const float outgoing[3], double exponent, double ks,
+                            int bounces, Pcg32& random, double radiance[3], uint64_t& rays);
+
+// The Phong lobe value ks (n + 2) / (2 pi) max(0, r . wi)^n for unit r and wi (docs/conventions.md).
+float phongLobe(const float mirror[3], const float incoming[3], double exponent, double ks);
+
 } // namespace prt::pathtrace

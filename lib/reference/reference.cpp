@@ -25,18 +25,26 @@ void checkInputs(const TriMesh& mesh, const ReferenceOptions& options) {
     if (mesh.normals.size() != mesh.positions.size()) throw Error("", "mesh", "has no vertex normals");
     if (!mesh.albedo.empty() && mesh.albedo.size() != mesh.positions.size())
         throw Error("", "mesh", "albedo is not rgb per vertex");
+    if (options.phong && !(options.phong->exponent > 0.0 && std::isfinite(options.phong->exponent)))
+        throw Error("", "--brdf", "the Phong exponent must be > 0", kExitUsage);
+    if (options.phong && !(options.phong->ks >= 0.0 && options.phong->ks <= 1.0))
+        throw Error("", "--brdf", "the Phong specular albedo must lie in [0, 1]", kExitUsage);
 }
 
 // Mean of `samples` path estimates from `point` and its standard error (Welford's running variance, which
 // stays accurate when the mean is large against the spread).
 void estimatePoint(const SceneTracer& scene, const EnvironmentSampler& environment, const ShadingPoint& point,
                    uint64_t pointIndex, const ReferenceOptions& options, float mean[3], float standardError[3],
-                   uint64_t& rays) {
+                   uint64_t& rays, const float* outgoing = nullptr) {
     double running[3] = {0, 0, 0}, squares[3] = {0, 0, 0};
     for (int sample = 0; sample < options.samples; ++sample) {
         Pcg32 random = sampleGenerator(options.seed, pointIndex, uint64_t(sample));
         double radiance[3];
-        estimateRadiance(scene, environment, point, options.bounces, random, radiance, rays);
+        if (options.phong && outgoing)
+            estimateGlossyRadiance(scene, environment, point, outgoing, options.phong->exponent, options.phong->ks,
+                                   options.bounces, random, radiance, rays);
+        else
+            estimateRadiance(scene, environment, point, options.bounces, random, radiance, rays);
         for (int c = 0; c < 3; ++c) {
             double delta = radiance[c] - running[c];
             running[c] += delta / (sample + 1);
@@ -77,6 +85,8 @@ auto withThreads(int threads, const Work& work) {
 ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const EnvironmentMap& env,
                                           const ReferenceOptions& options) {
     checkInputs(mesh, options);
+    if (options.phong && !options.eye)
+        throw Error("", "--eye", "a glossy BRDF's per-vertex radiance needs the eye point", kExitUsage);
     EnvironmentSampler environment = makeEnvironmentSampler(env);
     return withThreads(options.threads, [&] {
         SceneTracer scene(mesh, options.albedo);
@@ -84,9 +94,18 @@ ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const Environment
         result.radiance.resize(mesh.vertexCount() * 3);
         result.standardError.resize(mesh.vertexCount() * 3);
         auto shadeVertices = [&](size_t begin, size_t end, uint64_t& rays) {
-            for (size_t v = begin; v < end; ++v)
-                estimatePoint(scene, environment, scene.vertexPoint(uint32_t(v)), v, options, &result.radiance[v * 3],
-                              &result.standardError[v * 3], rays);
+            for (size_t v = begin; v < end; ++v) {
+                ShadingPoint point = scene.vertexPoint(uint32_t(v));
+                float outgoing[3] = {0, 0, 1};
+                if (options.eye) {
+                    for (int c = 0; c < 3; ++c) outgoing[c] = (*options.eye)[c] - point.position[c];
+                    float length = std::sqrt(outgoing[0] * outgoing[0] + outgoing[1] * outgoing[1] +
+                                             outgoing[2] * outgoing[2]);
+                    for (float& c : outgoing) c /= length;
+                }
+                estimatePoint(scene, environment, point, v, options, &result.radiance[v * 3],
+                              &result.standardError[v * 3], rays, options.eye ? outgoing : nullptr);
+            }
         };
         result.rays = parallelOverPoints("reference", mesh.vertexCount(), shadeVertices);
         return result;
@@ -119,8 +138,9 @@ ReferenceImage referenceImage(const TriMesh& mesh, const EnvironmentMap& env, co
                     const float* emitted = environment.texels[environmentTexel(environment, d)].radiance;
                     std::copy(emitted, emitted + 3, radiance);
                 } else if (kind == HitKind::FrontFace) {
+                    float outgoing[3] = {-d[0], -d[1], -d[2]};
                     estimatePoint(scene, environment, hit, pixel, options, radiance,
-                                  &result.standardError.rgb[pixel * 3], rays);
+                                  &result.standardError.rgb[pixel * 3], rays, outgoing);
                 } // a back face stays black, as it ends a path
             }
         };

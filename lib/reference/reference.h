@@ -20,6 +20,14 @@
 
 namespace prt {
 
+// The normalised Phong lobe on top of the diffuse albedo (docs/conventions.md, "Glossy BRDF"):
+// f = albedo / pi + ks (n + 2) / (2 pi) max(0, r . wi)^n, r the mirror of the outgoing direction about the
+// shading normal, the lobe zero when the outgoing direction is below the surface.
+struct PhongBrdf {
+    double exponent = 32.0; // n > 0
+    double ks = 0.0;        // specular albedo in [0, 1]
+};
+
 struct ReferenceOptions {
     int bounces = 0;   // extra diffuse vertices per path: 0 = direct lighting only (shadowed)
     int samples = 256; // paths per vertex or pixel, >= 2 (the standard error needs two)
@@ -27,6 +35,10 @@ struct ReferenceOptions {
     // Diffuse albedo: this constant if set, else the mesh's per-vertex albedo if it has one, else white.
     std::optional<std::array<float, 3>> albedo;
     int threads = 0; // worker threads; 0 = all hardware threads. Results do not depend on it.
+    // Glossy surfaces: the Phong lobe at every path vertex. Vertex mode then needs `eye`: each vertex's radiance
+    // is the radiance it sends toward that point (view-dependent); images use the camera ray.
+    std::optional<PhongBrdf> phong;
+    std::optional<std::array<float, 3>> eye;
 };
 
 struct ReferenceRadiance {

@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <numbers>
 #include <vector>
 
@@ -342,3 +343,58 @@ TEST(Reference, BadInputsThrow) {
 }
 
 } // namespace
+
+namespace {
+
+// Directional albedo of the Phong lobe, integral of ks (n+2)/(2 pi) max(0, r.wi)^n cos(theta_i) over the
+// hemisphere, for an outgoing direction at polar angle thetaOut: midpoint rule, fine enough for 1e-4.
+double phongDirectionalAlbedo(double thetaOut, double exponent, double ks) {
+    const int rows = 300, columns = 600;
+    double r[3] = {-std::sin(thetaOut), 0.0, std::cos(thetaOut)}; // mirror of wo = (sin, 0, cos)
+    double sum = 0.0;
+    for (int i = 0; i < rows; ++i) {
+        double theta = (i + 0.5) * std::numbers::pi / 2 / rows;
+        for (int j = 0; j < columns; ++j) {
+            double phi = (j + 0.5) * 2 * std::numbers::pi / columns;
+            double w[3] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+            double lobe = std::max(0.0, r[0] * w[0] + r[1] * w[1] + r[2] * w[2]);
+            sum += std::pow(lobe, exponent) * std::cos(theta) * std::sin(theta);
+        }
+    }
+    double cell = (std::numbers::pi / 2 / rows) * (2 * std::numbers::pi / columns);
+    return ks * (exponent + 2.0) / (2.0 * std::numbers::pi) * sum * cell;
+}
+
+} // namespace
+
+TEST(Reference, PhongWhiteFurnaceReturnsTheDirectionalAlbedo) {
+    // Constant radiance L on an unoccluded sphere: each vertex returns L (rho + E(theta_o)), E the lobe's
+    // directional albedo, which is ks at normal incidence and never more.
+    const float radiance[3] = {1.0f, 1.0f, 1.0f};
+    EnvironmentMap env = constantEnvironment(radiance);
+    prt::TriMesh sphere = prt::makeSphere(1.0f, 8, 16);
+    prt::ReferenceOptions options;
+    options.samples = 512;
+    options.albedo = std::array<float, 3>{0.3f, 0.3f, 0.3f};
+    options.phong = prt::PhongBrdf{16.0, 0.6};
+    options.eye = std::array<float, 3>{0.0f, 3.0f, 0.0f};
+    EXPECT_NEAR(phongDirectionalAlbedo(0.0, 16.0, 0.6), 0.6, 1e-4);
+    prt::ReferenceRadiance result = prt::referenceVertexRadiance(sphere, env, options);
+    std::vector<double> expected(result.radiance.size());
+    for (size_t v = 0; v < sphere.vertexCount(); ++v) {
+        const float* p = &sphere.positions[v * 3];
+        double toEye[3] = {-p[0], 3.0 - p[1], -p[2]};
+        double length = std::sqrt(toEye[0] * toEye[0] + toEye[1] * toEye[1] + toEye[2] * toEye[2]);
+        double cosOut = (toEye[0] * sphere.normals[v * 3] + toEye[1] * sphere.normals[v * 3 + 1] +
+                         toEye[2] * sphere.normals[v * 3 + 2]) / length;
+        static std::map<float, double> albedoByCosine; // rings share their cosine
+        if (!albedoByCosine.count(float(cosOut)))
+            albedoByCosine[float(cosOut)] =
+                cosOut > 0.0 ? phongDirectionalAlbedo(std::acos(std::min(1.0, cosOut)), 16.0, 0.6) : 0.0;
+        double lobe = albedoByCosine[float(cosOut)];
+        for (int c = 0; c < 3; ++c) expected[v * 3 + c] = 0.3 + lobe;
+    }
+    expectUnbiasedWithinItsStandardError(result, expected, 1e-3);
+    // The north pole faces the eye: rho + ks.
+    EXPECT_NEAR(result.radiance[0 * 3 + 1], 0.9, 4.5 * result.standardError[1] + 1e-3);
+}

@@ -1,0 +1,214 @@
+// prt glossy: view-dependent glossy transfer as spherical-Gaussian lobes per vertex and view (lib/glossy), plus
+// the diffuse SH transfer (lib/transfer, or copied from --diffuse), in one bundle.
+#include "cli.h"
+
+#include "bundle.h"
+#include "core.h"
+#include "glossy.h"
+#include "sh.h"
+#include "transfer.h"
+
+#include <nlohmann/json.hpp>
+
+#include <memory>
+
+#ifndef PRT_VERSION
+#define PRT_VERSION "0.0.0"
+#endif
+
+namespace prt::cli {
+
+namespace {
+
+struct GlossyArgs {
+    std::string input;
+    std::string output;
+    std::string brdf;
+    std::string albedo = "0.5";
+    int lobes = 1;
+    std::string solver = "pocl";
+    int bounces = 0;
+    std::string diffuse;
+    int order = 3;
+    int samples = 1024;
+    int grid = 16;
+    double beta = 0.01, gamma = 0.01, delta = 0.01;
+    bool noCoherence = false;
+    int threads = 0;
+    int iterations = 100;
+    std::string stats;
+    size_t compareSolvers = 0;
+    std::string vertexStats;
+    std::string lobeType = "float16";
+};
+
+Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
+
+Layer diffuseLayer(const GlossyArgs& args, const TriMesh& mesh, const std::array<double, 3>& albedo, int threads) {
+    if (!args.diffuse.empty()) {
+        Bundle diffuse = readBundle(args.diffuse);
+        const Layer* layer = findLayer(diffuse, "transfer");
+        if (!layer || layer->domain != "vertex" || layer->semantic != "sh_transfer_rgb")
+            throw Error(args.diffuse, "layers", "has no per-vertex \"transfer\" layer (prt transfer writes one)");
+        if (layer->shape.empty() || layer->shape[0] != mesh.vertexCount())
+            throw Error(args.diffuse, "layer transfer", "has another vertex count than " + args.input);
+        return *layer;
+    }
+    TransferOptions options;
+    options.mode = args.bounces > 0 ? TransferMode::Interreflected : TransferMode::Shadowed;
+    options.bounces = args.bounces;
+    options.order = args.order;
+    options.samples = args.samples;
+    options.albedo = {float(albedo[0]), float(albedo[1]), float(albedo[2])};
+    options.albedoOverride = true;
+    options.threads = threads;
+    Transfer transfer = computeTransfer(mesh, options);
+    Layer layer;
+    layer.name = "transfer";
+    layer.domain = "vertex";
+    layer.semantic = "sh_transfer_rgb";
+    layer.shape = {mesh.vertexCount(), uint64_t(args.order) * args.order, 3};
+    layer.data = std::move(transfer.coefficients);
+    layer.params = {{"mode", transferModeName(options.mode)}, {"order", args.order}, {"samples", args.samples},
+                    {"bounces", args.bounces}, {"albedo", albedo}, {"seed", 0},
+                    {"direction_set", kTransferDirectionSet}, {"ray_offset", transfer.stats.rayOffset},
+                    {"rays", transfer.stats.rays}, {"back_face_hits", transfer.stats.backFaceHits}};
+    return layer;
+}
+
+void runGlossy(const GlossyArgs& args) {
+    double start = nowSeconds();
+    glossy::GlossyOptions options;
+    if (args.brdf.empty()) throw usage("--brdf", "is required: phong:EXPONENT,KS");
+    parsePhongBrdf(args.brdf, options.phong.exponent, options.phong.ks);
+    if (args.lobes < 1 || args.lobes > glossy::kMaxLobes)
+        throw usage("--lobes", "must lie in 1.." + std::to_string(glossy::kMaxLobes) + ", got " +
+                                   std::to_string(args.lobes));
+    options.lobes = args.lobes;
+    options.solver = glossy::parseSolver(args.solver);
+    if (args.bounces < 0) throw usage("--bounces", "must be >= 0");
+    if (args.order < 1 || args.order > sh::kMaxOrder) throw usage("--order", "outside 1.." + std::to_string(sh::kMaxOrder));
+    if (args.samples < 1 || args.samples > kMaxTransferSamples) throw usage("--samples", "out of range");
+    if (args.grid < 2 || args.grid > 64) throw usage("--grid", "cube resolution must lie in 2..64");
+    if (!(args.beta >= 0 && args.gamma >= 0 && args.delta >= 0)) throw usage("--coherence", "weights must be >= 0");
+    if (args.iterations < 1) throw usage("--iterations", "must be >= 1");
+    if (args.compareSolvers == 0 && args.output.empty()) throw usage("-o", "is required");
+    if (args.compareSolvers == 0 && fileExtension(args.output) != "glb")
+        throw Error(args.output, "-o", "must end in .glb", kExitUsage);
+    options.gridResolution = args.grid;
+    options.weights = args.noCoherence ? glossy::FitWeights{} : glossy::FitWeights{args.beta, args.gamma, args.delta};
+    options.solverOptions.threads = resolveThreads(args.threads);
+    options.solverOptions.maxIterations = args.iterations;
+    options.progress = !logOptions().quiet;
+    if (args.lobeType != "float16" && args.lobeType != "float32")
+        throw usage("--lobe-type", "must be float16 or float32");
+    options.lobeType = args.lobeType;
+    std::array<double, 3> albedo = parseAlbedo(args.albedo);
+    if (options.solver == glossy::Solver::OpenCl) logInfo("glossy: OpenCL device " + glossy::openClDeviceName());
+
+    Bundle input = readBundle(args.input);
+    TriMesh& mesh = input.mesh;
+    if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
+    logInfo("glossy: " + args.input + " (" + std::to_string(mesh.vertexCount()) + " vertices), " + args.brdf + ", " +
+            std::to_string(args.lobes) + " lobes, " + args.solver + ", grid 6x" + std::to_string(args.grid) + "^2");
+    if (args.compareSolvers > 0) {
+        glossy::SolverComparison c = glossy::compareSolvers(mesh, options, args.compareSolvers);
+        nlohmann::json record = {{"problems", c.problems}, {"lobes", args.lobes}, {"grid", args.grid},
+                                 {"brdf", args.brdf}, {"threads", options.solverOptions.threads},
+                                 {"pocl_seconds", c.openClSeconds}, {"ceres_seconds", c.ceresSeconds},
+                                 {"pocl_ms_per_fit", 1e3 * c.openClSeconds / double(c.problems)},
+                                 {"ceres_ms_per_fit", 1e3 * c.ceresSeconds / double(c.problems)},
+                                 {"speed_ratio", c.ceresSeconds / c.openClSeconds},
+                                 {"initial_cost", c.initialCost}, {"pocl_cost", c.openClCost},
+                                 {"ceres_cost", c.ceresCost}, {"share_within_1pct", c.shareWithinOnePercent},
+                                 {"pocl_mean_iterations", c.openClMeanIterations},
+                                 {"ceres_mean_iterations", c.ceresMeanIterations}};
+        logEvent("glossy_solver_comparison", record.dump());
+        if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
+        return;
+    }
+    Layer diffuse = diffuseLayer(args, mesh, albedo, options.solverOptions.threads);
+    glossy::GlossyLobes lobes = glossy::computeGlossyLobes(mesh, options);
+
+    Bundle output;
+    output.layers.push_back(glossy::lobeLayer(lobes, options, mesh.vertexCount()));
+    output.layers.push_back(std::move(diffuse));
+    output.mesh = std::move(mesh);
+    output.producer = {{"tool", "prt"}, {"version", PRT_VERSION}, {"stage", "glossy"}};
+    output.inputs = {{"mesh", hashFile(args.input)}};
+    if (!args.diffuse.empty()) output.inputs["diffuse"] = hashFile(args.diffuse);
+    output.convention = conventionRecord();
+    writeBundle(args.output, output);
+    logInfo("glossy: wrote " + args.output);
+
+    const glossy::GlossyStats& stats = lobes.stats;
+    nlohmann::json record = {{"problems", stats.problems},
+                             {"rays", stats.rays},
+                             {"tabulate_seconds", stats.tabulateSeconds},
+                             {"fit_seconds", stats.fitSeconds},
+                             {"mean_cost", stats.meanCost},
+                             {"mean_relative_error", stats.meanRelativeError},
+                             {"solver", args.solver},
+                             {"lobes", args.lobes},
+                             {"grid", args.grid},
+                             {"brdf", args.brdf},
+                             {"coherence", !args.noCoherence},
+                             {"view_pairs", stats.viewPairs},
+                             {"view_flips", stats.viewFlips},
+                             {"vertex_pairs", stats.vertexPairs},
+                             {"vertex_flips", stats.vertexFlips},
+                             {"seconds", nowSeconds() - start},
+                             {"peak_memory_bytes", peakMemoryBytes()},
+                             {"vertices", output.mesh.vertexCount()},
+                             {"lobe_layer_bytes_per_vertex",
+                              double(output.layers[0].shape[1] * output.layers[0].shape[2] * output.layers[0].shape[3]) *
+                                  (args.lobeType == "float16" ? 2.0 : 4.0)}};
+    if (!args.vertexStats.empty())
+        writeNpy(args.vertexStats, lobes.vertexStats, {lobes.vertexEnd - lobes.vertexBegin, size_t(glossy::kVertexStatColumns)});
+    logEvent("glossy_stats", record.dump());
+    if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
+
+    StageCost cost;
+    cost.stage = "glossy";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = stats.rays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
+} // namespace
+
+void addGlossyCommand(CLI::App& app) {
+    auto args = std::make_shared<GlossyArgs>();
+    CLI::App* command = app.add_subcommand(
+        "glossy", "View-dependent glossy transfer: spherical-Gaussian lobes per vertex and view (OpenCL LM or Ceres) "
+                  "plus diffuse SH transfer");
+    command->add_option("mesh", args->input, "Input mesh with normals (from `prt meshprep`)")->required();
+    command->add_option("-o,--output", args->output, "Output bundle (.glb): glossy_lobes and transfer layers");
+    command->add_option("--brdf", args->brdf, "phong:EXPONENT,KS (docs/conventions.md)")->required();
+    command->add_option("--albedo", args->albedo, "Diffuse albedo R,G,B or grey, in [0,1] (default 0.5)");
+    command->add_option("--lobes", args->lobes, "Spherical Gaussians per vertex and view, 1..4 (default 1)");
+    command->add_option("--solver", args->solver, "pocl (batched OpenCL LM, default) or ceres (reference)");
+    command->add_option("--bounces", args->bounces, "Diffuse interreflection bounces of the SH part (default 0)");
+    command->add_option("--diffuse", args->diffuse, "Take the diffuse transfer layer from this bundle instead");
+    command->add_option("--order", args->order, "SH bands of the diffuse part (default 3)");
+    command->add_option("--samples", args->samples, "Rays per vertex of the diffuse part (default 1024)");
+    command->add_option("--grid", args->grid, "Cube face resolution of the kernel grid (default 16: 6x16x16)");
+    command->add_option("--beta", args->beta, "Weight of the mean-coherence term (default 0.01)");
+    command->add_option("--gamma", args->gamma, "Weight of the width-coherence term (default 0.01)");
+    command->add_option("--delta", args->delta, "Weight of the no-flip term (default 0.01)");
+    command->add_flag("--no-coherence", args->noCoherence, "Independent fits only, no coherence pass");
+    command->add_option("--iterations", args->iterations, "LM iteration limit per fit (default 100)");
+    command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
+    command->add_option("--stats", args->stats, "Also write the fit statistics as JSON to this file");
+    command->add_option("--compare-solvers", args->compareSolvers,
+                        "Instead of a bundle: solve the first N fit problems with both solvers and report time, "
+                        "cost and agreement (JSON on stderr and in --stats)");
+    command->add_option("--vertex-stats", args->vertexStats,
+                        "Also write per-vertex diagnostics [V,6] (.npy): normal, visible share, mean and worst "
+                        "relative fit error");
+    command->add_option("--lobe-type", args->lobeType, "Lobe layer storage: float16 (default) or float32");
+    command->callback([args] { runGlossy(*args); });
+}
+
+} // namespace prt::cli

@@ -1,0 +1,404 @@
+// The glossy stage: per chunk of vertices, visibility over the grid (Embree), the kernel for every view above
+// the horizon, a first independent fit, lobe alignment across views, then the coherence fit; the chunk's kernels
+// are dropped before the next chunk, so memory is one chunk plus the output.
+#include "glossy.h"
+
+#include "core.h"
+#include "raycast.h"
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <optional>
+
+namespace prt::glossy {
+
+Solver parseSolver(const std::string& name) {
+    if (name == "pocl" || name == "opencl") return Solver::OpenCl;
+    if (name == "ceres") return Solver::Ceres;
+    throw Error("", "--solver", "'" + name + "' is not pocl or ceres", kExitUsage);
+}
+
+namespace {
+
+void checkOptions(const TriMesh& mesh, const GlossyOptions& options) {
+    if (!(options.phong.exponent > 0.0 && std::isfinite(options.phong.exponent)))
+        throw Error("", "--brdf", "the Phong exponent must be > 0", kExitUsage);
+    if (!(options.phong.ks >= 0.0 && options.phong.ks <= 1.0))
+        throw Error("", "--brdf", "KS must lie in [0, 1]", kExitUsage);
+    if (options.lobes < 1 || options.lobes > kMaxLobes)
+        throw Error("", "--lobes", "must lie in 1.." + std::to_string(kMaxLobes) + ", got " +
+                                       std::to_string(options.lobes), kExitUsage);
+    if (options.gridResolution < 2 || options.gridResolution > 64)
+        throw Error("", "--grid", "cube resolution must lie in 2..64", kExitUsage);
+    if (options.chunkVertices < 1) throw Error("", "chunk", "must be >= 1", kExitUsage);
+    if (mesh.normals.size() != mesh.positions.size())
+        throw Error("", "mesh", "has no vertex normals (prt meshprep adds them)");
+}
+
+// Solver form (a, m, log lambda) to output form (a, unit mu, lambda) and back.
+void toOutput(const float* solver, float* out, int lobes) {
+    for (int k = 0; k < lobes; ++k) {
+        const float* s = solver + k * kLobeParams;
+        float* o = out + k * kLobeParams;
+        double length = std::sqrt(double(s[1]) * s[1] + double(s[2]) * s[2] + double(s[3]) * s[3]);
+        o[0] = s[0];
+        for (int c = 0; c < 3; ++c) o[1 + c] = float(s[1 + c] / length);
+        o[4] = float(std::exp(double(s[4])));
+    }
+}
+void toSolver(const float* out, float* solver, int lobes) {
+    for (int k = 0; k < lobes; ++k) {
+        std::copy_n(out + k * kLobeParams, 4, solver + k * kLobeParams);
+        solver[k * kLobeParams + 4] = float(std::log(double(out[k * kLobeParams + 4])));
+    }
+}
+
+void solve(const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights, const GlossyOptions& options) {
+    if (batch.problems == 0) return;
+    if (options.solver == Solver::OpenCl)
+        solveOpenCl(grid, batch, weights, options.bounds, options.solverOptions);
+    else
+        solveCeres(grid, batch, weights, options.bounds, options.solverOptions);
+}
+
+// Views of one vertex in breadth-first order over the view graph from the fitted view nearest the normal; each
+// entry's parent is an earlier fitted view (or -1 for the root of a component).
+std::vector<std::pair<int, int>> viewOrder(const std::vector<int>& slot, const float normal[3]) {
+    const ViewSet& views = viewSet();
+    std::vector<std::pair<int, int>> order;
+    std::vector<char> seen(kViewCount, 0);
+    for (;;) {
+        int root = -1;
+        double best = -2.0;
+        for (int v = 0; v < kViewCount; ++v) {
+            if (seen[v] || slot[v] < 0) continue;
+            const auto& d = views.directions[v];
+            double c = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2];
+            if (c > best) best = c, root = v;
+        }
+        if (root < 0) return order;
+        std::deque<std::pair<int, int>> queue{{root, -1}};
+        seen[root] = 1;
+        while (!queue.empty()) {
+            auto [v, parent] = queue.front();
+            queue.pop_front();
+            order.push_back({v, parent});
+            for (uint32_t n : views.neighbours[v])
+                if (!seen[n] && slot[n] >= 0) seen[n] = 1, queue.push_back({int(n), v});
+        }
+    }
+}
+
+// One chunk's problems: kernels of every view above each vertex's horizon with a nonzero kernel, started from
+// the shared initialisation. slot[i][view] is the problem's index among vertex i's, or -1.
+struct Chunk {
+    FitBatch batch;
+    std::vector<std::vector<int>> slot;
+    std::vector<size_t> first; // [chunk + 1]: vertex i's problems are first[i] .. first[i + 1]
+    std::vector<std::array<float, 3>> normals;
+    std::vector<float> visibleShare; // [chunk]: visible solid angle over the upper hemisphere's
+};
+
+Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const GlossyOptions& options,
+                const EmbreeScene& embree, float offset, size_t chunkBegin, size_t chunkEnd,
+                tbb::task_arena& arena, std::atomic<uint64_t>& rays) {
+    const ViewSet& views = viewSet();
+    const int lobes = options.lobes, width = lobes * kLobeParams;
+    const size_t count = grid.count(), chunk = chunkEnd - chunkBegin;
+    const EmbreeScene* scene = &embree;
+    Chunk result;
+    auto& slot = result.slot;
+    auto& normals = result.normals;
+    auto& first = result.first;
+    auto& batch = result.batch;
+    slot.assign(chunk, std::vector<int>(kViewCount, -1));
+    normals.resize(chunk);
+    result.visibleShare.assign(chunk, 0.0f);
+    for (size_t i = 0; i < chunk; ++i) {
+        const float* n = &mesh.normals[(chunkBegin + i) * 3];
+        double length = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+        for (int c = 0; c < 3; ++c) normals[i][c] = float(n[c] / length);
+    }
+    // Kernels for every view above the horizon, visibility shared by the views of a vertex.
+    std::vector<std::vector<float>> kernels(chunk);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk, 1), [&](const tbb::blocked_range<size_t>& r) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            std::vector<uint8_t> visible(count, 0);
+            uint64_t cast = 0;
+            for (size_t i = r.begin(); i < r.end(); ++i) {
+                const float* p = &mesh.positions[(chunkBegin + i) * 3];
+                const float* n = normals[i].data();
+                for (size_t t = 0; t < count; ++t) {
+                    const float* d = &grid.directions[t * 3];
+                    if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] <= 0.0f) { visible[t] = 0; continue; }
+                    RTCRay ray{};
+                    ray.org_x = p[0] + offset * n[0], ray.org_y = p[1] + offset * n[1];
+                    ray.org_z = p[2] + offset * n[2];
+                    ray.dir_x = d[0], ray.dir_y = d[1], ray.dir_z = d[2];
+                    ray.tnear = offset;
+                    ray.tfar = std::numeric_limits<float>::infinity();
+                    ray.mask = ~0u;
+                    rtcOccluded1(scene->scene, &context, &ray);
+                    visible[t] = ray.tfar >= 0.0f;
+                    ++cast;
+                }
+                std::vector<float> table(count);
+                for (int v = 0; v < kViewCount; ++v) {
+                    const float* view = views.directions[v].data();
+                    if (n[0] * view[0] + n[1] * view[1] + n[2] * view[2] <= 0.0f) continue;
+                    tabulateKernel(grid, n, view, options.phong, visible.data(), table.data());
+                    if (*std::max_element(table.begin(), table.end()) <= 0.0f) continue;
+                    slot[i][v] = int(kernels[i].size() / count);
+                    kernels[i].insert(kernels[i].end(), table.begin(), table.end());
+                }
+            }
+            rays += cast;
+        });
+    });
+    // One batch in (vertex, view) order.
+    batch.lobes = lobes;
+    first.assign(chunk + 1, 0);
+    for (size_t i = 0; i < chunk; ++i) first[i + 1] = first[i] + kernels[i].size() / count;
+    batch.problems = first[chunk];
+    batch.kernel.reserve(batch.problems * count);
+    for (auto& k : kernels) batch.kernel.insert(batch.kernel.end(), k.begin(), k.end()), std::vector<float>().swap(k);
+    batch.params.resize(batch.problems * width);
+    batch.amplitudeMax.resize(batch.problems);
+    for (size_t p = 0; p < batch.problems; ++p) {
+        const float* k = &batch.kernel[p * count];
+        batch.amplitudeMax[p] = 4.0f * *std::max_element(k, k + count);
+        initialise(grid, k, lobes, options.phong.exponent, options.bounds, &batch.params[p * width]);
+    }
+    return result;
+}
+
+bool allLobesLit(const float* lobes, int count) {
+    for (int k = 0; k < count; ++k)
+        if (!(lobes[k * kLobeParams] > 0.0f)) return false;
+    return true;
+}
+
+// Lobe-order flips between neighbouring views of each vertex and between mesh neighbours at each view.
+void countFlips(const TriMesh& mesh, GlossyLobes& result) {
+    if (result.lobes < 2) return;
+    const ViewSet& views = viewSet();
+    const size_t width = size_t(result.lobes) * kLobeParams;
+    auto lobesOf = [&](size_t vertex, int view) {
+        return &result.values[((vertex - result.vertexBegin) * kViewCount + size_t(view)) * width];
+    };
+    for (size_t v = result.vertexBegin; v < result.vertexEnd; ++v)
+        for (int a = 0; a < kViewCount; ++a)
+            for (uint32_t b : views.neighbours[a]) {
+                if (int(b) <= a || !allLobesLit(lobesOf(v, a), result.lobes) || !allLobesLit(lobesOf(v, int(b)), result.lobes))
+                    continue;
+                ++result.stats.viewPairs;
+                result.stats.viewFlips += lobesFlipped(lobesOf(v, a), lobesOf(v, int(b)), result.lobes);
+            }
+    for (size_t t = 0; t < mesh.triangleCount(); ++t)
+        for (int e = 0; e < 3; ++e) {
+            size_t p = mesh.indices[t * 3 + e], q = mesh.indices[t * 3 + (e + 1) % 3];
+            // Each undirected edge once: from its smaller end, in the triangle that lists it ascending.
+            if (p >= q || p < result.vertexBegin || q >= result.vertexEnd) continue;
+            for (int view = 0; view < kViewCount; ++view) {
+                if (!allLobesLit(lobesOf(p, view), result.lobes) || !allLobesLit(lobesOf(q, view), result.lobes)) continue;
+                ++result.stats.vertexPairs;
+                result.stats.vertexFlips += lobesFlipped(lobesOf(p, view), lobesOf(q, view), result.lobes);
+            }
+        }
+}
+
+} // namespace
+
+GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options) {
+    checkOptions(mesh, options);
+    const ViewSet& views = viewSet();
+    const DirectionGrid grid = cubeGrid(options.gridResolution);
+    const int lobes = options.lobes, width = lobes * kLobeParams;
+    const size_t count = grid.count();
+    GlossyLobes result;
+    result.lobes = lobes;
+    result.vertexBegin = std::min(options.vertexBegin, mesh.vertexCount());
+    result.vertexEnd = std::clamp(options.vertexEnd, result.vertexBegin, mesh.vertexCount());
+    const size_t vertices = result.vertexEnd - result.vertexBegin;
+    result.values.assign(vertices * kViewCount * width, 0.0f);
+    result.vertexStats.assign(vertices * kVertexStatColumns, 0.0f);
+    const bool coherence = options.weights.beta > 0 || options.weights.gamma > 0 || options.weights.delta > 0;
+
+    tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
+                                                            : int(tbb::task_arena::automatic));
+    std::optional<EmbreeScene> scene;
+    arena.execute([&] { scene.emplace(mesh, /*robust=*/true); });
+    const float offset = rayOffset(mesh);
+    std::atomic<uint64_t> rays{0};
+    double costSum = 0.0, errorSum = 0.0;
+    std::optional<Progress> progress;
+    if (options.progress) progress.emplace("glossy", vertices);
+
+    for (size_t chunkBegin = result.vertexBegin; chunkBegin < result.vertexEnd; chunkBegin += options.chunkVertices) {
+        const size_t chunkEnd = std::min(result.vertexEnd, chunkBegin + options.chunkVertices);
+        const size_t chunk = chunkEnd - chunkBegin;
+        double tabulateStart = nowSeconds();
+        Chunk tabulated = tabulateChunk(mesh, grid, options, *scene, offset, chunkBegin, chunkEnd, arena, rays);
+        auto& slot = tabulated.slot;
+        auto& normals = tabulated.normals;
+        auto& first = tabulated.first;
+        FitBatch& batch = tabulated.batch;
+        result.stats.tabulateSeconds += nowSeconds() - tabulateStart;
+
+        double fitStart = nowSeconds();
+        solve(grid, batch, FitWeights{}, options);
+        std::vector<float> fitted(batch.problems * width);
+        for (size_t p = 0; p < batch.problems; ++p) toOutput(&batch.params[p * width], &fitted[p * width], lobes);
+        if (coherence) {
+            // Align lobe order across each vertex's views, then refit with priors from the aligned neighbours.
+            batch.prior.assign(batch.problems * lobes * 4, 0.0f);
+            batch.hasPrior.assign(batch.problems, 0);
+            for (size_t i = 0; i < chunk; ++i) {
+                auto problem = [&](int v) { return first[i] + size_t(slot[i][v]); };
+                for (auto [v, parent] : viewOrder(slot[i], normals[i].data()))
+                    if (parent >= 0 && lobes > 1)
+                        alignLobes(&fitted[problem(parent) * width], &fitted[problem(v) * width], lobes);
+                for (int v = 0; v < kViewCount; ++v) {
+                    if (slot[i][v] < 0) continue;
+                    size_t p = problem(v);
+                    double sum[kMaxLobes][4] = {};
+                    int neighbours = 0;
+                    for (uint32_t n : views.neighbours[v]) {
+                        if (slot[i][n] < 0) continue;
+                        const float* q = &fitted[problem(int(n)) * width];
+                        ++neighbours;
+                        for (int k = 0; k < lobes; ++k) {
+                            for (int c = 0; c < 3; ++c) sum[k][c] += q[k * kLobeParams + 1 + c];
+                            sum[k][3] += std::log(double(q[k * kLobeParams + 4]));
+                        }
+                    }
+                    if (neighbours == 0) continue;
+                    batch.hasPrior[p] = 1;
+                    for (int k = 0; k < lobes; ++k) {
+                        double length = std::sqrt(sum[k][0] * sum[k][0] + sum[k][1] * sum[k][1] + sum[k][2] * sum[k][2]);
+                        float* prior = &batch.prior[(p * lobes + k) * 4];
+                        for (int c = 0; c < 3; ++c)
+                            prior[c] = length > 0 ? float(sum[k][c] / length) : fitted[p * width + k * kLobeParams + 1 + c];
+                        prior[3] = float(sum[k][3] / neighbours);
+                    }
+                }
+            }
+            for (size_t p = 0; p < batch.problems; ++p) toSolver(&fitted[p * width], &batch.params[p * width], lobes);
+            solve(grid, batch, options.weights, options);
+            for (size_t p = 0; p < batch.problems; ++p) toOutput(&batch.params[p * width], &fitted[p * width], lobes);
+        }
+        result.stats.fitSeconds += nowSeconds() - fitStart;
+        for (size_t i = 0; i < chunk; ++i) {
+            float* stat = &result.vertexStats[(chunkBegin - result.vertexBegin + i) * kVertexStatColumns];
+            std::copy_n(normals[i].data(), 3, stat);
+            stat[3] = tabulated.visibleShare[i];
+            double mean = 0, worst = 0;
+            for (size_t p = first[i]; p < first[i + 1]; ++p) {
+                double energy = dataEnergy(grid, &batch.kernel[p * count]);
+                double error = energy > 0 ? std::sqrt(batch.cost[p] / energy) : 0.0;
+                costSum += batch.cost[p];
+                errorSum += error;
+                mean += error;
+                worst = std::max(worst, error);
+            }
+            stat[4] = first[i + 1] > first[i] ? float(mean / double(first[i + 1] - first[i])) : 0.0f;
+            stat[5] = float(worst);
+        }
+        result.stats.problems += batch.problems;
+
+        // Output rows; views without a fit get a = 0, the mirror direction and the exponent.
+        for (size_t i = 0; i < chunk; ++i) {
+            const float* n = normals[i].data();
+            for (int v = 0; v < kViewCount; ++v) {
+                float* out = &result.values[((chunkBegin - result.vertexBegin + i) * kViewCount + v) * width];
+                if (slot[i][v] >= 0) {
+                    std::copy_n(&fitted[(first[i] + size_t(slot[i][v])) * width], width, out);
+                    continue;
+                }
+                const float* view = views.directions[v].data();
+                float c = n[0] * view[0] + n[1] * view[1] + n[2] * view[2];
+                for (int k = 0; k < lobes; ++k) {
+                    float* o = out + k * kLobeParams;
+                    o[0] = 0.0f;
+                    for (int a = 0; a < 3; ++a) o[1 + a] = 2.0f * c * n[a] - view[a];
+                    o[4] = float(options.phong.exponent);
+                }
+            }
+        }
+        if (progress) progress->add(chunk);
+    }
+    if (progress) progress->finish();
+    countFlips(mesh, result);
+    result.stats.rays = rays;
+    result.stats.meanCost = result.stats.problems ? costSum / double(result.stats.problems) : 0.0;
+    result.stats.meanRelativeError = result.stats.problems ? errorSum / double(result.stats.problems) : 0.0;
+    result.stats.peakMemoryBytes = peakMemoryBytes();
+    return result;
+}
+
+FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t problems) {
+    checkOptions(mesh, options);
+    const DirectionGrid grid = cubeGrid(options.gridResolution);
+    const int width = options.lobes * kLobeParams;
+    tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
+                                                            : int(tbb::task_arena::automatic));
+    std::optional<EmbreeScene> scene;
+    arena.execute([&] { scene.emplace(mesh, /*robust=*/true); });
+    std::atomic<uint64_t> rays{0};
+    FitBatch all;
+    all.lobes = options.lobes;
+    for (size_t begin = 0; begin < mesh.vertexCount() && all.problems < problems; begin += options.chunkVertices) {
+        size_t end = std::min(mesh.vertexCount(), begin + options.chunkVertices);
+        Chunk chunk = tabulateChunk(mesh, grid, options, *scene, rayOffset(mesh), begin, end, arena, rays);
+        size_t take = std::min(chunk.batch.problems, problems - all.problems);
+        all.kernel.insert(all.kernel.end(), chunk.batch.kernel.begin(), chunk.batch.kernel.begin() + take * grid.count());
+        all.params.insert(all.params.end(), chunk.batch.params.begin(), chunk.batch.params.begin() + take * width);
+        all.amplitudeMax.insert(all.amplitudeMax.end(), chunk.batch.amplitudeMax.begin(),
+                                chunk.batch.amplitudeMax.begin() + take);
+        all.problems += take;
+    }
+    return all;
+}
+
+Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount) {
+    Layer layer;
+    layer.name = "glossy_lobes";
+    bool whole = lobes.vertexBegin == 0 && lobes.vertexEnd == vertexCount;
+    layer.domain = whole ? "vertex" : "vertex_range";
+    layer.semantic = "sg_lobes";
+    if (options.lobeType != "float16" && options.lobeType != "float32")
+        throw Error("", "--lobe-type", "must be float16 or float32", kExitUsage);
+    layer.componentType = options.lobeType;
+    layer.shape = {uint64_t(lobes.vertexEnd - lobes.vertexBegin), uint64_t(kViewCount), uint64_t(lobes.lobes),
+                   uint64_t(kLobeParams)};
+    layer.data = lobes.values;
+    nlohmann::json directions = nlohmann::json::array();
+    for (const auto& d : viewSet().directions) directions.push_back({d[0], d[1], d[2]});
+    layer.params["views"] = directions;
+    nlohmann::json triangles = nlohmann::json::array();
+    for (const auto& t : viewSet().triangles) triangles.push_back({t[0], t[1], t[2]});
+    layer.params["view_triangles"] = triangles;
+    layer.params["view_set"] = "geodesic-icosahedron-frequency-3";
+    layer.params["lobes"] = lobes.lobes;
+    layer.params["record"] = "a, mu_x, mu_y, mu_z, lambda: a exp(lambda (mu . w - 1)), radiance per steradian";
+    layer.params["brdf"] = {{"model", "phong"}, {"exponent", options.phong.exponent}, {"ks", options.phong.ks}};
+    layer.params["grid"] = {{"kind", "cube"}, {"resolution", options.gridResolution}};
+    layer.params["solver"] = options.solver == Solver::OpenCl ? "pocl" : "ceres";
+    layer.params["weights"] = {{"beta", options.weights.beta}, {"gamma", options.weights.gamma},
+                               {"delta", options.weights.delta}};
+    layer.params["lambda_bounds"] = {options.bounds.lambdaMin, options.bounds.lambdaMax};
+    if (!whole) layer.params["vertex_range"] = {lobes.vertexBegin, lobes.vertexEnd};
+    return layer;
+}
+
+} // namespace prt::glossy

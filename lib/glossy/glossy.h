@@ -1,0 +1,203 @@
+// Glossy view-dependent transfer (Green 2005): per vertex and per view of a fixed global view set, the glossy
+// kernel T(wi) = f_phong V cos (docs/conventions.md, "Glossy BRDF") tabulated on a solid-angle-weighted cube
+// grid and replaced by N spherical Gaussians a exp(lambda (mu . w - 1)) (docs/conventions.md, "Spherical
+// Gaussians"), fitted by a batched Levenberg-Marquardt in OpenCL kernels (PoCL's CPU device) or, as the
+// reference solver, by Ceres on the identical objective. docs/glossy.md records the choices and measurements.
+//
+// Parameters of one fit problem (one vertex, one view), kLobeParams per lobe, lobe-major:
+//   [0] a        amplitude, in [0, amplitudeMax]
+//   [1..3] m     unnormalised mean; the model uses mu = m / |m| and a gauge residual keeps |m| near 1
+//   [4] s        log sharpness, lambda = exp(s), s in [log lambdaMin, log lambdaMax]
+// Objective (sum of squared residuals, E = sum_i dw_i T_i^2 the problem's data energy):
+//   data     sqrt(dw_i) (F(w_i) - T_i)                       every grid direction i
+//   gauge    sqrt(E) (|m_k|^2 - 1)                           every lobe
+//   mean     sqrt(beta E) (mu_k - priorMean_k)               3 per lobe, when the problem has a prior
+//   width    sqrt(gamma E) (s_k - priorLogSharpness_k)       per lobe, with a prior
+//   no-flip  sqrt(delta E) max(0, -(mu_k1 - mu_k2) . (p_k1 - p_k2))^(3/2), k1 < k2, p the prior means
+#pragma once
+
+#include "bundle.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt::glossy {
+
+inline constexpr int kLobeParams = 5;
+inline constexpr int kMaxLobes = 4;
+inline constexpr int kViewCount = 92;
+
+// ---- the view set ------------------------------------------------------------------------------------------
+// The frequency-3 geodesic icosahedron: 92 unit directions (12 icosahedron corners, then edge and face points),
+// 180 counter-clockwise triangles, each view's 1-ring neighbours. Antipodally symmetric, so every open
+// hemisphere not bounded by a view holds exactly 46 views; every direction lies within 13.65 deg of a view.
+struct ViewSet {
+    std::vector<std::array<float, 3>> directions;  // [92]
+    std::vector<std::array<uint32_t, 3>> triangles; // [180]
+    std::vector<std::vector<uint32_t>> neighbours;  // [92], 5 or 6 each, ascending
+};
+const ViewSet& viewSet();
+
+// ---- the direction grid ------------------------------------------------------------------------------------
+// A cube grid of 6 x resolution^2 texel centres (faces +X, -X, +Y, -Y, +Z, -Z) with their exact solid angles,
+// summing to 4 pi.
+struct DirectionGrid {
+    int resolution = 0;
+    std::vector<float> directions; // [count][3], unit
+    std::vector<float> solidAngle; // [count]
+    size_t count() const { return solidAngle.size(); }
+};
+DirectionGrid cubeGrid(int resolution);
+
+// ---- the kernel --------------------------------------------------------------------------------------------
+struct Phong {
+    double exponent = 32.0; // > 0
+    double ks = 1.0;        // [0, 1]
+};
+
+// T(w_i) for every grid direction at a point with unit shading normal `normal`, seen from unit `outgoing`,
+// with visibility[i] (1 visible, 0 blocked; null: all visible). Writes grid.count() values; all zero when
+// outgoing is below the surface.
+void tabulateKernel(const DirectionGrid& grid, const float normal[3], const float outgoing[3], const Phong& phong,
+                    const uint8_t* visibility, float* kernel);
+
+// ---- the fit -----------------------------------------------------------------------------------------------
+struct FitWeights {
+    double beta = 0.0;  // mean coherence
+    double gamma = 0.0; // width coherence
+    double delta = 0.0; // no-flip
+};
+
+struct FitBounds {
+    double lambdaMin = 0.5;
+    double lambdaMax = 8192.0;
+};
+
+// A batch of independent problems on one grid, lobe count fixed. Arrays are problem-major.
+struct FitBatch {
+    int lobes = 1;
+    size_t problems = 0;
+    std::vector<float> kernel;      // [problems][grid.count()]  T_i
+    std::vector<float> params;      // [problems][lobes * kLobeParams]: the start on input, the result on output
+    std::vector<float> amplitudeMax; // [problems]
+    std::vector<float> prior;       // [problems][lobes * 4]: prior mean xyz and log sharpness, or empty
+    std::vector<uint8_t> hasPrior;  // [problems], or empty
+    std::vector<float> cost;        // [problems], filled by the solvers: final objective
+    std::vector<int> iterations;    // [problems], filled by the solvers
+};
+
+struct SolverOptions {
+    int maxIterations = 100;
+    int threads = 0; // Ceres: worker threads over problems (0 all); PoCL uses its own device threads
+};
+
+// Data energy E = sum_i dw_i T_i^2 of problem p.
+double dataEnergy(const DirectionGrid& grid, const float* kernel);
+
+// The objective above at `params` for problem p of `batch`, in double. Both solvers minimise exactly this.
+double objective(const DirectionGrid& grid, const FitBatch& batch, size_t p, const FitWeights& weights,
+                 const FitBounds& bounds, const float* params);
+
+// The deterministic start both solvers share: greedy peak picking. Lobe k goes at the brightest grid direction of
+// the kernel minus lobes < k, sharpness the Phong exponent (sharper for later lobes), amplitude the residual there.
+// Writes lobes * kLobeParams floats.
+void initialise(const DirectionGrid& grid, const float* kernel, int lobes, double exponent,
+                const FitBounds& bounds, float* params);
+
+// Batched LM in OpenCL on the first platform's first device (PoCL's CPU device in CI). Kernels compile once per
+// process per (lobes, grid size) and are reused. Deterministic: every problem is its own work item in full work
+// groups, with contraction off. Throws prt::Error(kExitFailure) when no OpenCL platform exists (naming
+// --solver ceres) or a kernel fails to build (with the build log).
+void solveOpenCl(const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights, const FitBounds& bounds,
+                 const SolverOptions& options);
+
+// The same problems, one Ceres solve each (analytic Jacobian, bounds on a and s), in parallel over problems.
+void solveCeres(const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights, const FitBounds& bounds,
+                const SolverOptions& options);
+
+// Builds `source` as an OpenCL program on the default device (exposed for the build-failure test). Throws
+// prt::Error(kExitFailure) with the build log when it does not compile.
+void buildOpenClProgram(const std::string& source, const std::string& buildOptions);
+
+// Human name of the OpenCL device solveOpenCl uses; throws as solveOpenCl does when none exists.
+std::string openClDeviceName();
+
+// ---- lobe order --------------------------------------------------------------------------------------------
+// Reorders the lobes of `b` (in place) to best match `a`: the permutation minimising the sum of angles between
+// means plus |log sharpness difference| over lobes whose amplitudes are both > 0.
+void alignLobes(const float* a, float* b, int lobes);
+// Whether the lobes of b are flipped against a: some other permutation matches better than the identity by
+// more than `margin` (same distance as alignLobes).
+bool lobesFlipped(const float* a, const float* b, int lobes, double margin = 0.05);
+
+// ---- the stage ---------------------------------------------------------------------------------------------
+enum class Solver { OpenCl, Ceres };
+Solver parseSolver(const std::string& name); // "pocl" | "ceres"; throws prt::Error(kExitUsage)
+
+struct GlossyOptions {
+    Phong phong;
+    int lobes = 1;                // 1..kMaxLobes
+    int gridResolution = 16;      // cube face resolution, 2..64
+    Solver solver = Solver::OpenCl;
+    FitWeights weights{0.01, 0.01, 0.01}; // coherence pass weights; all zero: no coherence pass
+    FitBounds bounds;
+    SolverOptions solverOptions;
+    size_t chunkVertices = 64;    // vertices tabulated and fitted together; results do not depend on it
+    size_t vertexBegin = 0, vertexEnd = SIZE_MAX;
+    bool progress = true;
+    std::string lobeType = "float16"; // the bundle layer's componentType: "float16" or "float32"
+};
+
+struct GlossyStats {
+    uint64_t rays = 0;
+    uint64_t problems = 0;       // fitted (vertex, view) pairs
+    double tabulateSeconds = 0.0;
+    double fitSeconds = 0.0;
+    double meanCost = 0.0;       // mean final objective over fitted problems
+    double meanRelativeError = 0.0; // mean over problems of sqrt(data cost / E)
+    uint64_t peakMemoryBytes = 0;
+    // Lobe-order flips (lobesFlipped, lobes >= 2): pairs of fitted neighbouring views of one vertex, and pairs of
+    // mesh-edge neighbours at one view, both fitted with every lobe's amplitude > 0.
+    uint64_t viewPairs = 0, viewFlips = 0, vertexPairs = 0, vertexFlips = 0;
+};
+
+// Per-vertex diagnostics of a fit, [rows][6]: unit normal xyz, the visible share of the upper hemisphere's grid
+// solid angle, and the mean and the largest over fitted views of sqrt(cost / E), the relative fit error.
+inline constexpr int kVertexStatColumns = 6;
+
+// Per-vertex lobes for the vertex range: [vertexEnd - vertexBegin][kViewCount][lobes][kLobeParams] as
+// (a, mu x, mu y, mu z, lambda) with unit mu and a in radiance per steradian of the lighting; views below a
+// vertex's horizon and empty kernels get a = 0 with the mirror direction and the exponent.
+struct GlossyLobes {
+    int lobes = 0;
+    size_t vertexBegin = 0, vertexEnd = 0;
+    std::vector<float> values;
+    GlossyStats stats;
+    std::vector<float> vertexStats; // [rows][kVertexStatColumns]
+};
+
+// Needs normals per vertex and options in range (throws prt::Error kExitUsage / kExitInput otherwise).
+// Streams: memory holds one chunk's kernels plus the output. Bit-identical for any thread count and any range.
+GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options);
+
+// The bundle layer of the lobes ("glossy_lobes", semantic "sg_lobes", float16, shape [V, 92, N, 5]) and its
+// params: view set (directions), lobes, brdf, grid. `semantic` rows as GlossyLobes.values.
+Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount);
+
+// ---- solver comparison -------------------------------------------------------------------------------------
+struct SolverComparison {
+    size_t problems = 0;
+    double openClSeconds = 0.0, ceresSeconds = 0.0; // wall clock for all problems, after a warm-up launch
+    double initialCost = 0.0, openClCost = 0.0, ceresCost = 0.0; // summed final objectives
+    double shareWithinOnePercent = 0.0; // OpenCL cost <= 1.01 x Ceres cost (or at the float floor, 1e-7 E)
+    double openClMeanIterations = 0.0, ceresMeanIterations = 0.0;
+    std::vector<double> openClCosts, ceresCosts;
+};
+// The first `problems` fit problems of the stage on `mesh` (vertex order, views above the horizon), started from
+// the shared initialisation and solved without priors by both solvers with options.solverOptions.
+SolverComparison compareSolvers(const TriMesh& mesh, const GlossyOptions& options, size_t problems);
+
+} // namespace prt::glossy

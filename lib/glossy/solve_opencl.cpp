@@ -1,0 +1,201 @@
+// The batched solver: lm_kernel.cl on the first OpenCL device (PoCL's CPU device here), one work item per
+// problem. The context, queue and each (lobes, precision) program are created once per process.
+#include "glossy.h"
+#include "glossy_internal.h"
+#include "lm_kernel.h"
+
+#include "core.h"
+
+#include <CL/cl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+namespace prt::glossy {
+
+namespace {
+
+constexpr size_t kLocalSize = 16; // every work group full, so every problem runs the same code path
+constexpr const char* kNoPlatform =
+    "no OpenCL platform found: install pocl-opencl-icd (scripts/bootstrap.sh does), or use --solver ceres";
+
+void check(cl_int status, const char* step) {
+    if (status != CL_SUCCESS)
+        throw Error("", "OpenCL", std::string(step) + " failed with status " + std::to_string(status), kExitFailure);
+}
+
+struct Device {
+    cl_device_id device = nullptr;
+    cl_context context = nullptr;
+    cl_command_queue queue = nullptr;
+    std::map<std::string, cl_program> programs;
+    std::string name;
+};
+
+std::mutex deviceMutex;
+
+Device& device() {
+    static Device* shared = nullptr;
+    if (shared) return *shared;
+    cl_uint platforms = 0;
+    cl_int status = clGetPlatformIDs(0, nullptr, &platforms);
+    if (status != CL_SUCCESS || platforms == 0) throw Error("", "OpenCL", kNoPlatform, kExitFailure);
+    std::vector<cl_platform_id> ids(platforms);
+    check(clGetPlatformIDs(platforms, ids.data(), nullptr), "clGetPlatformIDs");
+    auto* created = new Device;
+    for (cl_platform_id platform : ids) {
+        cl_uint devices = 0;
+        if (clGetDeviceIDs(platform, CL_DEVICE_TYPE_ALL, 1, &created->device, &devices) == CL_SUCCESS && devices > 0)
+            break;
+        created->device = nullptr;
+    }
+    if (!created->device) {
+        delete created;
+        throw Error("", "OpenCL", kNoPlatform, kExitFailure);
+    }
+    char name[256] = {0};
+    clGetDeviceInfo(created->device, CL_DEVICE_NAME, sizeof name - 1, name, nullptr);
+    created->name = name;
+    created->context = clCreateContext(nullptr, 1, &created->device, nullptr, nullptr, &status);
+    check(status, "clCreateContext");
+    created->queue = clCreateCommandQueueWithProperties(created->context, created->device, nullptr, &status);
+    check(status, "clCreateCommandQueue");
+    shared = created;
+    return *shared;
+}
+
+cl_program build(Device& dev, const std::string& source, const std::string& options) {
+    const char* text = source.c_str();
+    size_t length = source.size();
+    cl_int status;
+    cl_program program = clCreateProgramWithSource(dev.context, 1, &text, &length, &status);
+    check(status, "clCreateProgramWithSource");
+    status = clBuildProgram(program, 1, &dev.device, options.c_str(), nullptr, nullptr);
+    if (status != CL_SUCCESS) {
+        size_t size = 0;
+        clGetProgramBuildInfo(program, dev.device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &size);
+        std::string log(size, '\0');
+        clGetProgramBuildInfo(program, dev.device, CL_PROGRAM_BUILD_LOG, size, log.data(), nullptr);
+        clReleaseProgram(program);
+        throw Error("", "OpenCL kernel build", "failed (status " + std::to_string(status) + "); build log:\n" + log,
+                    kExitFailure);
+    }
+    return program;
+}
+
+struct Buffer {
+    cl_mem mem = nullptr;
+    Buffer(cl_context context, cl_mem_flags flags, size_t bytes, const void* host) {
+        cl_int status;
+        mem = clCreateBuffer(context, flags | (host ? CL_MEM_COPY_HOST_PTR : 0), std::max<size_t>(bytes, 4),
+                             const_cast<void*>(host), &status);
+        check(status, "clCreateBuffer");
+    }
+    ~Buffer() { clReleaseMemObject(mem); }
+    Buffer(const Buffer&) = delete;
+    Buffer& operator=(const Buffer&) = delete;
+};
+
+} // namespace
+
+std::string openClDeviceName() {
+    std::lock_guard lock(deviceMutex);
+    return device().name;
+}
+
+void buildOpenClProgram(const std::string& source, const std::string& buildOptions) {
+    std::lock_guard lock(deviceMutex);
+    clReleaseProgram(build(device(), source, buildOptions));
+}
+
+void solveOpenCl(const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights, const FitBounds& bounds,
+                 const SolverOptions& options) {
+    std::lock_guard lock(deviceMutex);
+    Device& dev = device();
+    const std::string buildOptions = "-D NL=" + std::to_string(batch.lobes) + " -D real=float";
+    cl_program& program = dev.programs[buildOptions];
+    if (!program) program = build(dev, kLmKernelSource, buildOptions);
+    cl_int status;
+    cl_kernel kernel = clCreateKernel(program, "fitLobes", &status);
+    check(status, "clCreateKernel");
+
+    const size_t problems = batch.problems, count = grid.count(), width = size_t(batch.lobes) * kLobeParams;
+    const size_t padded = (problems + kLocalSize - 1) / kLocalSize * kLocalSize;
+    const size_t stride = (count + 7) / 8 * 8; // the kernel reads 8 directions at a time
+    // The grid in columns, padded with zero-weight directions.
+    std::vector<float> dirX(stride, 0.0f), dirY(stride, 0.0f), dirZ(stride, 1.0f), rootSolidAngle(stride, 0.0f);
+    for (size_t i = 0; i < count; ++i) {
+        dirX[i] = grid.directions[i * 3], dirY[i] = grid.directions[i * 3 + 1], dirZ[i] = grid.directions[i * 3 + 2];
+        rootSolidAngle[i] = std::sqrt(grid.solidAngle[i]);
+    }
+    std::vector<float> kernelValues(stride * padded, 0.0f), energies(padded, 0.0f), amplitudeMax(padded, 0.0f);
+    std::vector<float> priors(padded * batch.lobes * 4, 0.0f), priorWeights(padded, 0.0f), params(padded * width, 0.0f);
+    for (size_t p = 0; p < problems; ++p) {
+        std::copy_n(&batch.kernel[p * count], count, &kernelValues[p * stride]);
+        energies[p] = float(dataEnergy(grid, &batch.kernel[p * count]));
+        amplitudeMax[p] = batch.amplitudeMax[p];
+        if (!batch.hasPrior.empty() && batch.hasPrior[p]) {
+            priorWeights[p] = 1.0f;
+            std::copy_n(&batch.prior[p * batch.lobes * 4], batch.lobes * 4, &priors[p * batch.lobes * 4]);
+        }
+    }
+    std::copy_n(batch.params.begin(), problems * width, params.begin());
+    for (size_t p = problems; p < padded; ++p) // padding: unit means, never fitted (energy 0)
+        for (int k = 0; k < batch.lobes; ++k) params[p * width + k * kLobeParams + 1] = 1.0f;
+
+    const cl_mem_flags in = CL_MEM_READ_ONLY;
+    Buffer kernelBuffer(dev.context, in, kernelValues.size() * 4, kernelValues.data());
+    Buffer dirXBuffer(dev.context, in, stride * 4, dirX.data());
+    Buffer dirYBuffer(dev.context, in, stride * 4, dirY.data());
+    Buffer dirZBuffer(dev.context, in, stride * 4, dirZ.data());
+    Buffer rootBuffer(dev.context, in, stride * 4, rootSolidAngle.data());
+    Buffer energyBuffer(dev.context, in, padded * 4, energies.data());
+    Buffer amplitudeBuffer(dev.context, in, padded * 4, amplitudeMax.data());
+    Buffer priorBuffer(dev.context, in, priors.size() * 4, priors.data());
+    Buffer priorWeightBuffer(dev.context, in, padded * 4, priorWeights.data());
+    Buffer paramBuffer(dev.context, CL_MEM_READ_WRITE, params.size() * 4, params.data());
+    Buffer costBuffer(dev.context, CL_MEM_WRITE_ONLY, padded * 4, nullptr);
+    Buffer iterationBuffer(dev.context, CL_MEM_WRITE_ONLY, padded * 4, nullptr);
+
+    cl_int problemCount = cl_int(padded), gridCount = cl_int(stride);
+    float beta = float(weights.beta), gamma = float(weights.gamma), delta = float(weights.delta);
+    float logMin = float(std::log(bounds.lambdaMin)), logMax = float(std::log(bounds.lambdaMax));
+    cl_int maxIterations = options.maxIterations;
+    float tolerance = 1e-6f;
+    int arg = 0;
+    auto set = [&](size_t size, const void* value) { check(clSetKernelArg(kernel, arg++, size, value), "clSetKernelArg"); };
+    set(sizeof(cl_int), &problemCount);
+    set(sizeof(cl_int), &gridCount);
+    for (Buffer* b : {&kernelBuffer, &dirXBuffer, &dirYBuffer, &dirZBuffer, &rootBuffer, &energyBuffer, &amplitudeBuffer,
+                      &priorBuffer, &priorWeightBuffer})
+        set(sizeof(cl_mem), &b->mem);
+    set(sizeof(float), &beta);
+    set(sizeof(float), &gamma);
+    set(sizeof(float), &delta);
+    set(sizeof(float), &logMin);
+    set(sizeof(float), &logMax);
+    set(sizeof(cl_int), &maxIterations);
+    set(sizeof(float), &tolerance);
+    for (Buffer* b : {&paramBuffer, &costBuffer, &iterationBuffer}) set(sizeof(cl_mem), &b->mem);
+    size_t global = padded, local = kLocalSize;
+    check(clEnqueueNDRangeKernel(dev.queue, kernel, 1, nullptr, &global, &local, 0, nullptr, nullptr),
+          "clEnqueueNDRangeKernel");
+    std::vector<float> costs(padded);
+    std::vector<cl_int> iterations(padded);
+    check(clEnqueueReadBuffer(dev.queue, paramBuffer.mem, CL_TRUE, 0, params.size() * 4, params.data(), 0, nullptr,
+                              nullptr), "clEnqueueReadBuffer");
+    check(clEnqueueReadBuffer(dev.queue, iterationBuffer.mem, CL_TRUE, 0, padded * 4, iterations.data(), 0, nullptr,
+                              nullptr), "clEnqueueReadBuffer");
+    clReleaseKernel(kernel);
+    std::copy_n(params.begin(), problems * width, batch.params.begin());
+    batch.cost.assign(problems, 0.0f);
+    batch.iterations.assign(problems, 0);
+    for (size_t p = 0; p < problems; ++p) {
+        batch.cost[p] = float(objective(grid, batch, p, weights, bounds, &batch.params[p * width]));
+        batch.iterations[p] = iterations[p];
+    }
+}
+
+} // namespace prt::glossy

@@ -1,0 +1,208 @@
+// The glossy runtime: lobe interpolation between the 3 views around the eye direction and lobe integration
+// against a box-filtered environment chain. Needs only the bundle reader and the standard library.
+#include "runtime.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace prt {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+} // namespace
+
+GlossyModel glossyModel(const Bundle& bundle, const std::string& source) {
+    const Layer* layer = findLayer(bundle, "glossy_lobes");
+    if (!layer) throw Error(source, "layers", "has no \"glossy_lobes\" layer (prt glossy writes one)");
+    auto bad = [&](const std::string& problem) { return Error(source, "layer glossy_lobes", problem); };
+    if (layer->domain != "vertex" || layer->semantic != "sg_lobes")
+        throw bad("needs domain vertex and semantic sg_lobes");
+    if (layer->shape.size() != 4 || layer->shape[3] != 5 || layer->shape[2] < 1 || layer->shape[2] > 4)
+        throw bad("shape must be [V, views, N (1..4), 5]");
+    if (layer->shape[0] != bundle.mesh.vertexCount())
+        throw bad("has " + std::to_string(layer->shape[0]) + " rows for " + std::to_string(bundle.mesh.vertexCount()) +
+                  " vertices");
+    if (bundle.mesh.normals.size() != bundle.mesh.positions.size()) throw Error(source, "mesh", "has no normals");
+    GlossyModel model;
+    const nlohmann::json& views = layer->params.value("views", nlohmann::json());
+    const nlohmann::json& triangles = layer->params.value("view_triangles", nlohmann::json());
+    if (!views.is_array() || views.size() != layer->shape[1])
+        throw bad("its view set (params.views, " + std::to_string(views.is_array() ? views.size() : 0) +
+                  " directions) disagrees with its " + std::to_string(layer->shape[1]) + " views per vertex");
+    for (const auto& v : views) {
+        if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+            throw bad("params.views must hold x,y,z triples");
+        float d[3] = {v[0].get<float>(), v[1].get<float>(), v[2].get<float>()};
+        if (!(std::abs(std::sqrt(dot3(d, d)) - 1.0f) < 1e-3f)) throw bad("params.views must be unit directions");
+        model.views.insert(model.views.end(), d, d + 3);
+    }
+    if (!triangles.is_array() || triangles.empty()) throw bad("params.view_triangles is missing");
+    for (const auto& t : triangles) {
+        if (!t.is_array() || t.size() != 3) throw bad("params.view_triangles must hold index triples");
+        for (const auto& i : t) {
+            if (!i.is_number_unsigned() || i.get<uint64_t>() >= views.size())
+                throw bad("params.view_triangles indexes a view that does not exist");
+            model.triangles.push_back(i.get<uint32_t>());
+        }
+    }
+    model.vertexCount = uint32_t(layer->shape[0]);
+    model.lobes = int(layer->shape[2]);
+    model.values = layer->data;
+    for (float value : model.values)
+        if (!std::isfinite(value)) throw bad("holds a value that is not finite");
+    model.positions = bundle.mesh.positions;
+    model.normals = bundle.mesh.normals;
+    return model;
+}
+
+void viewWeights(const GlossyModel& model, const float d[3], uint32_t views[3], float weights[3]) {
+    double bestMin = -1e30;
+    for (size_t t = 0; t < model.triangles.size() / 3; ++t) {
+        const uint32_t* tri = &model.triangles[t * 3];
+        const float* a = &model.views[tri[0] * 3];
+        const float* b = &model.views[tri[1] * 3];
+        const float* c = &model.views[tri[2] * 3];
+        // d = wa a + wb b + wc c (up to scale): Cramer's rule with triple products.
+        auto triple = [](const float* x, const float* y, const float* z) {
+            return double(x[0]) * (double(y[1]) * z[2] - double(y[2]) * z[1]) -
+                   double(x[1]) * (double(y[0]) * z[2] - double(y[2]) * z[0]) +
+                   double(x[2]) * (double(y[0]) * z[1] - double(y[1]) * z[0]);
+        };
+        double det = triple(a, b, c);
+        double wa = triple(d, b, c) / det, wb = triple(a, d, c) / det, wc = triple(a, b, d) / det;
+        double sum = wa + wb + wc;
+        if (!(sum > 0)) continue;
+        double low = std::min({wa, wb, wc}) / sum;
+        if (low > bestMin) { // the containing triangle has all weights >= 0; keep the best if rounding hides it
+            bestMin = low;
+            views[0] = tri[0], views[1] = tri[1], views[2] = tri[2];
+            weights[0] = float(std::max(0.0, wa)), weights[1] = float(std::max(0.0, wb));
+            weights[2] = float(std::max(0.0, wc));
+            if (low >= 0) break;
+        }
+    }
+    float total = weights[0] + weights[1] + weights[2];
+    for (int i = 0; i < 3; ++i) weights[i] /= total;
+}
+
+void interpolateLobe(const GlossyModel& model, uint32_t vertex, int lobe, const uint32_t views[3],
+                     const float weights[3], float out[5]) {
+    double a = 0.0, mean[3] = {0, 0, 0}, logSharpness = 0.0;
+    for (int j = 0; j < 3; ++j) {
+        const float* v = &model.values[((size_t(vertex) * model.viewCount() + views[j]) * model.lobes + lobe) * 5];
+        a += weights[j] * double(v[0]);
+        for (int c = 0; c < 3; ++c) mean[c] += weights[j] * double(v[1 + c]);
+        logSharpness += weights[j] * std::log(std::max(double(v[4]), 1e-6));
+    }
+    double length = std::sqrt(mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2]);
+    out[0] = float(a);
+    for (int c = 0; c < 3; ++c) out[1 + c] = length > 0 ? float(mean[c] / length) : (c == 1 ? 1.0f : 0.0f);
+    out[4] = float(std::exp(logSharpness));
+}
+
+PrefilteredEnvironment prefilterEnvironment(const float* rgb, int width, int height) {
+    if (width < 2 || height < 1 || width != 2 * height)
+        throw Error("", "environment", "the glossy runtime needs a 2:1 equirectangular map");
+    PrefilteredEnvironment env;
+    PrefilteredEnvironment::Level level;
+    level.width = width, level.height = height;
+    level.rgb.assign(rgb, rgb + size_t(width) * height * 3);
+    for (;;) {
+        level.solidAngle.resize(level.height);
+        for (int y = 0; y < level.height; ++y)
+            level.solidAngle[y] = float(2.0 * kPi / level.width *
+                                        (std::cos(kPi * y / level.height) - std::cos(kPi * (y + 1) / level.height)));
+        env.levels.push_back(level);
+        if (level.height % 2 || level.height < 4) break;
+        const PrefilteredEnvironment::Level& fine = env.levels.back();
+        PrefilteredEnvironment::Level coarse;
+        coarse.width = fine.width / 2, coarse.height = fine.height / 2;
+        coarse.rgb.assign(size_t(coarse.width) * coarse.height * 3, 0.0f);
+        for (int y = 0; y < coarse.height; ++y)
+            for (int x = 0; x < coarse.width; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    // Solid-angle weighted: the two fine rows differ in texel size.
+                    double sum = 0.0, weight = 0.0;
+                    for (int dy = 0; dy < 2; ++dy)
+                        for (int dx = 0; dx < 2; ++dx) {
+                            double w = fine.solidAngle[2 * y + dy];
+                            sum += w * fine.rgb[((size_t(2 * y + dy) * fine.width) + 2 * x + dx) * 3 + c];
+                            weight += w;
+                        }
+                    coarse.rgb[(size_t(y) * coarse.width + x) * 3 + c] = float(sum / weight);
+                }
+        level = std::move(coarse);
+    }
+    return env;
+}
+
+void integrateLobe(const PrefilteredEnvironment& env, const float lobe[5], float radiance[3]) {
+    radiance[0] = radiance[1] = radiance[2] = 0.0f;
+    if (!(lobe[0] > 0.0f)) return;
+    const double sharpness = lobe[4], spread = 1.0 / std::sqrt(sharpness);
+    size_t chosen = 0; // finest unless a coarser level still resolves the lobe
+    for (size_t l = 0; l < env.levels.size(); ++l)
+        if (2.0 * kPi / env.levels[l].width <= spread / 4.0) chosen = l;
+    const PrefilteredEnvironment::Level& level = env.levels[chosen];
+    const double radius = std::min(kPi, 5.5 * spread), cosRadius = std::cos(radius);
+    const double mu[3] = {lobe[1], lobe[2], lobe[3]};
+    const double theta = std::acos(std::clamp(mu[1], -1.0, 1.0)), phi = std::atan2(mu[0], -mu[2]);
+    int rowBegin = std::max(0, int(std::floor((theta - radius) / kPi * level.height)));
+    int rowEnd = std::min(level.height, int(std::ceil((theta + radius) / kPi * level.height)));
+    double sum[3] = {0, 0, 0};
+    for (int y = rowBegin; y < rowEnd; ++y) {
+        double t = kPi * (y + 0.5) / level.height, st = std::sin(t), ct = std::cos(t);
+        // Azimuths within the cap on this row: cos(radius) <= ct cos(theta) + st sin(theta) cos(dphi).
+        double denominator = st * std::sin(theta);
+        double halfWidth = kPi;
+        if (denominator > 1e-12) {
+            double c = (cosRadius - ct * std::cos(theta)) / denominator;
+            if (c > 1.0) continue;
+            if (c > -1.0) halfWidth = std::acos(c) + 2.0 * kPi / level.width;
+        }
+        int columns = std::min(level.width, int(std::ceil(2.0 * halfWidth / (2.0 * kPi) * level.width)) + 1);
+        int center = int(std::floor((phi + kPi) / (2.0 * kPi) * level.width));
+        double rowSum[3] = {0, 0, 0};
+        for (int i = 0; i < columns; ++i) {
+            int x = ((center - columns / 2 + i) % level.width + level.width) % level.width;
+            double p = 2.0 * kPi * (x + 0.5) / level.width - kPi;
+            double w[3] = {st * std::sin(p), ct, -st * std::cos(p)};
+            double e = std::exp(sharpness * (mu[0] * w[0] + mu[1] * w[1] + mu[2] * w[2] - 1.0));
+            const float* L = &level.rgb[(size_t(y) * level.width + x) * 3];
+            for (int c = 0; c < 3; ++c) rowSum[c] += e * L[c];
+        }
+        for (int c = 0; c < 3; ++c) sum[c] += rowSum[c] * level.solidAngle[y];
+    }
+    for (int c = 0; c < 3; ++c) radiance[c] = float(lobe[0] * sum[c]);
+}
+
+void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env, const float eye[3],
+                    float* radiance) {
+    for (uint32_t v = 0; v < model.vertexCount; ++v) {
+        float* out = radiance + size_t(v) * 3;
+        out[0] = out[1] = out[2] = 0.0f;
+        const float* p = &model.positions[size_t(v) * 3];
+        const float* n = &model.normals[size_t(v) * 3];
+        float d[3] = {eye[0] - p[0], eye[1] - p[1], eye[2] - p[2]};
+        float length = std::sqrt(dot3(d, d));
+        if (!(length > 0.0f)) continue;
+        for (float& c : d) c /= length;
+        if (dot3(d, n) <= 0.0f) continue; // the lobe sends nothing below the surface
+        uint32_t views[3];
+        float weights[3];
+        viewWeights(model, d, views, weights);
+        for (int k = 0; k < model.lobes; ++k) {
+            float lobe[5], lit[3];
+            interpolateLobe(model, v, k, views, weights, lobe);
+            integrateLobe(env, lobe, lit);
+            for (int c = 0; c < 3; ++c) out[c] += lit[c];
+        }
+    }
+}
+
+} // namespace prt

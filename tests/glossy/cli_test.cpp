@@ -1,0 +1,96 @@
+// `prt glossy` and `prt relight --eye` end to end: a small fit, the view-dependent radiance against the
+// reference, and every bad input refused with no output.
+#include "bundle.h"
+#include "core.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct PrtRun {
+    int exitCode;
+    std::string text;
+};
+
+PrtRun prt(const std::string& arguments, const fs::path& dir, const std::string& environment = "") {
+    fs::path log = dir / "stderr.txt";
+    std::string command = environment + " " + PRT_EXECUTABLE + " " + arguments + " 2> " + log.string();
+    int status = std::system(command.c_str());
+    std::stringstream text;
+    text << std::ifstream(log).rdbuf();
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+}
+
+class GlossyCli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir = fs::temp_directory_path() / ("prt_glossy_cli_" + std::to_string(getpid()));
+        fs::create_directories(dir);
+        ASSERT_EQ(prt("scene sphere -o " + path("sphere.glb") + " --quiet", dir).exitCode, 0);
+    }
+    void TearDown() override { fs::remove_all(dir); }
+    std::string path(const std::string& name) const { return (dir / name).string(); }
+    fs::path dir;
+};
+
+TEST_F(GlossyCli, BadInputsFailWithoutOutput) {
+    const std::string base = "glossy " + path("sphere.glb") + " -o " + path("out.glb") + " --grid 4 --quiet ";
+    PrtRun exponent = prt(base + "--brdf phong:0,0.5", dir);
+    EXPECT_EQ(exponent.exitCode, 2);
+    EXPECT_NE(exponent.text.find("exponent must be > 0"), std::string::npos) << exponent.text;
+    PrtRun lobes = prt(base + "--brdf phong:8,0.5 --lobes 5", dir);
+    EXPECT_EQ(lobes.exitCode, 2);
+    EXPECT_NE(lobes.text.find("--lobes"), std::string::npos) << lobes.text;
+    PrtRun solver = prt(base + "--brdf phong:8,0.5 --solver cuda", dir);
+    EXPECT_EQ(solver.exitCode, 2);
+    // No OpenCL platform: an empty ICD vendor folder.
+    fs::create_directories(dir / "no_vendors");
+    PrtRun platform = prt(base + "--brdf phong:8,0.5", dir, "OCL_ICD_VENDORS=" + path("no_vendors"));
+    EXPECT_NE(platform.exitCode, 0);
+    EXPECT_NE(platform.text.find("--solver ceres"), std::string::npos) << platform.text;
+    EXPECT_FALSE(fs::exists(dir / "out.glb"));
+}
+
+TEST_F(GlossyCli, FitRelightsAndRefusesATamperedViewSet) {
+    PrtRun fit = prt("glossy " + path("sphere.glb") + " -o " + path("g.glb") +
+                  " --brdf phong:8,0.5 --albedo 0.3 --grid 4 --samples 64 --quiet", dir);
+    ASSERT_EQ(fit.exitCode, 0) << fit.text;
+    prt::Bundle bundle = prt::readBundle(path("g.glb"));
+    const prt::Layer* lobes = prt::findLayer(bundle, "glossy_lobes");
+    ASSERT_NE(lobes, nullptr);
+    EXPECT_EQ(lobes->componentType, "float16");
+    EXPECT_EQ(lobes->shape[1], 92u);
+    ASSERT_NE(prt::findLayer(bundle, "transfer"), nullptr);
+    // A view set of 91 directions for 92 views per vertex.
+    for (prt::Layer& layer : bundle.layers)
+        if (layer.name == "glossy_lobes") layer.params["views"].erase(0);
+    prt::writeBundle(path("bad.glb"), bundle);
+    std::string env = std::string(PRT_DATA_DIR) + "/env/courtyard.exr";
+    if (!fs::exists(env)) GTEST_SKIP() << "no " << env;
+    PrtRun bad = prt("relight " + path("bad.glb") + " --env " + env + " --eye 0,0,4 -o " + path("bad.npy"), dir);
+    EXPECT_EQ(bad.exitCode, 3);
+    EXPECT_NE(bad.text.find("disagrees"), std::string::npos) << bad.text;
+    EXPECT_FALSE(fs::exists(dir / "bad.npy"));
+    PrtRun relit = prt("relight " + path("g.glb") + " --env " + env + " --eye 0,0,4 -o " + path("fit.npy") + " --quiet", dir);
+    ASSERT_EQ(relit.exitCode, 0) << relit.text;
+    PrtRun reference = prt("reference " + path("sphere.glb") + " --env " + env +
+                        " --brdf phong:8,0.5 --albedo 0.3 --eye 0,0,4 --samples 64 -o " + path("ref.npy") + " --quiet",
+                        dir);
+    ASSERT_EQ(reference.exitCode, 0) << reference.text;
+    PrtRun compare = prt("compare " + path("fit.npy") + " " + path("ref.npy") + " > " + path("c.json"), dir);
+    ASSERT_EQ(compare.exitCode, 0);
+    nlohmann::json metrics = nlohmann::json::parse(std::ifstream(path("c.json")));
+    EXPECT_LT(metrics["relative_rmse"].get<double>(), 0.25) << metrics.dump();
+}
+
+} // namespace

@@ -1,0 +1,127 @@
+// The fit: a synthetic Gaussian is recovered by both solvers, the OpenCL batch is deterministic, kernel build
+// failures carry their log, lobe matching, and the stage's results do not depend on chunking or ranges.
+#include "glossy.h"
+
+#include "core.h"
+#include "scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace {
+
+using namespace prt::glossy;
+
+// A batch of `copies` problems whose kernel is exactly a exp(l (mu . w - 1)), started from a perturbed guess.
+FitBatch syntheticBatch(const DirectionGrid& grid, size_t copies, const float truth[5], const float start[5]) {
+    FitBatch batch;
+    batch.lobes = 1;
+    batch.problems = copies;
+    for (size_t p = 0; p < copies; ++p) {
+        for (size_t i = 0; i < grid.count(); ++i) {
+            const float* w = &grid.directions[i * 3];
+            double c = truth[1] * w[0] + truth[2] * w[1] + truth[3] * w[2];
+            batch.kernel.push_back(float(truth[0] * std::exp(truth[4] * (c - 1.0))));
+        }
+        batch.params.insert(batch.params.end(), start, start + 5);
+        batch.amplitudeMax.push_back(4 * truth[0]);
+    }
+    return batch;
+}
+
+void expectRecovered(const FitBatch& batch, size_t p, const float truth[5], double energy) {
+    const float* x = &batch.params[p * 5];
+    double length = std::sqrt(x[1] * x[1] + x[2] * x[2] + x[3] * x[3]);
+    double dot = (x[1] * truth[1] + x[2] * truth[2] + x[3] * truth[3]) / length;
+    EXPECT_LT(std::acos(std::min(1.0, dot)) * 180 / std::numbers::pi, 0.05);
+    EXPECT_NEAR(x[0], truth[0], 2e-3 * truth[0]);
+    EXPECT_NEAR(std::exp(x[4]), truth[4], 2e-3 * truth[4]);
+    EXPECT_LT(batch.cost[p], 1e-6 * energy);
+}
+
+TEST(GlossyFit, SingleGaussianRecoveredByBothSolvers) {
+    DirectionGrid grid = cubeGrid(16);
+    const float truth[5] = {3.0f, 0.48f, 0.6f, 0.64f, 40.0f};
+    const float start[5] = {1.5f, 0.3f, 0.7f, 0.65f, std::log(20.0f)};
+    FitBatch batch = syntheticBatch(grid, 1, truth, start);
+    double energy = dataEnergy(grid, batch.kernel.data());
+    FitBatch ceres = batch, opencl = batch;
+    solveCeres(grid, ceres, FitWeights{}, FitBounds{}, SolverOptions{});
+    expectRecovered(ceres, 0, truth, energy);
+    solveOpenCl(grid, opencl, FitWeights{}, FitBounds{}, SolverOptions{});
+    expectRecovered(opencl, 0, truth, energy);
+    // The objective both minimise is the one reported.
+    EXPECT_FLOAT_EQ(opencl.cost[0], float(objective(grid, opencl, 0, FitWeights{}, FitBounds{}, opencl.params.data())));
+}
+
+TEST(GlossyFit, OpenClBatchIsBitIdenticalWhereverAProblemSits) {
+    DirectionGrid grid = cubeGrid(8);
+    const float truth[5] = {2.0f, 0.0f, 0.8f, 0.6f, 12.0f};
+    const float start[5] = {1.0f, 0.2f, 0.7f, 0.6f, std::log(8.0f)};
+    FitBatch one = syntheticBatch(grid, 1, truth, start);
+    FitBatch many = syntheticBatch(grid, 37, truth, start);
+    // Vary the others so the batch is not uniform.
+    for (size_t p = 1; p < many.problems; ++p) many.params[p * 5] = 0.5f + 0.05f * float(p);
+    solveOpenCl(grid, one, FitWeights{}, FitBounds{}, SolverOptions{});
+    solveOpenCl(grid, many, FitWeights{}, FitBounds{}, SolverOptions{});
+    for (int i = 0; i < 5; ++i) EXPECT_EQ(one.params[i], many.params[i]);
+    EXPECT_EQ(one.iterations[0], many.iterations[0]);
+}
+
+TEST(GlossyFit, KernelBuildFailureShowsTheBuildLog) {
+    try {
+        buildOpenClProgram("__kernel void broken(__global float* x) { x[0] = undefinedName; }", "");
+        FAIL() << "expected a build failure";
+    } catch (const prt::Error& e) {
+        EXPECT_NE(e.problem().find("build log"), std::string::npos) << e.what();
+        EXPECT_NE(e.problem().find("undefinedName"), std::string::npos) << e.what();
+        EXPECT_EQ(e.exitCode(), prt::kExitFailure);
+    }
+}
+
+TEST(GlossyFit, LobeMatching) {
+    // Output form (a, mu, lambda): b is a with its two lobes swapped.
+    float a[10] = {1, 1, 0, 0, 10, 2, 0, 1, 0, 50};
+    float b[10] = {2, 0, 1, 0, 50, 1, 1, 0, 0, 10};
+    EXPECT_TRUE(lobesFlipped(a, b, 2));
+    EXPECT_FALSE(lobesFlipped(a, a, 2));
+    alignLobes(a, b, 2);
+    for (int i = 0; i < 10; ++i) EXPECT_EQ(a[i], b[i]);
+}
+
+TEST(GlossyStage, ChunksAndRangesGiveTheSameRowsAndSolversAgree) {
+    prt::TriMesh sphere = prt::makeSphere(1.0f, 5, 8);
+    GlossyOptions options;
+    options.phong = {16.0, 0.5};
+    options.lobes = 1;
+    options.gridResolution = 6;
+    options.progress = false;
+    options.chunkVertices = 64;
+    GlossyLobes whole = computeGlossyLobes(sphere, options);
+    options.chunkVertices = 5;
+    options.vertexBegin = 7;
+    options.vertexEnd = 19;
+    GlossyLobes part = computeGlossyLobes(sphere, options);
+    const size_t row = kViewCount * kLobeParams;
+    ASSERT_EQ(part.values.size(), 12 * row);
+    for (size_t i = 0; i < part.values.size(); ++i) ASSERT_EQ(part.values[i], whole.values[7 * row + i]) << i;
+    // An unoccluded convex sphere: every fitted lobe points near its view's mirror direction.
+    EXPECT_GT(whole.stats.problems, 0u);
+    EXPECT_LT(whole.stats.meanRelativeError, 0.3);
+    options.solver = Solver::Ceres;
+    GlossyLobes ceres = computeGlossyLobes(sphere, options);
+    double worst = 0;
+    for (size_t i = 0; i < ceres.values.size(); i += kLobeParams)
+        worst = std::max(worst, double(std::abs(ceres.values[i] - part.values[i])) / (1e-3 + part.values[i]));
+    EXPECT_LT(worst, 0.02);
+    // Bad options.
+    options.lobes = 5;
+    EXPECT_THROW(computeGlossyLobes(sphere, options), prt::Error);
+    options.lobes = 1;
+    options.phong.exponent = 0;
+    EXPECT_THROW(computeGlossyLobes(sphere, options), prt::Error);
+}
+
+} // namespace

@@ -1,0 +1,133 @@
+// The glossy runtime: view weights, lobe interpolation, lobe integration against closed forms, and the loader's
+// checks.
+#include "glossy.h"
+#include "runtime.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace {
+
+prt::GlossyModel modelOf(int lobes, const std::vector<float>& values) {
+    const prt::glossy::ViewSet& views = prt::glossy::viewSet();
+    prt::GlossyModel model;
+    model.vertexCount = 1;
+    model.lobes = lobes;
+    for (const auto& d : views.directions) model.views.insert(model.views.end(), d.begin(), d.end());
+    for (const auto& t : views.triangles) model.triangles.insert(model.triangles.end(), t.begin(), t.end());
+    model.values = values;
+    model.positions = {0, 0, 0};
+    model.normals = {0, 0, 1};
+    return model;
+}
+
+std::vector<float> constantEquirect(int width, float value) {
+    return std::vector<float>(size_t(width) * (width / 2) * 3, value);
+}
+
+TEST(GlossyRuntime, ViewWeightsAreBarycentricAndReproduceViews) {
+    prt::GlossyModel model = modelOf(1, std::vector<float>(92 * 5, 0.0f));
+    for (int v = 0; v < 92; v += 7) {
+        uint32_t views[3];
+        float weights[3];
+        viewWeights(model, &model.views[v * 3], views, weights);
+        float at = 0;
+        for (int j = 0; j < 3; ++j) at += views[j] == uint32_t(v) ? weights[j] : 0.0f;
+        EXPECT_NEAR(at, 1.0f, 1e-5f) << v;
+    }
+    const float d[3] = {0.3f, 0.5f, std::sqrt(1 - 0.34f)};
+    uint32_t views[3];
+    float weights[3];
+    viewWeights(model, d, views, weights);
+    float sum = 0;
+    for (float w : weights) {
+        EXPECT_GE(w, 0.0f);
+        sum += w;
+    }
+    EXPECT_NEAR(sum, 1.0f, 1e-6f);
+}
+
+TEST(GlossyRuntime, InterpolationBlendsLinearlyNormalisedAndInLog) {
+    std::vector<float> values(92 * 5, 0.0f);
+    for (int v = 0; v < 92; ++v) {
+        float* lobe = &values[v * 5];
+        lobe[0] = 2.0f, lobe[1] = 0.0f, lobe[2] = 0.0f, lobe[3] = 1.0f, lobe[4] = 30.0f;
+    }
+    values[1 * 5 + 0] = 4.0f, values[1 * 5 + 4] = 120.0f, values[1 * 5 + 1] = 1.0f, values[1 * 5 + 3] = 0.0f;
+    prt::GlossyModel model = modelOf(1, values);
+    const uint32_t views[3] = {0, 1, 2};
+    const float weights[3] = {0.5f, 0.5f, 0.0f};
+    float lobe[5];
+    interpolateLobe(model, 0, 0, views, weights, lobe);
+    EXPECT_FLOAT_EQ(lobe[0], 3.0f);
+    EXPECT_NEAR(lobe[4], 60.0f, 1e-3f); // geometric mean of 30 and 120
+    EXPECT_NEAR(lobe[1] * lobe[1] + lobe[2] * lobe[2] + lobe[3] * lobe[3], 1.0f, 1e-6f);
+    EXPECT_NEAR(lobe[1], std::sqrt(0.5f), 1e-6f);
+    const uint32_t same[3] = {3, 4, 5};
+    const float third[3] = {0.2f, 0.3f, 0.5f};
+    interpolateLobe(model, 0, 0, same, third, lobe);
+    EXPECT_FLOAT_EQ(lobe[0], 2.0f);
+    EXPECT_NEAR(lobe[4], 30.0f, 1e-4f);
+    EXPECT_FLOAT_EQ(lobe[3], 1.0f);
+}
+
+TEST(GlossyRuntime, LobeIntegralUnderConstantAndGaussianLight) {
+    // Constant L: a L 2 pi (1 - exp(-2 l)) / l, for wide and sharp lobes.
+    prt::PrefilteredEnvironment constant = prt::prefilterEnvironment(constantEquirect(512, 1.5f).data(), 512, 256);
+    for (float sharpness : {2.0f, 30.0f, 400.0f, 3000.0f}) {
+        const float lobe[5] = {2.0f, 0.6f, 0.0f, 0.8f, sharpness};
+        float radiance[3];
+        integrateLobe(constant, lobe, radiance);
+        double expected = 2.0 * 1.5 * 2 * std::numbers::pi * (1 - std::exp(-2.0 * sharpness)) / sharpness;
+        EXPECT_NEAR(radiance[1], expected, 0.01 * expected) << sharpness;
+    }
+    // A Gaussian environment exp(lL (d . w - 1)): the SG inner-product closed form.
+    const int width = 1024, height = 512;
+    std::vector<float> rgb(size_t(width) * height * 3);
+    const double d[3] = {0.0, 0.6, -0.8}, lightSharpness = 50.0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            double t = std::numbers::pi * (y + 0.5) / height, p = 2 * std::numbers::pi * (x + 0.5) / width - std::numbers::pi;
+            double w[3] = {std::sin(t) * std::sin(p), std::cos(t), -std::sin(t) * std::cos(p)};
+            float value = float(std::exp(lightSharpness * (d[0] * w[0] + d[1] * w[1] + d[2] * w[2] - 1)));
+            for (int c = 0; c < 3; ++c) rgb[(size_t(y) * width + x) * 3 + c] = value;
+        }
+    prt::PrefilteredEnvironment gaussian = prt::prefilterEnvironment(rgb.data(), width, height);
+    const double mu[3] = {0.0, 0.8, -0.6}, sharpness = 80.0;
+    const float lobe[5] = {1.0f, float(mu[0]), float(mu[1]), float(mu[2]), float(sharpness)};
+    float radiance[3];
+    integrateLobe(gaussian, lobe, radiance);
+    double m[3], lm = 0;
+    for (int c = 0; c < 3; ++c) m[c] = sharpness * mu[c] + lightSharpness * d[c], lm += m[c] * m[c];
+    lm = std::sqrt(lm);
+    double expected = 2 * std::numbers::pi * std::exp(lm - sharpness - lightSharpness) * (1 - std::exp(-2 * lm)) / lm;
+    EXPECT_NEAR(radiance[0], expected, 0.01 * expected);
+}
+
+TEST(GlossyRuntime, LoaderRefusesALobeLayerThatDisagreesWithItsViewSet) {
+    prt::Bundle bundle;
+    bundle.mesh.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    bundle.mesh.normals = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+    bundle.mesh.indices = {0, 1, 2};
+    prt::glossy::GlossyLobes lobes;
+    lobes.lobes = 1;
+    lobes.vertexEnd = 3;
+    lobes.values.assign(3 * 92 * 5, 1.0f);
+    prt::Layer layer = prt::glossy::lobeLayer(lobes, prt::glossy::GlossyOptions{}, 3);
+    bundle.layers.push_back(layer);
+    EXPECT_NO_THROW(prt::glossyModel(bundle, "b.glb"));
+    bundle.layers[0].params["views"].erase(91);
+    try {
+        prt::glossyModel(bundle, "b.glb");
+        FAIL();
+    } catch (const prt::Error& e) {
+        EXPECT_NE(e.problem().find("disagrees"), std::string::npos) << e.what();
+    }
+    bundle.layers[0] = layer;
+    bundle.layers[0].shape[2] = 5;
+    EXPECT_THROW(prt::glossyModel(bundle, "b.glb"), prt::Error);
+}
+
+} // namespace
