@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <string>
@@ -22,6 +23,10 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
+
+// What a pipeline cache key holds about this prt (`prt --build-info`): its version, build type, compiler, the
+// content hash of its executable, and the versions of the libraries it was compiled against and has loaded.
+nlohmann::json buildInfo();
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);

@@ -1,4 +1,4 @@
-// The Embree scene and the ray offset every ray-casting stage shares.
+// The Embree scene, the ray offset and the spawn rule every ray-casting stage shares.
 #include "raycast.h"
 
 #include "core.h"
@@ -16,14 +16,14 @@ void throwIfEmbreeFailed(RTCDevice device, const char* step) {
                     kExitFailure);
 }
 
-EmbreeScene::EmbreeScene(const TriMesh& mesh, bool robust) {
+EmbreeScene::EmbreeScene(const TriMesh& mesh) {
     device = rtcNewDevice(nullptr);
     if (!device)
         throw Error("", "embree device",
                     "cannot create (error code " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")", kExitFailure);
     try {
         scene = rtcNewScene(device);
-        if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
         rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
         if (mesh.triangleCount() > 0) {
             RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);

@@ -34,8 +34,9 @@ int sizeParam(const nlohmann::json& object, const char* key, const std::string& 
 // A file referenced from `owner` by a relative uri: checked against its recorded hash.
 std::string referencedFile(const std::string& owner, const std::string& uri, const nlohmann::json& hash,
                            const std::string& place) {
-    if (uri.empty() || fs::path(uri).is_absolute())
-        throw Error(owner, place, "uri '" + uri + "' is not a path relative to the bundle");
+    fs::path relative = fs::path(uri).lexically_normal();
+    if (uri.empty() || relative.is_absolute() || relative.empty() || *relative.begin() == "..")
+        throw Error(owner, place, "uri '" + uri + "' is not a path inside the bundle's folder");
     std::error_code error;
     fs::path resolved = fs::canonical(owner, error); // a linked bundle's textures lie next to its target
     fs::path path = (error ? fs::path(owner) : resolved).parent_path() / uri;
@@ -71,14 +72,15 @@ std::vector<float> readExrRows(const std::string& path, int width, int height, i
 std::vector<float> readU8Rows(const std::string& sidecarPath, int width, int height, int coefficients) {
     std::ifstream in(sidecarPath);
     nlohmann::json sidecar = nlohmann::json::parse(in, nullptr, false);
-    if (!sidecar.is_object() || sidecar.value("format", "") != "prt-texel-u8" || !sidecar["layers"].is_array())
+    if (!sidecar.is_object() || !sidecar.contains("format") || sidecar["format"] != "prt-texel-u8" ||
+        !sidecar.contains("layers") || !sidecar["layers"].is_array())
         throw Error(sidecarPath, "", "not a prt-texel-u8 sidecar (JSON with format \"prt-texel-u8\" and layers)");
     const nlohmann::json& layers = sidecar["layers"];
     if (int(layers.size()) != coefficients)
         throw Error(sidecarPath, "layers", std::to_string(layers.size()) + " layers for " +
                                                std::to_string(coefficients) + " coefficients");
     const size_t texels = size_t(width) * height, values = 3 * size_t(coefficients);
-    std::vector<float> rows(texels * values);
+    std::vector<float> rows; // allocated once the first image has shown the size is real
     for (int j = 0; j < coefficients; ++j) {
         const nlohmann::json& layer = layers[j];
         std::string place = "layers[" + std::to_string(j) + "]";
@@ -89,6 +91,7 @@ std::vector<float> readU8Rows(const std::string& sidecarPath, int width, int hei
                                           layer.value("hash", nlohmann::json()), place);
         ImageChannels image = readImageChannels(path, {"R", "G", "B"});
         checkSize(image, width, height, path);
+        if (rows.empty()) rows.resize(texels * values);
         float lo = layer["min"].get<float>(), span = layer["max"].get<float>() - lo;
         // The file holds q / 255 as read; value = min + q * (max - min) / 255.
         for (size_t t = 0; t < texels; ++t)
@@ -117,10 +120,12 @@ TexelRelightModel loadTexelRelightModel(const std::string& bundlePath) {
         throw Error(bundlePath, place, "has " + std::to_string(layer->shape[0]) + " rows for a " +
                                            std::to_string(width) + "x" + std::to_string(height) + " atlas");
 
+    const int coefficients = order * order;
+    // The size comes from the bundle's JSON: bounded before anything is allocated for it.
+    checkedProduct({texels, 3 * uint64_t(coefficients)}, "texel transfer values", bundlePath, place);
     std::string format = stringParam(*layer, "format", bundlePath, place);
     std::string path = referencedFile(bundlePath, stringParam(*layer, "uri", bundlePath, place),
                                       layer->params.value("hash", nlohmann::json()), place + ", params.uri");
-    const int coefficients = order * order;
     TexelRelightModel model;
     model.width = width;
     model.height = height;

@@ -62,7 +62,7 @@ Fan fan(const float position[3], const float normal[3], uint64_t key, uint64_t s
         f.tangent[i] = c * t0[i] + s * b0[i];
         f.bitangent[i] = -s * t0[i] + c * b0[i];
         f.normal[i] = n[i];
-        f.origin[i] = float(p[i] + offset * n[i]);
+        f.origin[i] = float(p[i] + offset * n[i]); // spawnOrigin (lib/raycast), with the normal in double
         f.axes[i] = float(f.tangent[i]);
         f.axes[3 + i] = float(f.bitangent[i]);
         f.axes[6 + i] = float(n[i]);

@@ -57,20 +57,11 @@ void validateReceivers(const Receivers& receivers);
 
 // The ray of sample k of a fan, ready for rtcOccluded1 / rtcIntersect1.
 inline void setRay(const Fan& fan, const Hemisphere& set, int k, float offset, RTCRay& ray) {
+    (void)offset; // the fan's origin is already spawnOrigin(position, normal, offset): the shared spawn rule
     float sx = set.x[k], sy = set.y[k], sz = set.z[k];
     const float* a = fan.axes;
-    ray.org_x = fan.origin[0];
-    ray.org_y = fan.origin[1];
-    ray.org_z = fan.origin[2];
-    ray.dir_x = a[0] * sx + a[3] * sy + a[6] * sz;
-    ray.dir_y = a[1] * sx + a[4] * sy + a[7] * sz;
-    ray.dir_z = a[2] * sx + a[5] * sy + a[8] * sz;
-    ray.tnear = offset;
-    ray.tfar = INFINITY;
-    ray.time = 0.0f;
-    ray.mask = 0xFFFFFFFFu;
-    ray.id = 0;
-    ray.flags = 0;
+    spawnRay(ray, fan.origin, a[0] * sx + a[3] * sy + a[6] * sz, a[1] * sx + a[4] * sy + a[7] * sz,
+             a[2] * sx + a[5] * sy + a[8] * sz);
 }
 
 // Checks what every pass relies on: normals present and nonzero, indices in range, finite positions.
