@@ -23,6 +23,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
+# npm packages the tests use (package-lock.json pins them): the Khronos glTF validator.
+[ -d tests/bundle/gltf_validator/node_modules/gltf-validator ] ||
+  npm ci --prefix tests/bundle/gltf_validator --no-audit --no-fund --loglevel=error
+
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build
 make -f Makefile.data PRT=build/prt

@@ -32,4 +32,12 @@ std::string extensionChecksum(const std::vector<unsigned char>& buffer, nlohmann
 // reach outside their buffers, unsupported accessor kinds, malformed node trees and files without triangles.
 TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file);
 
+// The triangles of glTF mesh `meshIndex` alone, untransformed: a version 2 bundle's object. Throws as readGltfMesh.
+TriMesh readGltfMeshAt(const tinygltf::Model& model, int meshIndex, const std::string& file);
+
+// Bytes per element of a layer component type ("float32" 4, "float16" 2, "uint8" 1, "uint16" 2, "uint32" 4), 0
+// for an unknown name.
+size_t componentSize(const std::string& componentType);
+bool isFloatComponent(const std::string& componentType);
+
 } // namespace prt::detail

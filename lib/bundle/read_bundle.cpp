@@ -4,6 +4,7 @@
 
 #include <bit>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <algorithm>
@@ -122,8 +123,8 @@ static std::string stringMember(const json& parent, const char* key, const std::
     return parent[key].get<std::string>();
 }
 
-static Layer readLayer(const json& record, const tinygltf::Model& model, size_t vertexCount, const std::string& path,
-                       const std::string& place) {
+static Layer readLayer(const json& record, const tinygltf::Model& model, const Bundle& bundle, int version,
+                       const std::string& path, const std::string& place) {
     auto refuse = [&](const std::string& problem) { throw Error(path, place, problem); };
     if (!record.is_object()) refuse("layer is not a JSON object");
     Layer layer;
@@ -131,6 +132,12 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, size_t 
     layer.domain = stringMember(record, "domain", path, place);
     layer.semantic = stringMember(record, "semantic", path, place);
     layer.params = objectMember(record, "params", path, place);
+    if (record.contains("object")) {
+        if (version < 2) refuse("object is a version 2 member");
+        if (!record["object"].is_number_unsigned() || record["object"].get<uint64_t>() > bundle.objects.size())
+            refuse("object " + record["object"].dump() + " does not exist");
+        layer.object = record["object"].get<uint32_t>();
+    }
     if (!record.contains("shape") || !record["shape"].is_array() || record["shape"].empty()) refuse("shape is missing or empty");
     uint64_t count = 1;
     bool overflow = false;
@@ -142,15 +149,21 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, size_t 
     }
     if (overflow) refuse("shape is too large");
     checkElementCount(count, "layer values", path, place + ".shape");
+    size_t vertexCount = objectMesh(bundle, layer.object).vertexCount();
     if (layer.domain == "vertex" && layer.shape[0] != vertexCount)
         refuse("vertex layer has " + std::to_string(layer.shape[0]) + " rows but the mesh has " + std::to_string(vertexCount) + " vertices");
 
     if (!record.contains("bufferView")) {
         bool external = layer.params.contains("uri") && layer.params["uri"].is_string();
         if (count != 0 && !external) refuse("layer has neither a bufferView nor params.uri");
+        if (record.contains("componentType") && record["componentType"].is_string())
+            layer.componentType = record["componentType"].get<std::string>();
         return layer;
     }
-    if (record.value("componentType", "") != "float32") refuse("componentType must be \"float32\"");
+    layer.componentType = record.value("componentType", "");
+    size_t size = detail::componentSize(layer.componentType);
+    if (version < 2 && layer.componentType != "float32") refuse("componentType must be \"float32\"");
+    if (size == 0) refuse("componentType must be one of float32, float16, uint8, uint16, uint32");
     if (!record["bufferView"].is_number_unsigned() || record["bufferView"].get<uint64_t>() >= model.bufferViews.size())
         refuse("bufferView does not exist");
     const tinygltf::BufferView& view = model.bufferViews[record["bufferView"].get<size_t>()];
@@ -158,10 +171,35 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, size_t 
     const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
     if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
         refuse("bufferView reaches past the end of its buffer");
-    if (count > view.byteLength / sizeof(float) || view.byteLength != count * sizeof(float))
-        refuse("bufferView holds " + std::to_string(view.byteLength) + " bytes, shape needs " + std::to_string(count) + " float32");
-    layer.data.resize(count);
-    if (count > 0) std::memcpy(layer.data.data(), buffer.data() + view.byteOffset, view.byteLength);
+    // Checked against the view, which lies inside the file, before anything is allocated.
+    if (count > view.byteLength / size || view.byteLength != count * size)
+        refuse("bufferView holds " + std::to_string(view.byteLength) + " bytes, shape needs " + std::to_string(count) + " " +
+               layer.componentType);
+    const unsigned char* bytes = buffer.data() + view.byteOffset;
+    if (layer.componentType == "float32") {
+        layer.data.resize(count);
+        if (count > 0) std::memcpy(layer.data.data(), bytes, view.byteLength);
+    } else if (layer.componentType == "float16") {
+        layer.data.resize(count);
+        for (size_t i = 0; i < count; ++i) {
+            uint16_t half;
+            std::memcpy(&half, bytes + 2 * i, 2);
+            layer.data[i] = halfToFloat(half);
+        }
+    } else {
+        layer.integers.resize(count);
+        for (size_t i = 0; i < count; ++i) {
+            if (size == 1) {
+                layer.integers[i] = bytes[i];
+            } else if (size == 2) {
+                uint16_t value;
+                std::memcpy(&value, bytes + 2 * i, 2);
+                layer.integers[i] = value;
+            } else {
+                std::memcpy(&layer.integers[i], bytes + 4 * i, 4);
+            }
+        }
+    }
     return layer;
 }
 
@@ -171,9 +209,9 @@ static json verifiedExtension(const tinygltf::Model& model, const std::string& p
     json extension = json::parse(model.extensions_json_string).at(kBundleExtension);
     if (!extension.is_object()) throw Error(path, place, "is not a JSON object");
     json version = extension.value("version", json());
-    if (!version.is_number_integer() || version.get<int64_t>() != kBundleVersion)
-        throw Error(path, place, "version " + version.dump() + " is not supported; this build reads version " +
-                                     std::to_string(kBundleVersion));
+    if (!version.is_number_integer() || version.get<int64_t>() < kOldestBundleVersion || version.get<int64_t>() > kBundleVersion)
+        throw Error(path, place, "version " + version.dump() + " is not supported; this build reads versions " +
+                                     std::to_string(kOldestBundleVersion) + " to " + std::to_string(kBundleVersion));
     if (!extension.contains("checksum") || !extension["checksum"].is_string()) throw Error(path, place, "checksum is missing");
     static const std::vector<unsigned char> kNoBuffer;
     const std::vector<unsigned char>& buffer = model.buffers.empty() ? kNoBuffer : model.buffers[0].data;
@@ -182,17 +220,71 @@ static json verifiedExtension(const tinygltf::Model& model, const std::string& p
     return extension;
 }
 
+// A version 2 bundle's objects, each from its own glTF mesh: object 0 into bundle.mesh, the rest into objects.
+static void readObjects(const json& extension, const tinygltf::Model& model, const std::string& path, Bundle& bundle) {
+    const std::string place = std::string(kBundleExtension) + ".objects";
+    const json& objects = extension["objects"];
+    if (!objects.is_array() || objects.empty()) throw Error(path, place, "is not a non-empty array");
+    std::set<std::string> names;
+    for (size_t k = 0; k < objects.size(); ++k) {
+        std::string objectPlace = place + "[" + std::to_string(k) + "]";
+        const json& record = objects[k];
+        if (!record.is_object()) throw Error(path, objectPlace, "is not a JSON object");
+        std::string name = stringMember(record, "name", path, objectPlace);
+        std::string role = stringMember(record, "role", path, objectPlace);
+        if (name.empty() || !names.insert(name).second) throw Error(path, objectPlace, "name is empty or not unique");
+        if (!record.contains("mesh") || !record["mesh"].is_number_unsigned() || record["mesh"].get<uint64_t>() >= model.meshes.size())
+            throw Error(path, objectPlace + ".mesh", "is not the index of a glTF mesh");
+        TriMesh mesh = detail::readGltfMeshAt(model, record["mesh"].get<int>(), path);
+        if (k == 0) {
+            bundle.mesh = std::move(mesh);
+            bundle.meshName = name;
+            bundle.meshRole = role;
+        } else {
+            bundle.objects.push_back({name, role, std::move(mesh)});
+        }
+    }
+}
+
+static void readInstances(const json& extension, const std::string& path, Bundle& bundle) {
+    const std::string place = std::string(kBundleExtension) + ".instances";
+    const json& instances = extension["instances"];
+    if (!instances.is_array()) throw Error(path, place, "is not an array");
+    for (size_t i = 0; i < instances.size(); ++i) {
+        std::string instancePlace = place + "[" + std::to_string(i) + "]";
+        const json& record = instances[i];
+        if (!record.is_object()) throw Error(path, instancePlace, "is not a JSON object");
+        Instance instance;
+        if (record.contains("name")) instance.name = stringMember(record, "name", path, instancePlace);
+        if (!record.contains("object") || !record["object"].is_number_unsigned() || record["object"].get<uint64_t>() > bundle.objects.size())
+            throw Error(path, instancePlace + ".object", "is not the index of an object");
+        instance.object = record["object"].get<uint32_t>();
+        if (record.contains("translation")) {
+            const json& t = record["translation"];
+            if (!t.is_array() || t.size() != 3) throw Error(path, instancePlace + ".translation", "is not three numbers");
+            for (int a = 0; a < 3; ++a) {
+                if (!t[a].is_number() || !std::isfinite(t[a].get<double>()))
+                    throw Error(path, instancePlace + ".translation", "is not three finite numbers");
+                instance.translation[a] = t[a].get<float>();
+            }
+        }
+        bundle.instances.push_back(instance);
+    }
+}
+
 static void readRecords(const json& extension, const tinygltf::Model& model, const std::string& path, Bundle& bundle) {
     const std::string place = kBundleExtension;
+    int version = extension["version"].get<int>();
     bundle.producer = objectMember(extension, "producer", path, place);
     bundle.inputs = objectMember(extension, "inputs", path, place);
     bundle.convention = objectMember(extension, "convention", path, place);
+    if (version >= 2 && extension.contains("instances")) readInstances(extension, path, bundle);
     if (!extension.contains("layers")) return;
     if (!extension["layers"].is_array()) throw Error(path, place + ".layers", "is not an array");
     std::set<std::string> names;
     for (size_t i = 0; i < extension["layers"].size(); ++i) {
         std::string layerPlace = place + ".layers[" + std::to_string(i) + "]";
-        bundle.layers.push_back(readLayer(extension["layers"][i], model, bundle.mesh.vertexCount(), path, layerPlace));
+        bundle.layers.push_back(readLayer(extension["layers"][i], model, bundle, version, path, layerPlace));
         if (!names.insert(bundle.layers.back().name).second) throw Error(path, layerPlace, "duplicate layer name");
     }
 }
@@ -203,7 +295,11 @@ Bundle readBundle(const std::string& path) {
     Bundle bundle;
     try {
         json extension = hasExtension ? verifiedExtension(model, path) : json();
-        bundle.mesh = detail::readGltfMesh(model, path);
+        // Version 1 and plain glTF: the scene's triangles, merged. Version 2: each object from its own mesh.
+        if (hasExtension && extension["version"].get<int>() >= 2 && extension.contains("objects"))
+            readObjects(extension, model, path, bundle);
+        else
+            bundle.mesh = detail::readGltfMesh(model, path);
         if (hasExtension) readRecords(extension, model, path, bundle);
     } catch (const json::exception& e) {
         throw Error(path, kBundleExtension, std::string("malformed extension JSON: ") + e.what());

@@ -344,10 +344,27 @@ void addScene(MeshBuilder& builder, int sceneIndex) {
 
 } // namespace
 
-TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
+// What every reader does once the primitives are gathered: drop arrays not every primitive had, refuse no triangles.
+static TriMesh finishMesh(MeshBuilder& builder, const std::string& noTriangles) {
+    if (builder.skippedPrimitives > 0)
+        logWarn(builder.file + ": skipped primitives that are points or lines: " + std::to_string(builder.skippedPrimitives));
+    TriMesh& mesh = builder.mesh;
+    if (mesh.indices.empty()) throw Error(builder.file, "", noTriangles);
+    if (!builder.allNormals) mesh.normals.clear();
+    if (!builder.allTexcoords) mesh.texcoords.clear();
+    if (!builder.anyAlbedo) mesh.albedo.clear();
+    return std::move(mesh);
+}
+
+// glTF 1.0 parses far enough to find no glTF 2.0 meshes; say what it is instead of "no triangles".
+static void requireGltf2(const tinygltf::Model& model, const std::string& file) {
     if (!model.asset.version.empty() && model.asset.version[0] == '1')
         throw Error(file, "asset.version", "glTF " + model.asset.version + " is not supported; prt reads glTF 2.0 "
                                            "(convert the file, for example with the Khronos glTF 1.0 to 2.0 converter)");
+}
+
+TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
+    requireGltf2(model, file);
     if (model.nodes.size() > kMaxNodes)
         throw Error(file, "nodes", std::to_string(model.nodes.size()) + " nodes, more than the " + std::to_string(kMaxNodes) +
                                        " prt reads");
@@ -358,14 +375,14 @@ TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
         int sceneIndex = model.defaultScene >= 0 && size_t(model.defaultScene) < model.scenes.size() ? model.defaultScene : 0;
         addScene(builder, sceneIndex);
     }
-    if (builder.skippedPrimitives > 0)
-        logWarn(file + ": skipped primitives that are not triangle lists: " + std::to_string(builder.skippedPrimitives));
-    TriMesh& mesh = builder.mesh;
-    if (mesh.indices.empty()) throw Error(file, "", "no triangles: no TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive is reachable from the scene");
-    if (!builder.allNormals) mesh.normals.clear();
-    if (!builder.allTexcoords) mesh.texcoords.clear();
-    if (!builder.anyAlbedo) mesh.albedo.clear();
-    return std::move(mesh);
+    return finishMesh(builder, "no triangles: no TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive is reachable from the scene");
+}
+
+TriMesh readGltfMeshAt(const tinygltf::Model& model, int meshIndex, const std::string& file) {
+    requireGltf2(model, file);
+    MeshBuilder builder{model, file, TriMesh{}};
+    addMesh(builder, meshIndex, kIdentity, "meshes");
+    return finishMesh(builder, "no triangles in meshes[" + std::to_string(meshIndex) + "]");
 }
 
 } // namespace prt::detail

@@ -18,8 +18,8 @@ using nlohmann::json;
 // Raw little-endian floats and indices are copied into the GLB as they lie in memory.
 static_assert(std::endian::native == std::endian::little, "GLB buffers are little-endian");
 
-static void checkMesh(const std::string& path, const TriMesh& mesh) {
-    auto refuse = [&](const std::string& problem) { throw Error(path, "mesh", problem, kExitFailure); };
+static void checkMesh(const std::string& path, const std::string& place, const TriMesh& mesh) {
+    auto refuse = [&](const std::string& problem) { throw Error(path, place, problem, kExitFailure); };
     size_t vertexCount = mesh.vertexCount();
     if (mesh.positions.size() % 3 != 0) refuse("positions are not xyz triples");
     // POSITION bounds go into the JSON, which has no NaN or infinity.
@@ -48,7 +48,38 @@ static bool hasExternalData(const Layer& layer) {
     return layer.params.is_object() && layer.params.contains("uri") && layer.params["uri"].is_string();
 }
 
-static void checkLayers(const std::string& path, const Bundle& bundle) {
+static std::string objectName(const Bundle& bundle, uint32_t object) {
+    if (object == 0) return bundle.meshName.empty() ? "mesh" : bundle.meshName;
+    return bundle.objects[object - 1].name;
+}
+
+static void checkObjects(const std::string& path, const Bundle& bundle, int version) {
+    auto refuse = [&](const std::string& place, const std::string& problem) { throw Error(path, place, problem, kExitFailure); };
+    if (version != 1 && version != kBundleVersion)
+        refuse("", "cannot write bundle version " + std::to_string(version) + "; this build writes 1 and " +
+                       std::to_string(kBundleVersion));
+    if (version == 1 && (!bundle.objects.empty() || !bundle.instances.empty()))
+        refuse("", "version 1 holds one mesh: objects and instances need version 2");
+    checkMesh(path, "mesh", bundle.mesh);
+    std::set<std::string> names = {objectName(bundle, 0)};
+    for (size_t k = 0; k < bundle.objects.size(); ++k) {
+        std::string place = "objects[" + std::to_string(k + 1) + "]";
+        const BundleObject& object = bundle.objects[k];
+        if (object.name.empty()) refuse(place, "object has no name");
+        if (!names.insert(object.name).second) refuse(place, "duplicate object name '" + object.name + "'");
+        if (object.role.empty()) refuse(place, "object has no role");
+        checkMesh(path, place, object.mesh);
+    }
+    for (size_t i = 0; i < bundle.instances.size(); ++i) {
+        const Instance& instance = bundle.instances[i];
+        std::string place = "instances[" + std::to_string(i) + "]";
+        if (instance.object > bundle.objects.size()) refuse(place, "object " + std::to_string(instance.object) + " does not exist");
+        for (float t : instance.translation)
+            if (!std::isfinite(t)) refuse(place, "translation is not finite");
+    }
+}
+
+static void checkLayers(const std::string& path, const Bundle& bundle, int version) {
     std::set<std::string> names;
     for (const Layer& layer : bundle.layers) {
         std::string place = "layer '" + layer.name + "'";
@@ -58,17 +89,36 @@ static void checkLayers(const std::string& path, const Bundle& bundle) {
         if (layer.domain.empty() || layer.semantic.empty()) refuse("domain and semantic are required");
         if (layer.shape.empty()) refuse("shape is empty");
         if (!layer.params.is_object()) refuse("params is not a JSON object");
+        size_t size = detail::componentSize(layer.componentType);
+        if (size == 0) refuse("unknown componentType '" + layer.componentType + "'");
+        if (version == 1 && layer.componentType != "float32") refuse("version 1 stores float32 only");
+        if (layer.object > bundle.objects.size()) refuse("object " + std::to_string(layer.object) + " does not exist");
+        if (version == 1 && layer.object != 0) refuse("version 1 holds one object");
+        bool floats = detail::isFloatComponent(layer.componentType);
+        const size_t values = floats ? layer.data.size() : layer.integers.size();
+        if (floats ? !layer.integers.empty() : !layer.data.empty())
+            refuse(std::string(floats ? "a float layer holds integers" : "an integer layer holds floats"));
         uint64_t count = elementCount(layer);
         bool dataless = count == 0 || hasExternalData(layer);
-        if (!(layer.data.size() == count || (dataless && layer.data.empty())))
-            refuse("data holds " + std::to_string(layer.data.size()) + " floats, shape needs " + std::to_string(count));
-        if (layer.domain == "vertex" && layer.shape[0] != bundle.mesh.vertexCount())
-            refuse("vertex layer has " + std::to_string(layer.shape[0]) + " rows for " +
-                   std::to_string(bundle.mesh.vertexCount()) + " vertices");
+        if (!(values == count || (dataless && values == 0)))
+            refuse("holds " + std::to_string(values) + " values, shape needs " + std::to_string(count));
+        if (layer.componentType == "float16")
+            for (float value : layer.data)
+                if (!std::isfinite(value) || std::fabs(value) > 65504.0f) refuse("a value does not fit float16");
+        if (!floats && layer.componentType != "uint32") {
+            uint32_t limit = layer.componentType == "uint8" ? 0xffu : 0xffffu;
+            for (uint32_t value : layer.integers)
+                if (value > limit) refuse("value " + std::to_string(value) + " does not fit " + layer.componentType);
+        }
+        size_t vertexCount = objectMesh(bundle, layer.object).vertexCount();
+        if (layer.domain == "vertex" && layer.shape[0] != vertexCount)
+            refuse("vertex layer has " + std::to_string(layer.shape[0]) + " rows for " + std::to_string(vertexCount) +
+                   " vertices of object '" + objectName(bundle, layer.object) + "'");
     }
 }
 
-// Appends bytes to buffer 0 as a new buffer view; every element prt stores is 4 bytes, so views stay 4-aligned.
+// Appends bytes to buffer 0 as a new buffer view, then pads the buffer to 4 bytes so that every view starts
+// 4-aligned whatever its element size.
 static int addView(tinygltf::Model& model, const void* data, size_t byteLength, int target) {
     std::vector<unsigned char>& buffer = model.buffers[0].data;
     tinygltf::BufferView view;
@@ -78,6 +128,7 @@ static int addView(tinygltf::Model& model, const void* data, size_t byteLength, 
     view.target = target;
     const unsigned char* bytes = static_cast<const unsigned char*>(data);
     buffer.insert(buffer.end(), bytes, bytes + byteLength);
+    buffer.resize((buffer.size() + 3) / 4 * 4, 0);
     model.bufferViews.push_back(view);
     return int(model.bufferViews.size()) - 1;
 }
@@ -92,7 +143,8 @@ static int addFloatAttribute(tinygltf::Model& model, const std::vector<float>& v
     return int(model.accessors.size()) - 1;
 }
 
-static void addMesh(tinygltf::Model& model, const TriMesh& mesh) {
+// Adds `mesh` as glTF mesh number model.meshes.size() with material 0, and a node without transform showing it.
+static void addMesh(tinygltf::Model& model, const TriMesh& mesh, const std::string& name) {
     tinygltf::Primitive primitive;
     primitive.mode = TINYGLTF_MODE_TRIANGLES;
     primitive.attributes["POSITION"] = addFloatAttribute(model, mesh.positions, 3);
@@ -116,7 +168,19 @@ static void addMesh(tinygltf::Model& model, const TriMesh& mesh) {
     indices.count = mesh.indices.size();
     model.accessors.push_back(indices);
     primitive.indices = int(model.accessors.size()) - 1;
+    primitive.material = 0;
 
+    tinygltf::Mesh gltfMesh;
+    gltfMesh.name = name;
+    gltfMesh.primitives.push_back(primitive);
+    model.meshes.push_back(gltfMesh);
+    tinygltf::Node node;
+    node.name = name;
+    node.mesh = int(model.meshes.size()) - 1;
+    model.nodes.push_back(node);
+}
+
+static void addMaterial(tinygltf::Model& model) {
     // A white dielectric, so viewers show the albedo (COLOR_0) as a diffuse surface and readers multiply it by 1.
     tinygltf::Material material;
     material.name = "prt_diffuse";
@@ -124,42 +188,85 @@ static void addMesh(tinygltf::Model& model, const TriMesh& mesh) {
     material.pbrMetallicRoughness.metallicFactor = 0.0;
     material.pbrMetallicRoughness.roughnessFactor = 1.0;
     model.materials.push_back(material);
-    primitive.material = 0;
+}
 
-    tinygltf::Mesh gltfMesh;
-    gltfMesh.primitives.push_back(primitive);
-    model.meshes.push_back(gltfMesh);
-    tinygltf::Node node;
-    node.mesh = 0;
-    model.nodes.push_back(node);
+// The glTF scene: object k is mesh k and node k. Without instances the scene shows every object once; with
+// instances it shows one translated node per instance (nodes N+1..), and the object nodes stay out of it.
+static json addScene(tinygltf::Model& model, const Bundle& bundle) {
     tinygltf::Scene scene;
-    scene.nodes.push_back(0);
+    json instances = json::array();
+    size_t objectCount = bundle.objects.size() + 1;
+    if (bundle.instances.empty()) {
+        for (size_t k = 0; k < objectCount; ++k) scene.nodes.push_back(int(k));
+    } else {
+        for (const Instance& instance : bundle.instances) {
+            tinygltf::Node node;
+            node.name = instance.name;
+            node.mesh = int(instance.object);
+            node.translation = {instance.translation[0], instance.translation[1], instance.translation[2]};
+            model.nodes.push_back(node);
+            scene.nodes.push_back(int(model.nodes.size()) - 1);
+            json record = {{"object", instance.object},
+                           {"translation", {instance.translation[0], instance.translation[1], instance.translation[2]}},
+                           {"node", model.nodes.size() - 1}};
+            if (!instance.name.empty()) record["name"] = instance.name;
+            instances.push_back(record);
+        }
+    }
     model.scenes.push_back(scene);
     model.defaultScene = 0;
+    return instances;
 }
 
 static json layerRecord(tinygltf::Model& model, const Layer& layer) {
     json record = {{"name", layer.name}, {"domain", layer.domain}, {"semantic", layer.semantic},
                    {"shape", layer.shape}, {"params", layer.params}};
-    if (!layer.data.empty()) {
+    if (layer.object != 0) record["object"] = layer.object;
+    const std::string& type = layer.componentType;
+    if (layer.data.empty() && layer.integers.empty()) return record;
+    if (type == "float32") {
         record["bufferView"] = addView(model, layer.data.data(), layer.data.size() * sizeof(float), 0);
-        record["componentType"] = "float32";
+    } else if (type == "float16") {
+        std::vector<uint16_t> halves(layer.data.size());
+        for (size_t i = 0; i < halves.size(); ++i) halves[i] = floatToHalf(layer.data[i]);
+        record["bufferView"] = addView(model, halves.data(), halves.size() * 2, 0);
+    } else if (type == "uint32") {
+        record["bufferView"] = addView(model, layer.integers.data(), layer.integers.size() * 4, 0);
+    } else if (type == "uint16") {
+        std::vector<uint16_t> narrow(layer.integers.begin(), layer.integers.end());
+        record["bufferView"] = addView(model, narrow.data(), narrow.size() * 2, 0);
+    } else {
+        std::vector<uint8_t> narrow(layer.integers.begin(), layer.integers.end());
+        record["bufferView"] = addView(model, narrow.data(), narrow.size(), 0);
     }
+    record["componentType"] = type;
     return record;
 }
 
-void writeBundle(const std::string& path, const Bundle& bundle) {
-    checkMesh(path, bundle.mesh);
-    checkLayers(path, bundle);
+void writeBundle(const std::string& path, const Bundle& bundle, int version) {
+    checkObjects(path, bundle, version);
+    checkLayers(path, bundle, version);
 
     tinygltf::Model model;
     model.asset.version = "2.0";
     model.asset.generator = "prt";
     model.buffers.resize(1);
-    addMesh(model, bundle.mesh);
+    addMaterial(model);
+    addMesh(model, bundle.mesh, version == 1 ? "" : objectName(bundle, 0));
+    json objects = json::array();
+    objects.push_back({{"name", objectName(bundle, 0)}, {"role", bundle.meshRole}, {"mesh", 0}, {"node", 0}});
+    for (size_t k = 0; k < bundle.objects.size(); ++k) {
+        addMesh(model, bundle.objects[k].mesh, bundle.objects[k].name);
+        objects.push_back({{"name", bundle.objects[k].name}, {"role", bundle.objects[k].role}, {"mesh", k + 1}, {"node", k + 1}});
+    }
+    json instances = addScene(model, bundle);
 
-    json extension = {{"version", kBundleVersion}, {"producer", bundle.producer}, {"inputs", bundle.inputs},
+    json extension = {{"version", version}, {"producer", bundle.producer}, {"inputs", bundle.inputs},
                       {"convention", bundle.convention}, {"layers", json::array()}};
+    if (version >= 2) {
+        extension["objects"] = objects;
+        extension["instances"] = instances;
+    }
     for (const Layer& layer : bundle.layers) extension["layers"].push_back(layerRecord(model, layer));
     extension = detail::storableJson(extension, path, kBundleExtension);
     extension["checksum"] = detail::extensionChecksum(model.buffers[0].data, extension);

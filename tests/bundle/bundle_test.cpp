@@ -52,7 +52,12 @@ prt::TriMesh tetrahedron() {
 
 prt::Layer layer(std::string name, std::string domain, std::string semantic, std::vector<uint64_t> shape, uint32_t seed,
                  json params = json::object()) {
-    prt::Layer layer{std::move(name), std::move(domain), std::move(semantic), std::move(shape), {}, std::move(params)};
+    prt::Layer layer;
+    layer.name = std::move(name);
+    layer.domain = std::move(domain);
+    layer.semantic = std::move(semantic);
+    layer.shape = std::move(shape);
+    layer.params = std::move(params);
     size_t count = std::accumulate(layer.shape.begin(), layer.shape.end(), size_t(1), std::multiplies<>());
     layer.data = arbitraryFloats(count, seed);
     return layer;
@@ -365,9 +370,9 @@ TEST(Bundle, OutOfRangeIndicesPassToValidation) {
 TEST(Bundle, UnsupportedVersionIsRefused) {
     std::string path = writeSample("version.glb");
     Glb glb = splitGlb(prt::readFileBytes(path));
-    glb.document["extensions"]["PRT_bundle"]["version"] = 2;
+    glb.document["extensions"]["PRT_bundle"]["version"] = 3;
     prt::writeBytesAtomic(path, joinGlb(glb));
-    expectReadError(path, "version 2 is not supported; this build reads version 1");
+    expectReadError(path, "version 3 is not supported; this build reads versions 1 to 2");
 }
 
 TEST(Bundle, TruncatedFileIsRefused) {
