@@ -291,7 +291,10 @@ static void readRecords(const json& extension, const tinygltf::Model& model, con
 
 Bundle readBundle(const std::string& path) {
     tinygltf::Model model = loadModel(path);
-    bool hasExtension = model.extensions.count(kBundleExtension) > 0;
+    // tinygltf drops an extension whose value is not an object; the original JSON still names it, and a file that
+    // claims to be a bundle is read as one (and refused), never silently as a plain mesh.
+    bool hasExtension = model.extensions.count(kBundleExtension) > 0 ||
+                        json::parse(model.extensions_json_string, nullptr, false).contains(kBundleExtension);
     Bundle bundle;
     try {
         json extension = hasExtension ? verifiedExtension(model, path) : json();

@@ -6,6 +6,8 @@
 
 #include <embree3/rtcore.h>
 
+#include <vector>
+
 namespace prt {
 
 // An Embree device and committed scene over a mesh's triangles (geometry 0, primitive i = triangle i), build
@@ -31,15 +33,18 @@ void throwIfEmbreeFailed(RTCDevice device, const char* step);
 float rayOffset(const TriMesh& mesh);
 
 // ---- the one ray-spawn rule (transfer, bake and reference all use it) ----------------------------------------
-// A ray leaving surface point `position` starts at position + offset * normal (offset = rayOffset(mesh), normal
-// unit and on the side the ray leaves), with tnear 0 and tfar infinity, traced in a robust EmbreeScene. The
-// offset is applied once: a tnear as well would skip geometry nearer than the offset, which at a crease is the
-// neighbouring face, and rays would leak out of closed rooms through their edges.
-inline void spawnOrigin(const float position[3], const float normal[3], float offset, float origin[3]) {
-    for (int c = 0; c < 3; ++c) origin[c] = float(double(position[c]) + double(offset) * double(normal[c]));
+// A ray leaving a surface point starts at position + offset * spawnNormal with tnear 0 and tfar infinity, in a
+// robust EmbreeScene; offset = rayOffset(mesh). The offset is applied once: a tnear of `offset` as well (the old
+// transfer rule) skips whatever is nearer than the offset, which at a crease is the neighbouring face, and rays
+// leak out of closed rooms through their edges. spawnNormal is the geometric normal of the surface at the point:
+// for a point inside a triangle, the triangle's; for a mesh vertex, spawnNormals() below, the mean over every
+// triangle that touches its position, so that at a crease or corner (where the vertex lies in the other faces'
+// planes) the origin leaves all of them, and a ray into a neighbouring face hits it at t > 0.
+inline void spawnOrigin(const float position[3], const float spawnNormal[3], float offset, float origin[3]) {
+    for (int c = 0; c < 3; ++c) origin[c] = float(double(position[c]) + double(offset) * double(spawnNormal[c]));
 }
 
-// Fills `ray` from an origin spawnOrigin gave and a direction: tnear 0, tfar infinity, mask all, time 0.
+// Fills `ray` for direction (dx, dy, dz) from an origin spawnOrigin gave: tnear 0, tfar infinity, mask all, time 0.
 inline void spawnRay(RTCRay& ray, const float origin[3], float dx, float dy, float dz) {
     ray.org_x = origin[0];
     ray.org_y = origin[1];
@@ -54,5 +59,10 @@ inline void spawnRay(RTCRay& ray, const float origin[3], float dx, float dy, flo
     ray.id = 0;
     ray.flags = 0;
 }
+
+// Per vertex [vertexCount][3]: the unit mean of the area-weighted geometric normals (counter-clockwise front) of
+// every triangle that touches a vertex at exactly the same position, split vertices included. Where they cancel
+// (two-sided sheets) or the vertex is on no triangle, the vertex normal (normalised), else +z.
+std::vector<float> spawnNormals(const TriMesh& mesh);
 
 } // namespace prt

@@ -160,7 +160,6 @@ std::function<std::string()> gltfText(const std::function<void(json&)>& edit) {
     return [edit] { return square(edit).dump(); };
 }
 
-const char* kMeshprep = "meshprep {in}/m -o {out}/m.glb --report {out}/r.json";
 
 std::vector<Case> catalogue() {
     auto mesh = [](std::string reader, std::string name, std::string extension, std::function<std::string()> content,
@@ -171,12 +170,12 @@ std::vector<Case> catalogue() {
     std::vector<Case> cases = {
         // ---- OBJ ----
         mesh("obj", "empty file", "obj", text(""), "empty"),
-        mesh("obj", "face index past the vertices", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "9"),
+        mesh("obj", "face index past the vertices", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "out of range"),
         mesh("obj", "coordinate is not a number", "obj", text("v 0 zero 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "zero"),
         mesh("obj", "vertices without faces", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\n"), "empty mesh"),
-        mesh("obj", "binary bytes", "obj", text(std::string("v 0 0 0\n\0\x01\x02\xff\n", 13)), "line 2"),
+        mesh("obj", "binary bytes", "obj", text(std::string("v 0 0 0\n\0\x01\x02\xff\n", 13)), "not a text file"),
         mesh("obj", "negative index before the first vertex", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"), "-4"),
-        mesh("obj", "NaN coordinate", "obj", text("v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "not finite"),
+        mesh("obj", "NaN coordinate", "obj", text("v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "non-finite coordinate"),
         mesh("obj", "only degenerate faces", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 1 2\n"), "degenerate"),
         // ---- PLY ----
         mesh("ply", "no end_header", "ply", text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"), "end_header"),
@@ -200,8 +199,8 @@ std::vector<Case> catalogue() {
         mesh("off", "face index past the vertices", "off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"), "5"),
         // ---- STL ----
         mesh("stl", "binary count past the data", "stl", text(std::string(80, ' ') + bytesOf({10}) + std::string(50, '\0')), "stl"),
-        mesh("stl", "ascii facet without endloop", "stl",
-             text("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendfacet\nendsolid t\n"), "endloop"),
+        mesh("stl", "ascii facet with two vertices", "stl",
+             text("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid t\n"), "stl"),
         mesh("stl", "ascii vertex not a number", "stl",
              text("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 a\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n"), "a"),
         mesh("stl", "solid without facets", "stl", text("solid t\nendsolid t\n"), "empty mesh"),
@@ -281,7 +280,7 @@ std::vector<Case> catalogue() {
                  e["layers"] = {{{"name", "t"}, {"domain", "texel"}, {"semantic", "x"}, {"shape", {1000000000000ull, 3}}, {"params", {{"uri", "t.exr"}}}}};
              })}}, "relight {in}/b.glb --sh {in}/b.glb -o {out}/r.npy", 3, "above the limit"},
         Case{"bundle", "layer without data", {{"b.glb", editedBundle([](json& e) {
-                 e["layers"] = {{{"name", "t"}, {"domain", "vertex"}, {"semantic", "x"}, {"shape", {0, 3}}}, {{"name", "u"}, {"domain", "texel"}, {"semantic", "x"}, {"shape", {4, 3}}}};
+                 e["layers"] = {{{"name", "u"}, {"domain", "texel"}, {"semantic", "x"}, {"shape", {4, 3}}}};
              })}}, "transfer {in}/b.glb -o {out}/t.glb --samples 4", 3, "neither a bufferView nor params.uri"},
         Case{"bundle", "extension is not an object", {{"b.glb", editedBundle([](json& e) { e = json::array({1, 2}); })}},
              "transfer {in}/b.glb -o {out}/t.glb --samples 4", 3, "PRT_bundle"},
@@ -301,8 +300,8 @@ std::vector<Case> catalogue() {
         Case{"cli", "unknown flag", {}, "meshprep {in}/m.obj -o {out}/m.glb --frobnicate", 2, "frobnicate"},
         Case{"cli", "order 0", {}, "envsh {in}/e.exr --order 0 -o {out}/sh.json", 2, "--order"},
         Case{"cli", "shard past its count", {}, "transfer {in}/b.glb -o {out}/t.glb --shard 3/2", 2, "--shard"},
-        Case{"cli", "element cap not a number", {{"m.obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")}},
-             "meshprep {in}/m.obj -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}},
+        Case{"cli", "element cap not a number", {{"m.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
+             "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}},
     };
     return cases;
 }

@@ -138,7 +138,9 @@ TEST_F(Kill, KilledAtEveryKindOfCheckpointTheStoreStaysConsistentAndResumes) {
         int status = waitStatus(pid);
         EXPECT_FALSE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the run passed kill point " << point;
         // What was copied out is whole or absent: a bundle there reads.
-        if (fs::exists(dir / "out-hooked/bundle.glb")) EXPECT_NO_THROW(readBundle(dir / "out-hooked/bundle.glb"));
+        if (fs::exists(dir / "out-hooked/bundle.glb")) {
+            EXPECT_NO_THROW(readBundle(dir / "out-hooked/bundle.glb"));
+        }
         expectResumesToTheSameOutputs(p, cache);
     }
 }

@@ -44,8 +44,8 @@ TEST(Raycast, RaysHitTheMeshWhereItIs) {
 
 // Rays spawned by the shared rule from every vertex of a closed box room (corners and edges included, where a
 // wall's vertex lies in the neighbouring wall's plane), over a dense hemisphere about its flat normal, and from
-// points just beside the creases: none may escape. With the old transfer rule (offset origin plus tnear =
-// offset) the rays from an edge towards the neighbouring wall skipped it and left the room.
+// points just beside the creases: none may escape. With the old transfer rule (origin along the vertex normal,
+// tnear = offset) the rays from an edge towards the neighbouring wall skipped it and left the room.
 TEST(Raycast, SpawnedRaysNeverLeakFromAClosedBoxRoom) {
     TriMesh room = makeBoxRoom(2.0f, 4);
     EmbreeScene scene(room);
@@ -53,9 +53,10 @@ TEST(Raycast, SpawnedRaysNeverLeakFromAClosedBoxRoom) {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     size_t rays = 0, escaped = 0, escapedOldRule = 0;
-    auto cast = [&](const float position[3], const float normal[3]) {
+    const std::vector<float> spawn = spawnNormals(room);
+    auto cast = [&](const float position[3], const float normal[3], const float spawnNormal[3]) {
         float origin[3];
-        spawnOrigin(position, normal, offset, origin);
+        spawnOrigin(position, spawnNormal, offset, origin);
         // Directions on a 24 x 48 grid of the hemisphere about the normal, grazing ones included.
         float t[3], b[3];
         const float* n = normal;
@@ -77,9 +78,11 @@ TEST(Raycast, SpawnedRaysNeverLeakFromAClosedBoxRoom) {
                 rtcIntersect1(scene.scene, &context, &rayHit);
                 ++rays;
                 if (rayHit.hit.geomID == RTC_INVALID_GEOMETRY_ID) ++escaped;
-                // The old transfer rule, for contrast: the same origin with tnear = offset as well.
                 RTCRayHit old{};
-                spawnRay(old.ray, origin, d[0], d[1], d[2]);
+                // The old transfer rule, for contrast: origin along the vertex normal, tnear = offset as well.
+                float oldOrigin[3];
+                spawnOrigin(position, normal, offset, oldOrigin);
+                spawnRay(old.ray, oldOrigin, d[0], d[1], d[2]);
                 old.ray.tnear = offset;
                 old.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                 rtcIntersect1(scene.scene, &context, &old);
@@ -87,7 +90,7 @@ TEST(Raycast, SpawnedRaysNeverLeakFromAClosedBoxRoom) {
             }
         }
     };
-    for (size_t v = 0; v < room.vertexCount(); ++v) cast(&room.positions[3 * v], &room.normals[3 * v]);
+    for (size_t v = 0; v < room.vertexCount(); ++v) cast(&room.positions[3 * v], &room.normals[3 * v], &spawn[3 * v]);
     // Beside the creases: points of each triangle at barycentric (1 - 2e, e, e) and its permutations.
     for (size_t f = 0; f < room.triangleCount(); ++f) {
         const uint32_t* corner = &room.indices[3 * f];
@@ -99,7 +102,7 @@ TEST(Raycast, SpawnedRaysNeverLeakFromAClosedBoxRoom) {
             for (int c = 0; c < 3; ++c)
                 p[c] = w[0] * room.positions[3 * corner[0] + c] + w[1] * room.positions[3 * corner[1] + c] +
                        w[2] * room.positions[3 * corner[2] + c];
-            cast(p, &room.normals[3 * corner[0]]);
+            cast(p, &room.normals[3 * corner[0]], &room.normals[3 * corner[0]]); // inside the face: its normal
         }
     }
     EXPECT_GT(rays, 100000u);
