@@ -30,7 +30,7 @@ namespace prt::cli {
 
 namespace {
 
-// The real file names of the shared libraries mapped into this process: their names carry the full version
+// The real file names (and sizes) of the shared libraries mapped into this process: their names carry the full version
 // (libembree3.so.3.13.5, libOpenImageIO.so.2.4.7.1, libm.so.6 of a given glibc is named by its package), so an
 // upgraded library changes the list even when prt itself was not rebuilt.
 std::vector<std::string> loadedLibraries() {
@@ -49,6 +49,10 @@ std::vector<std::string> loadedLibraries() {
     }
     return {names.begin(), names.end()};
 }
+
+// Taken before main: the libraries the executable links, whatever it loads later (plugins, OpenCL drivers), so
+// that asking in-process and asking a fresh prt give the same answer.
+const std::vector<std::string> kLinkedLibraries = loadedLibraries();
 
 } // namespace
 
@@ -73,7 +77,7 @@ nlohmann::json buildInfo() {
             {"build_type", PRT_BUILD_TYPE},
             {"compiler", __VERSION__},
             {"executable", hashFile(self)},
-            {"libraries", {{"compiled", compiled}, {"running", running}, {"loaded", loadedLibraries()}}}};
+            {"libraries", {{"compiled", compiled}, {"running", running}, {"loaded", kLinkedLibraries}}}};
 }
 
 } // namespace prt::cli

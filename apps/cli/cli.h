@@ -29,7 +29,9 @@ void addBakeCommand(CLI::App& app);
 nlohmann::json buildInfo();
 
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
-int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
+// With `answer`, only --build-info and --resolved-options are answered, into *answer (`prt run` asks itself
+// these in-process instead of starting prt again); anything else is a usage error.
+int runDriver(int argc, char** argv, const char* onlyCommand = nullptr, nlohmann::json* answer = nullptr);
 
 // Parses --albedo: "R,G,B" or a single grey value, each in [0, 1], kept in double so bundles record what was
 // typed. Throws prt::Error(kExitUsage) naming --albedo otherwise.

@@ -14,7 +14,7 @@
 
 namespace prt::cli {
 
-int runDriver(int argc, char** argv, const char* onlyCommand) {
+int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* answer) {
     std::vector<char*> args(argv, argv + argc);
     std::string command = onlyCommand ? onlyCommand : "";
     if (onlyCommand) args.insert(args.begin() + 1, command.data());
@@ -32,12 +32,15 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
     app.add_flag("--build-info", printBuildInfo, "Print this build's identity and library versions as JSON, and exit");
     app.add_flag("--resolved-options", printResolved,
                  "Print the options STAGE would run with, defaults included, as JSON, and exit without running it");
+    // With `answer`, the questions below are answered into it, and this process's logging is left as it is.
+    auto reply = [&](const nlohmann::json& value) {
+        if (answer) *answer = value;
+        else std::fputs((value.dump() + "\n").c_str(), stdout);
+        throw CLI::Success();
+    };
     app.parse_complete_callback([&] {
-        setLogOptions(log);
-        if (printBuildInfo) {
-            std::fputs((buildInfo().dump() + "\n").c_str(), stdout);
-            throw CLI::Success();
-        }
+        if (!answer) setLogOptions(log);
+        if (printBuildInfo) reply(buildInfo());
         if (app.get_subcommands().empty()) throw CLI::RequiredError("A subcommand");
         if (printResolved) {
             // Option name -> its values as given, or its default; positionals by name. Pipeline cache keys hold this.
@@ -54,9 +57,9 @@ int runDriver(int argc, char** argv, const char* onlyCommand) {
                     collect(group);
             };
             for (CLI::App* sub : app.get_subcommands()) collect(sub);
-            std::fputs((resolved.dump() + "\n").c_str(), stdout);
-            throw CLI::Success();
+            reply(resolved);
         }
+        if (answer) throw CLI::RequiredError("--build-info or --resolved-options");
         checkpoint("command"); // the questions above are not kill points: they change nothing
     });
 

@@ -71,7 +71,7 @@ std::vector<float> readNpy(const std::string& path, std::vector<size_t>* shape) 
         throw Error(path, "data", "expected " + std::to_string(count) + " floats, file holds " +
                                       std::to_string((bytes.size() - dataOffset) / sizeof(float)));
     std::vector<float> data(count);
-    std::memcpy(data.data(), bytes.data() + dataOffset, count * sizeof(float));
+    if (count > 0) std::memcpy(data.data(), bytes.data() + dataOffset, count * sizeof(float)); // memcpy of null is UB
     if (shape) *shape = dims;
     return data;
 }

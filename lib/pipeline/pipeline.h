@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -177,6 +178,9 @@ struct RunOptions {
     int slurmCpusPerTask = 1;
     double slurmPollSeconds = 0.5;
     std::vector<std::string> slurmArgs; // extra sbatch arguments, passed as given
+    // Answers `prt ARGS` for --build-info and --resolved-options in this process, when this process is the prt
+    // binary above (set by `prt run`); else they are asked of that binary.
+    std::function<nlohmann::json(const std::vector<std::string>& args)> askPrt = nullptr;
 };
 
 // Runs a pipeline and returns its report (also written to CACHE/runs/<name>-<time>-<pid>/report.json):

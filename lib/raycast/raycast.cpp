@@ -116,7 +116,12 @@ std::vector<float> spawnNormals(const TriMesh& mesh) {
         double scale = 0.0;
         for (int c = 0; c < 3; ++c) scale += std::fabs(s[c]);
         bool usable = length > 1e-6 * scale && length > 0.0;
-        for (int c = 0; c < 3; ++c) normals[3 * v + c] = float(usable ? s[c] / length : fallback[c]);
+        // On the side the rays leave: the shading normal's (an inside-out mesh keeps its rays inside).
+        bool haveNormal = mesh.normals.size() == mesh.positions.size();
+        double side = usable && haveNormal ? (s[0] * fallback[0] + s[1] * fallback[1] + s[2] * fallback[2]) / length : 1.0;
+        if (std::fabs(side) < 1e-3) usable = false;
+        double sign = side < 0.0 ? -1.0 : 1.0;
+        for (int c = 0; c < 3; ++c) normals[3 * v + c] = float(usable ? sign * s[c] / length : fallback[c]);
     }
     return normals;
 }

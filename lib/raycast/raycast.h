@@ -60,9 +60,10 @@ inline void spawnRay(RTCRay& ray, const float origin[3], float dx, float dy, flo
     ray.flags = 0;
 }
 
-// Per vertex [vertexCount][3]: the unit mean of the area-weighted geometric normals (counter-clockwise front) of
-// every triangle that touches a vertex at exactly the same position, split vertices included. Where they cancel
-// (two-sided sheets) or the vertex is on no triangle, the vertex normal (normalised), else +z.
+// Per vertex [vertexCount][3]: the unit mean of the area-weighted geometric normals of every triangle that touches
+// a vertex at exactly the same position, split vertices included, turned to the vertex normal's side (where the
+// rays leave). Where they cancel (two-sided sheets), are perpendicular to the vertex normal, or the vertex is on no
+// triangle: the vertex normal (normalised), else +z.
 std::vector<float> spawnNormals(const TriMesh& mesh);
 
 } // namespace prt
