@@ -23,6 +23,10 @@ void addBenchCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addMergeCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
+void addAdaptCommand(CLI::App& app);
+void addFivCommand(CLI::App& app);
+void addFivVisibilityCommand(CLI::App& app);
+void addFivshadeCommand(CLI::App& app);
 
 // What a pipeline cache key holds about this prt (`prt --build-info`): its version, build type, compiler, the
 // content hash of its executable, and the versions of the libraries it was compiled against and has loaded.
@@ -40,6 +44,9 @@ std::array<double, 3> parseAlbedo(const std::string& text);
 // Parses --shard "I/N" with 0 <= I < N into index I and count N. Throws prt::Error(kExitUsage) naming --shard
 // otherwise.
 void parseShard(const std::string& text, int& index, int& count);
+
+// Parses "X,Y,Z": exactly three finite numbers. Throws prt::Error(kExitUsage) naming `option` otherwise.
+std::array<float, 3> parsePoint(const std::string& text, const char* option);
 
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);

@@ -68,12 +68,16 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     addEnvshCommand(app);
     addTransferCommand(app);
     addBakeCommand(app);
+    addFivCommand(app);
+    addFivVisibilityCommand(app);
+    addFivshadeCommand(app);
     addReferenceCommand(app);
     addRelightCommand(app);
     addCompareCommand(app);
     addBenchCommand(app);
     addRunCommand(app);
     addMergeCommand(app);
+    addAdaptCommand(app);
 
     try {
         app.parse(int(args.size()), args.data());

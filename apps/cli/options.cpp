@@ -3,6 +3,7 @@
 
 #include "core.h"
 
+#include <cmath>
 #include <exception>
 #include <sstream>
 #include <thread>
@@ -42,6 +43,27 @@ void parseShard(const std::string& text, int& index, int& count) {
     std::istringstream in(text);
     if (!(in >> index >> slash >> count) || slash != '/' || (in >> rest) || count < 1 || index < 0 || index >= count)
         throw usage("--shard", "'" + text + "' is not I/N with 0 <= I < N");
+}
+
+std::array<float, 3> parsePoint(const std::string& text, const char* option) {
+    std::vector<float> values;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        size_t used = 0;
+        double value = 0.0;
+        try {
+            value = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size() || !std::isfinite(value) || std::abs(value) > 3e38)
+            throw usage(option, "'" + text + "' is not three finite numbers X,Y,Z");
+        values.push_back(float(value));
+    }
+    if (values.size() != 3 || (!text.empty() && text.back() == ','))
+        throw usage(option, "'" + text + "' is not three finite numbers X,Y,Z");
+    return {values[0], values[1], values[2]};
 }
 
 int resolveThreads(int requested) {

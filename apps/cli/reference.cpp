@@ -29,6 +29,8 @@ struct ReferenceCommandOptions {
     std::string albedo; // "R,G,B"
     std::string imageSize; // "W,H"
     std::string camera;    // "EYE,TARGET,UP,FOVY"
+    std::vector<std::string> occluders, at; // brute-force direct lighting with occluders (FIV ground truth)
+    bool bruteForce = false, unshadowed = false;
 };
 
 // Parses exactly `count` comma-separated finite numbers.
@@ -111,10 +113,38 @@ void runReference(const ReferenceCommandOptions& options) {
         camera.fovyDegrees = view[9];
     }
 
+    bool direct = options.bruteForce || options.unshadowed || !options.occluders.empty();
+    if (direct && (imageMode || options.bounces != 0))
+        throw Error("", "--occluder", "--occluder, --brute-force and --unshadowed need --bounces 0 and no --image",
+                    kExitUsage);
+    if (options.occluders.size() != options.at.size())
+        throw Error("", "--at", "give one --at X,Y,Z per --occluder", kExitUsage);
+    std::vector<DirectOccluder> occluders;
+    for (size_t j = 0; j < options.at.size(); ++j) occluders.push_back({TriMesh(), parsePoint(options.at[j], "--at")});
+
     Bundle bundle = readBundle(options.mesh);
     const TriMesh& mesh = bundle.mesh;
     if (mesh.normals.empty()) throw Error(options.mesh, "", "mesh has no vertex normals (prt meshprep adds them)");
+    for (size_t j = 0; j < occluders.size(); ++j) occluders[j].mesh = readBundle(options.occluders[j]).mesh;
     EnvironmentMap env = readEnvironmentMap(options.env);
+    if (direct) {
+        DirectOptions directOptions;
+        directOptions.albedo = reference.albedo;
+        directOptions.shadows = !options.unshadowed;
+        directOptions.threads = reference.threads;
+        ReferenceRadiance radiance = referenceDirectRadiance(mesh, occluders, env, directOptions);
+        writeVertexRadiance(options.output, radiance.radiance);
+        if (!options.standardErrorOutput.empty()) writeVertexRadiance(options.standardErrorOutput, radiance.standardError);
+        logInfo("reference: brute-force direct lighting over " + std::to_string(env.radiance.width) + "x" +
+                std::to_string(env.radiance.height) + " texels, " + std::to_string(occluders.size()) + " occluders");
+        StageCost cost;
+        cost.stage = "reference";
+        cost.seconds = nowSeconds() - start;
+        cost.rays = radiance.rays;
+        cost.peakMemoryBytes = peakMemoryBytes();
+        reportCost(cost);
+        return;
+    }
     std::string albedoSource = reference.albedo ? "constant" : mesh.albedo.empty() ? "white" : "per vertex";
     logInfo("reference: " + options.mesh + " (" + std::to_string(mesh.vertexCount()) + " vertices) under " +
             options.env + ", " + std::to_string(options.samples) + " samples, " + std::to_string(options.bounces) +
@@ -175,6 +205,13 @@ void addReferenceCommand(CLI::App& app) {
     command->add_option("--camera", options->camera,
                         "With --image: EYE,TARGET,UP,FOVY as 10 comma-separated numbers (three x,y,z triples, then "
                         "the vertical field of view in degrees), e.g. 0,1,3,0,0.5,0,0,1,0,40");
+    command->add_option("--occluder", options->occluders,
+                        "An occluder mesh (.glb) that blocks light but is not shaded (repeatable, one per --at); "
+                        "implies the brute-force direct sum, needs --bounces 0");
+    command->add_option("--at", options->at, "X,Y,Z: the occluder's translation; its vertex p sits at p + (X,Y,Z)");
+    command->add_flag("--brute-force", options->bruteForce,
+                      "Direct light (--bounces 0) as the exact sum over every texel of the map, one shadow ray each");
+    command->add_flag("--unshadowed", options->unshadowed, "With the brute-force sum: no shadows at all");
     command->callback([options] { runReference(*options); });
 }
 

@@ -125,6 +125,28 @@ std::vector<StageSpec> makeCatalogue() {
     compare.outputs = {{"metrics", FileKind::Metrics, "-o", "json"}};
     stages.push_back(compare);
 
+    // FIV (docs/fiv.md) in two stages, so that a new environment reruns only the cheap reduction: the masks
+    // (`prt fiv-visibility`, sharded over grid rows and joined by `--merge`), then `prt fiv VISIBILITY --env`.
+    StageSpec fivVisibility{"fiv-visibility", 1, "FIV visibility masks of an occluder type (environment-independent)"};
+    fivVisibility.inputs = {{"mesh", FileKind::Mesh, "", ""}};
+    fivVisibility.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
+    fivVisibility.params = {{"grid", ParamType::String},
+                            {"shells", ParamType::String},
+                            {"spacing", ParamType::String, 0.0, 0.0, {"log", "linear"}},
+                            {"cube", ParamType::Integer, 1.0, 256.0},
+                            {"supersample", ParamType::Integer, 1.0, 8.0},
+                            {"allow-open", ParamType::Boolean}};
+    fivVisibility.takesThreads = true;
+    fivVisibility.shardable = true;
+    fivVisibility.mergeFlag = "--merge";
+    stages.push_back(fivVisibility);
+
+    StageSpec fiv{"fiv", 1, "FIV grid, DifMap and FIV(Env): the environment reduction of the masks"};
+    fiv.inputs = {{"visibility", FileKind::Bundle, "", ""}, {"env", FileKind::Env, "--env", ""}};
+    fiv.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
+    fiv.params = {{"difmap", ParamType::Integer, 1.0, 256.0}, {"float32", ParamType::Boolean}};
+    stages.push_back(fiv);
+
     return stages;
 }
 

@@ -65,4 +65,23 @@ struct ReferenceImage {
 ReferenceImage referenceImage(const TriMesh& mesh, const EnvironmentMap& env, const PinholeCamera& camera,
                               const ReferenceOptions& options);
 
+// ---- brute-force direct lighting (bounces 0), for FIV shadows -------------------------------------------------
+// An occluder placed in the world: it blocks light but is not shaded; its vertex p sits at p + translation.
+struct DirectOccluder {
+    TriMesh mesh;
+    std::array<float, 3> translation{0, 0, 0};
+};
+struct DirectOptions {
+    std::optional<std::array<float, 3>> albedo; // as ReferenceOptions::albedo
+    bool shadows = true; // false: unshadowed irradiance (no rays at all)
+    int threads = 0;
+};
+// Outgoing radiance at every receiver vertex from direct light only, as the exact sum over every texel of the map
+// at its full resolution: albedo / pi * sum_t L_t max(0, N . w_t) V_t dw_t, texel-centre directions, exact texel
+// solid angles, V_t one Embree shadow ray from the vertex (pushed off along its normal) against the receiver and
+// every occluder. A flat receiver cannot shadow itself, so there only the rays that meet an occluder's bounding
+// sphere are cast. Deterministic; standardError is zero. Needs receiver normals; throws prt::Error otherwise.
+ReferenceRadiance referenceDirectRadiance(const TriMesh& receiver, const std::vector<DirectOccluder>& occluders,
+                                          const EnvironmentMap& env, const DirectOptions& options);
+
 } // namespace prt

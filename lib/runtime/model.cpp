@@ -57,6 +57,7 @@ void checkFiniteRows(const std::vector<float>& data, size_t rowValues, const std
 }
 
 RelightModel relightModel(Bundle bundle, const std::string& source) {
+    if (!findLayer(bundle, "transfer") && hasAdaptiveTransfer(bundle)) return adaptiveRelightModel(bundle, source);
     Layer* layer = &transferLayer(bundle, "transfer", "vertex", source, "transfer");
     const std::string place = "layer \"transfer\"";
 

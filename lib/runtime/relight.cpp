@@ -53,6 +53,7 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
         throw Error("", "relight", "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
                                        ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
                     kExitFailure);
+    if (!model.offsets.empty()) return relightAdaptive(model, lighting, begin, end, radiance);
     const int coefficients = sh::coefficientCount(model.order);
     const size_t rowValues = size_t(coefficients) * 3;
     // Blocks of a few thousand vertices keep the scheduling overhead far below the memory traffic.

@@ -1,0 +1,193 @@
+// Occluder FIV sampling (Fullsphere Irradiance Factorization, Michael & Chrysanthou): the precomputed shadow of
+// one rigid occluder type, for receivers anywhere around it, under one distant environment. docs/fiv.md is the
+// method's page (choices, measurements); docs/bundle.md documents the layers.
+//
+// The work is split in two:
+//   (a) sampleVisibility: for every sample of a spherical grid of receiver positions around the occluder, which
+//       texels of an environment cube the occluder hides (a coverage mask). Environment-independent, cacheable,
+//       shardable over grid samples. Only rays that can hit the occluder's bounding sphere are cast.
+//   (b) reduceVisibility + difMap + environmentFiv: the cheap environment reduction of every mask into the FIV
+//       (9 floats per sample: the occluded radiance's vector irradiance, xyz per colour), plus the occluded power
+//       (3 floats, for the partial-occluder correction), the unoccluded irradiance cube (DifMap) and FIV(Env).
+//
+// Grid (docs/bundle.md "FIV grids"): sample (i, j, k), i < azimuth, j < polar, k < shells, has row
+// (k * polar + j) * azimuth + i. It places the occluder's bounding-sphere centre at c = p + rho_k R d(theta_j,
+// phi_i) from the receiver point p, with phi_i = 2 pi i / azimuth (periodic), theta_j = pi j / (polar - 1) (both
+// poles included) and d = (sin theta sin phi, cos theta, -sin theta cos phi), the world's equirectangular
+// convention (docs/conventions.md). rho_k are the shell radii in units of the bounding-sphere radius R.
+// Radiance is per steradian, irradiance per unit area; every sum over texels carries the texel's exact solid angle.
+#pragma once
+
+#include "bundle.h"
+#include "image.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt::fiv {
+
+// ---- limits (refused before anything is allocated) ---------------------------------------------------------
+inline constexpr int kMaxAzimuth = 4096, kMaxPolar = 2049, kMaxShells = 1024, kMaxCube = 256, kMaxSupersample = 8;
+inline constexpr uint64_t kMaxSamples = uint64_t(1) << 26;
+
+// ---- the grid ------------------------------------------------------------------------------------------------
+struct GridSpec {
+    int azimuth = 128, polar = 65, shells = 30;
+    double shellMin = 0.25, shellMax = 8.0; // in units of R; shells spaced evenly in log(rho) between them
+    std::string spacing = "log";             // "log" | "linear"
+    size_t sampleCount() const { return size_t(azimuth) * polar * shells; }
+};
+
+// Throws prt::Error(source, place, problem, exitCode) for a zero, negative or absurd dimension, a sample count
+// above kMaxSamples, shellMin <= 0, shellMax <= shellMin, or an unknown spacing.
+void checkGrid(const GridSpec& grid, const std::string& source, int exitCode);
+
+// The shell radii rho_k (units of R), ascending: shellMin .. shellMax, `shells` of them (one shell: shellMin).
+std::vector<double> shellRadii(const GridSpec& grid);
+
+// Unit direction d of grid direction (i, j): exactly (0, +-1, 0) on the pole rows.
+void gridDirection(const GridSpec& grid, int i, int j, double d[3]);
+
+// Centre: middle of the axis-aligned bounds; radius: largest distance of a vertex from it (so every vertex lies
+// in the sphere). Needs a non-empty mesh.
+struct BoundingSphere {
+    std::array<double, 3> centre{0, 0, 0};
+    double radius = 0.0;
+};
+BoundingSphere boundingSphere(const TriMesh& mesh);
+
+// ---- cubes -------------------------------------------------------------------------------------------------
+// An environment cube of `size` texels per face edge, texel t = face * size^2 + row * size + column in the cube
+// strip order of docs/conventions.md (faces +X, -X, +Y, -Y, +Z, -Z).
+struct CubeTexels {
+    int size = 0;
+    std::vector<double> direction;   // [t][3], unit texel-centre directions
+    std::vector<double> solidAngle;  // [t], exact; sums to 4 pi
+    std::vector<double> cosRadius;   // [t], cosine of the largest angle between the centre and a corner
+    std::vector<double> sinRadius;   // [t]
+};
+// Needs 1 <= size <= kMaxCube.
+CubeTexels cubeTexels(int size);
+
+// Unit direction of subsample (sx, sy) of `supersample` x `supersample` in texel t (stratum centres).
+void subsampleDirection(const CubeTexels& cube, size_t t, int sx, int sy, int supersample, double d[3]);
+
+// Radiance on a cube: each texel the mean of the map over 4 x 4 stratum-centre directions inside it (nearest
+// texel of the map), so the cube keeps the map's power.
+struct CubeEnvironment {
+    int size = 0;
+    std::vector<double> radiance; // [t][3]
+};
+CubeEnvironment resampleToCube(const EnvironmentMap& env, int size);
+
+// The cube as an EnvironmentMap (cube strip layout), so the brute-force reference can integrate it exactly.
+EnvironmentMap cubeAsEnvironmentMap(const CubeEnvironment& cube);
+
+// The DifMap: unoccluded irradiance sum_t L_t max(0, n . w_t) dw_t at the centre direction n of every texel of
+// a cube of `size` ([t][3]). Deterministic (fixed summation order), parallel over output texels.
+std::vector<float> difMap(const CubeEnvironment& env, int size);
+
+// FIV(Env) = sum_t L_t w_t dw_t over the whole sphere: [channel][xyz].
+std::array<double, 9> environmentFiv(const CubeEnvironment& env);
+
+// ---- (a) visibility ------------------------------------------------------------------------------------------
+struct VisibilityOptions {
+    GridSpec grid;
+    int cube = 32;       // environment cube face size the masks are sampled on
+    int supersample = 1; // rays per texel edge: coverage in steps of 1 / supersample^2
+    bool allowOpen = false;
+    int threads = 0;        // 0 = all
+    int shardIndex = 0, shardCount = 1; // rows shardRows(sampleCount, index, count)
+};
+
+// The masks of grid rows [rowBegin, rowEnd). A row's candidate texels are those whose cone (centre, radius)
+// reaches the bounding sphere seen from the receiver (all texels when rho < 1), in ascending texel order; its
+// mask stores, per candidate, the count of subsample rays that hit the occluder (bitsPerTexel bits each, LSB
+// first, the row starting on a byte boundary). Invalid rows (receiver inside the occluder) store no bits.
+struct Visibility {
+    GridSpec grid;
+    int cube = 0, supersample = 1, bitsPerTexel = 1;
+    BoundingSphere sphere;
+    size_t rowBegin = 0, rowEnd = 0;
+    int shardIndex = 0, shardCount = 1;
+    std::vector<uint32_t> offsets; // rowEnd - rowBegin + 1 byte offsets into bits
+    std::vector<uint8_t> bits;
+    std::vector<uint8_t> valid;    // per row: 1 usable, 0 receiver inside the closed occluder
+    uint64_t rays = 0;             // rays cast (inside votes included)
+    uint64_t naiveRays = 0;        // rays of the naive method: cube texels x supersample^2 per sample
+    bool closed = true;            // the mesh had no boundary edges
+    size_t boundaryEdges = 0;
+};
+
+// Needs a validated mesh (lib/mesh) with at least one triangle. Throws prt::Error(source, ...): kExitInput for an
+// open or non-manifold occluder without allowOpen (the inside test needs a closed surface; with allowOpen a
+// sample is inside when most of 26 fixed rays first hit a back face), kExitUsage for bad options.
+// Same inputs give bit-identical masks for any thread count and any sharding.
+Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& options, const std::string& source);
+
+// Bitstream helpers shared by (a) and (b).
+int bitsPerTexel(int supersample);
+// The candidate texels of grid direction d at radius rho (units of R), ascending, appended to `out`.
+void candidateTexels(const CubeTexels& cube, const double d[3], double rho, std::vector<uint32_t>& out);
+
+// Joins shards (any order) into the unsharded visibility. Throws prt::Error(files[s], ...) for shards of other
+// runs, missing or repeated shards.
+Visibility joinShards(std::vector<Visibility> shards, const std::vector<std::string>& files);
+
+// ---- (b) reduction -----------------------------------------------------------------------------------------
+struct FivGrid {
+    GridSpec grid;
+    BoundingSphere sphere;
+    int cube = 0, supersample = 1;
+    std::vector<float> fiv;   // [sample][channel][xyz], 0 for invalid samples
+    std::vector<float> power; // [sample][channel]: sum of L dw over the occluded texels
+    std::vector<uint8_t> valid;
+};
+// Needs the whole grid (rowBegin 0, rowEnd sampleCount) and env.size == vis.cube. Fixed summation order, so the
+// result does not depend on threads or on how the visibility was sharded.
+FivGrid reduceVisibility(const Visibility& vis, const CubeEnvironment& env);
+
+// ---- bundles -------------------------------------------------------------------------------------------------
+// The visibility bundle (object 0 the occluder mesh, layers fiv_mask_offsets, fiv_mask_bits, fiv_valid) and its
+// reader. readVisibility throws prt::Error(path, layer, problem) when a layer is missing, its size disagrees with
+// the grid in its params, or an offset runs past the bits.
+Bundle visibilityBundle(const TriMesh& occluder, const Visibility& vis, const nlohmann::json& inputs);
+Visibility readVisibility(const Bundle& bundle, const std::string& path);
+
+// The FIV bundle: the occluder mesh, fiv (float16 [S,3,3] or float32), fiv_power, fiv_valid, difmap, fiv_env.
+struct FivBundleOptions {
+    bool half = true;
+    int difmapSize = 32;
+    std::string envHash;
+};
+Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector<float>& difmap,
+                 const std::array<double, 9>& fivEnv, const FivBundleOptions& options, const nlohmann::json& inputs);
+
+// Params every grid layer carries (dimensions, axes, shell radii, sphere).
+nlohmann::json gridParams(const GridSpec& grid, const BoundingSphere& sphere);
+
+} // namespace prt::fiv
+
+namespace prt::fiv {
+
+// ---- the stage -----------------------------------------------------------------------------------------------
+struct FivStageOptions {
+    std::vector<std::string> inputs; // one occluder mesh (.glb), or visibility bundles (one whole, or every shard)
+    std::string output;              // .glb: the FIV bundle, or with visibilityOnly the visibility bundle
+    std::string env;                 // environment map; needed unless visibilityOnly
+    VisibilityOptions visibility;    // grid, cube, supersample, allowOpen, threads, shard (mesh input only)
+    bool visibilityOnly = false;     // (a) only
+    std::vector<std::string> merge;  // with visibilityOnly: visibility shards to join instead of sampling
+    int difmapSize = 32;
+    bool half = true;                // FIV layers as float16 (else float32)
+};
+// `prt fiv`: (a) from a mesh input, unless the input is a visibility bundle already; then (b) unless
+// visibilityOnly. With visibilityOnly and `merge`, joins those visibility shards into one visibility bundle. Writes one bundle atomically, logs rays against the naive count, reports its cost.
+// Throws prt::Error: kExitUsage for bad options (a shard without visibilityOnly, no env, several meshes),
+// kExitInput for bad inputs (see sampleVisibility, readVisibility, joinShards).
+void runFiv(const FivStageOptions& options);
+
+} // namespace prt::fiv

@@ -1,0 +1,110 @@
+// `prt fiv`: the two halves of the precompute behind one command, with their cost.
+#include "fiv.h"
+
+#include "core.h"
+
+#include <cstdio>
+
+namespace prt::fiv {
+
+void runFiv(const FivStageOptions& options) {
+    double start = nowSeconds();
+    if (options.inputs.empty()) throw Error("", "fiv", "needs an occluder mesh or visibility bundles", kExitUsage);
+    if (fileExtension(options.output) != "glb") throw Error(options.output, "-o", "needs a .glb file", kExitUsage);
+    bool sharded = options.visibility.shardCount > 1;
+    if (sharded && !options.visibilityOnly)
+        throw Error("", "--shard", "shards hold visibility only: add --visibility-only, then reduce all shards", kExitUsage);
+    if (!options.visibilityOnly && options.env.empty())
+        throw Error("", "--env", "is needed to reduce the visibility (or give --visibility-only)", kExitUsage);
+    if (options.difmapSize < 1 || options.difmapSize > kMaxCube)
+        throw Error("", "--difmap", "must lie in 1.." + std::to_string(kMaxCube), kExitUsage);
+
+    if (!options.merge.empty()) {
+        if (!options.visibilityOnly) throw Error("", "--merge", "joins visibility shards only", kExitUsage);
+        std::vector<Visibility> parts;
+        Bundle shard = readBundle(options.merge[0]);
+        for (size_t i = 0; i < options.merge.size(); ++i) {
+            if (i > 0) shard = readBundle(options.merge[i]);
+            parts.push_back(readVisibility(shard, options.merge[i]));
+        }
+        Visibility joined = joinShards(std::move(parts), options.merge);
+        Bundle firstShard = readBundle(options.merge[0]);
+        writeBundle(options.output, visibilityBundle(firstShard.mesh, joined, firstShard.inputs));
+        logInfo("fiv: joined " + std::to_string(options.merge.size()) + " visibility shards into " + options.output);
+        return;
+    }
+    Bundle first = readBundle(options.inputs[0]);
+    bool fromVisibility = findLayer(first, "fiv_mask_offsets") != nullptr;
+    Visibility vis;
+    TriMesh occluder;
+    nlohmann::json inputs;
+    double visibilitySeconds = 0.0;
+    if (fromVisibility) {
+        if (options.visibilityOnly) throw Error(options.inputs[0], "--visibility-only", "input is visibility already", kExitUsage);
+        std::vector<Visibility> parts;
+        parts.push_back(readVisibility(first, options.inputs[0]));
+        occluder = std::move(first.mesh);
+        inputs = first.inputs;
+        for (size_t i = 1; i < options.inputs.size(); ++i) {
+            Bundle other = readBundle(options.inputs[i]);
+            if (!findLayer(other, "fiv_mask_offsets"))
+                throw Error(options.inputs[i], "fiv_mask_offsets", "is not a visibility bundle like " + options.inputs[0]);
+            parts.push_back(readVisibility(other, options.inputs[i]));
+        }
+        vis = parts.size() == 1 && parts[0].shardCount == 1 ? std::move(parts[0]) : joinShards(std::move(parts), options.inputs);
+        if (vis.rowBegin != 0 || vis.rowEnd != vis.grid.sampleCount())
+            throw Error(options.inputs[0], "fiv_mask_offsets", "covers rows " + std::to_string(vis.rowBegin) + ".." +
+                                                                  std::to_string(vis.rowEnd) + " only: give every shard");
+        logInfo("fiv: reducing the visibility of " + options.inputs[0] + " (" + std::to_string(vis.grid.sampleCount()) +
+                " samples)");
+    } else {
+        if (options.inputs.size() != 1) throw Error(options.inputs[1], "fiv", "one occluder mesh at a time", kExitUsage);
+        occluder = std::move(first.mesh);
+        inputs = {{"mesh", hashFile(options.inputs[0])}};
+        const GridSpec& g = options.visibility.grid;
+        logInfo("fiv: " + options.inputs[0] + " (" + std::to_string(occluder.triangleCount()) + " triangles), grid " +
+                std::to_string(g.azimuth) + "x" + std::to_string(g.polar) + "x" + std::to_string(g.shells) + ", cube 6x" +
+                std::to_string(options.visibility.cube) + "^2, supersample " + std::to_string(options.visibility.supersample));
+        double t0 = nowSeconds();
+        vis = sampleVisibility(occluder, options.visibility, options.inputs[0]);
+        visibilitySeconds = nowSeconds() - t0;
+        char line[200];
+        std::snprintf(line, sizeof line, "fiv: visibility in %.2f s, %llu rays (%.2f%% of the naive %llu)",
+                      visibilitySeconds, (unsigned long long)vis.rays, 100.0 * double(vis.rays) / double(std::max<uint64_t>(vis.naiveRays, 1)),
+                      (unsigned long long)vis.naiveRays);
+        logInfo(line);
+    }
+
+    if (options.visibilityOnly) {
+        writeBundle(options.output, visibilityBundle(occluder, vis, inputs));
+    } else {
+        double t0 = nowSeconds();
+        EnvironmentMap env = readEnvironmentMap(options.env);
+        std::string envHash = hashFile(options.env);
+        CubeEnvironment cube = resampleToCube(env, vis.cube);
+        FivGrid grid = reduceVisibility(vis, cube);
+        std::vector<float> difmap = difMap(cube, options.difmapSize);
+        std::array<double, 9> fivEnv = environmentFiv(cube);
+        inputs["env"] = envHash;
+        FivBundleOptions bundleOptions;
+        bundleOptions.half = options.half;
+        bundleOptions.difmapSize = options.difmapSize;
+        bundleOptions.envHash = envHash;
+        Bundle bundle = fivBundle(occluder, grid, difmap, fivEnv, bundleOptions, inputs);
+        for (Layer& layer : bundle.layers)
+            if (layer.name == "fiv") layer.params["rays"] = vis.rays, layer.params["naive_rays"] = vis.naiveRays;
+        writeBundle(options.output, bundle);
+        char line[160];
+        std::snprintf(line, sizeof line, "fiv: reduction in %.2f s, %d bytes per sample", nowSeconds() - t0,
+                      options.half ? 25 : 49);
+        logInfo(line);
+    }
+    StageCost cost;
+    cost.stage = "fiv";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = vis.rays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
+} // namespace prt::fiv

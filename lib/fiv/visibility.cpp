@@ -1,0 +1,302 @@
+// (a) Visibility: per grid sample, which cube texels the occluder hides, by Embree rays from the receiver point.
+// Only texels whose cone reaches the bounding sphere are candidates, and only subsample rays that meet the sphere
+// are cast; the rest are unoccluded by construction.
+#include "fiv.h"
+
+#include "core.h"
+#include "mesh.h"
+#include "raycast.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace prt::fiv {
+
+namespace {
+
+// 26 fixed directions (the non-zero points of {-1, 0, 1}^3), slightly skewed so none runs along an axis or an
+// edge of an axis-aligned mesh.
+std::vector<std::array<float, 3>> voteDirections() {
+    std::vector<std::array<float, 3>> out;
+    for (int x = -1; x <= 1; ++x)
+        for (int y = -1; y <= 1; ++y)
+            for (int z = -1; z <= 1; ++z) {
+                if (!x && !y && !z) continue;
+                double d[3] = {x + 0.0123, y + 0.0217, z - 0.0171};
+                double n = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                out.push_back({float(d[0] / n), float(d[1] / n), float(d[2] / n)});
+            }
+    return out;
+}
+
+RTCRay makeRay(const float origin[3], const float d[3]) {
+    RTCRay ray{};
+    ray.org_x = origin[0], ray.org_y = origin[1], ray.org_z = origin[2];
+    ray.dir_x = d[0], ray.dir_y = d[1], ray.dir_z = d[2];
+    ray.tnear = 0.0f;
+    ray.tfar = std::numeric_limits<float>::infinity();
+    ray.mask = ~0u;
+    return ray;
+}
+
+struct Tracer {
+    const TriMesh& mesh;
+    EmbreeScene embree;
+    std::vector<std::array<float, 3>> votes = voteDirections();
+
+    explicit Tracer(const TriMesh& m) : mesh(m), embree(m, /*robust=*/true) {}
+
+    bool occluded(const float origin[3], const float d[3]) const {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRay ray = makeRay(origin, d);
+        rtcOccluded1(embree.scene, &context, &ray);
+        return ray.tfar < 0.0f;
+    }
+
+    // Most of the 26 vote rays first meet a back face: the point is inside. Exact for a closed, consistently wound
+    // mesh (every ray then agrees), a majority vote for an open one.
+    bool inside(const float origin[3], uint64_t& rays) const {
+        int backFaces = 0;
+        for (const auto& d : votes) {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            RTCRayHit hit{};
+            hit.ray = makeRay(origin, d.data());
+            hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(embree.scene, &context, &hit);
+            ++rays;
+            if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+            const uint32_t* tri = &mesh.indices[3 * size_t(hit.hit.primID)];
+            const float* p0 = &mesh.positions[3 * size_t(tri[0])];
+            const float* p1 = &mesh.positions[3 * size_t(tri[1])];
+            const float* p2 = &mesh.positions[3 * size_t(tri[2])];
+            float e1[3], e2[3];
+            for (int c = 0; c < 3; ++c) e1[c] = p1[c] - p0[c], e2[c] = p2[c] - p0[c];
+            float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0.0f) ++backFaces;
+        }
+        return 2 * backFaces > int(votes.size());
+    }
+};
+
+struct BitWriter {
+    std::vector<uint8_t>& out;
+    int used = 8; // bits used in the last byte
+    void put(uint32_t value, int bits) {
+        for (int b = 0; b < bits; ++b) {
+            if (used == 8) out.push_back(0), used = 0;
+            if (value >> b & 1u) out.back() |= uint8_t(1u << used);
+            ++used;
+        }
+    }
+};
+
+// One sample's mask bytes; returns false when the receiver is inside the occluder.
+bool sampleMask(const Tracer& tracer, const CubeTexels& cube, const Visibility& vis, const std::vector<double>& radii,
+                size_t row, std::vector<uint32_t>& candidates, std::vector<uint8_t>& bytes, uint64_t& rays) {
+    const GridSpec& grid = vis.grid;
+    int i = int(row % size_t(grid.azimuth)), j = int(row / size_t(grid.azimuth) % size_t(grid.polar));
+    int k = int(row / (size_t(grid.azimuth) * grid.polar));
+    double rho = radii[size_t(k)], radius = vis.sphere.radius;
+    double d[3];
+    gridDirection(grid, i, j, d);
+    double toCentre[3]; // from the receiver point to the sphere centre
+    float origin[3];
+    for (int c = 0; c < 3; ++c) {
+        toCentre[c] = rho * radius * d[c];
+        origin[c] = float(vis.sphere.centre[size_t(c)] - toCentre[c]);
+    }
+    if (rho < 1.0 && tracer.inside(origin, rays)) return false;
+    candidates.clear();
+    candidateTexels(cube, d, rho, candidates);
+    double distance2 = rho * rho * radius * radius, slack = distance2 - radius * radius;
+    int s = vis.supersample;
+    BitWriter writer{bytes};
+    for (uint32_t t : candidates) {
+        uint32_t hits = 0;
+        for (int sy = 0; sy < s; ++sy)
+            for (int sx = 0; sx < s; ++sx) {
+                double w[3];
+                subsampleDirection(cube, t, sx, sy, s, w);
+                if (rho >= 1.0) { // outside the sphere: the ray must point at it and pass within R of the centre
+                    double along = toCentre[0] * w[0] + toCentre[1] * w[1] + toCentre[2] * w[2];
+                    if (along <= 0.0 || along * along < slack) continue;
+                }
+                float wf[3] = {float(w[0]), float(w[1]), float(w[2])};
+                ++rays;
+                if (tracer.occluded(origin, wf)) ++hits;
+            }
+        writer.put(hits, vis.bitsPerTexel);
+    }
+    return true;
+}
+
+} // namespace
+
+int bitsPerTexel(int supersample) {
+    int levels = supersample * supersample + 1, bits = 1;
+    while ((1 << bits) < levels) ++bits;
+    return bits;
+}
+
+void candidateTexels(const CubeTexels& cube, const double d[3], double rho, std::vector<uint32_t>& out) {
+    size_t count = cube.solidAngle.size();
+    if (rho <= 1.0) {
+        for (size_t t = 0; t < count; ++t) out.push_back(uint32_t(t));
+        return;
+    }
+    double sinAlpha = 1.0 / rho, cosAlpha = std::sqrt(1.0 - sinAlpha * sinAlpha);
+    for (size_t t = 0; t < count; ++t) {
+        const double* w = &cube.direction[3 * t];
+        double cosine = d[0] * w[0] + d[1] * w[1] + d[2] * w[2];
+        // angle(w, d) <= alpha + radius, i.e. cos(angle) >= cos(alpha + radius) while alpha + radius < pi.
+        double limit = cosAlpha * cube.cosRadius[t] - sinAlpha * cube.sinRadius[t];
+        if (cosine >= limit) out.push_back(uint32_t(t));
+    }
+}
+
+Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& options, const std::string& source) {
+    checkGrid(options.grid, source, kExitUsage);
+    if (options.supersample < 1 || options.supersample > kMaxSupersample)
+        throw Error(source, "--supersample", "must lie in 1.." + std::to_string(kMaxSupersample), kExitUsage);
+    if (options.shardCount < 1 || options.shardIndex < 0 || options.shardIndex >= options.shardCount)
+        throw Error(source, "--shard", "needs 0 <= I < N", kExitUsage);
+    if (occluder.triangleCount() == 0) throw Error(source, "occluder", "mesh has no triangles", kExitInput);
+    CubeTexels cube = cubeTexels(options.cube);
+
+    Visibility vis;
+    vis.grid = options.grid;
+    vis.cube = options.cube;
+    vis.supersample = options.supersample;
+    vis.bitsPerTexel = bitsPerTexel(options.supersample);
+    vis.sphere = boundingSphere(occluder);
+    vis.shardIndex = options.shardIndex;
+    vis.shardCount = options.shardCount;
+    MeshTopology topology = analyzeTopology(occluder);
+    vis.boundaryEdges = topology.boundaryEdges + topology.nonManifoldEdges;
+    vis.closed = vis.boundaryEdges == 0;
+    if (!vis.closed && !options.allowOpen)
+        throw Error(source, "occluder",
+                    "is not closed (" + std::to_string(topology.boundaryEdges) + " boundary edges in " +
+                        std::to_string(topology.boundaryLoops) + " loops, " +
+                        std::to_string(topology.nonManifoldEdges) +
+                        " non-manifold edges): telling samples inside the occluder from outside needs a closed "
+                        "surface; --allow-open decides by a majority vote of back-face hits instead",
+                    kExitInput);
+    if (!vis.closed)
+        logWarn(source + ": occluder is open (" + std::to_string(vis.boundaryEdges) +
+                " boundary edges); inside samples are decided by a back-face vote of 26 rays");
+
+    size_t samples = options.grid.sampleCount();
+    RowRange range = shardRows(samples, options.shardIndex, options.shardCount);
+    vis.rowBegin = range.begin;
+    vis.rowEnd = range.end;
+    size_t rows = range.end - range.begin;
+    vis.naiveRays = uint64_t(rows) * cube.solidAngle.size() * uint64_t(options.supersample * options.supersample);
+    std::vector<double> radii = shellRadii(options.grid);
+    size_t azimuth = size_t(options.grid.azimuth);
+    size_t firstLine = range.begin / azimuth, endLine = rows ? (range.end - 1) / azimuth + 1 : firstLine;
+
+    std::vector<std::vector<uint8_t>> bytes(rows);
+    vis.valid.assign(rows, 0);
+    std::atomic<uint64_t> rays{0};
+    tbb::task_arena arena(options.threads > 0 ? options.threads : int(tbb::task_arena::automatic));
+    arena.execute([&] {
+        Tracer tracer(occluder);
+        Progress progress("fiv visibility", endLine - firstLine);
+        tbb::parallel_for(tbb::blocked_range<size_t>(firstLine, endLine, 1), [&](const tbb::blocked_range<size_t>& r) {
+            std::vector<uint32_t> candidates;
+            uint64_t lineRays = 0;
+            for (size_t line = r.begin(); line < r.end(); ++line) {
+                size_t j = line % size_t(options.grid.polar);
+                bool pole = j == 0 || j + 1 == size_t(options.grid.polar);
+                size_t lo = std::max(line * azimuth, range.begin), hi = std::min((line + 1) * azimuth, range.end);
+                if (pole) { // every azimuth of a pole row is the same sample: compute it once, copy it
+                    // Its rays count where its first row lies, so shards sum to the unsharded count.
+                    std::vector<uint8_t> poleBytes;
+                    uint64_t poleRays = 0;
+                    bool valid = sampleMask(tracer, cube, vis, radii, line * azimuth, candidates, poleBytes, poleRays);
+                    if (line * azimuth >= range.begin) lineRays += poleRays;
+                    for (size_t row = lo; row < hi; ++row) {
+                        bytes[row - range.begin] = valid ? poleBytes : std::vector<uint8_t>();
+                        vis.valid[row - range.begin] = valid;
+                    }
+                } else {
+                    for (size_t row = lo; row < hi; ++row) {
+                        std::vector<uint8_t>& out = bytes[row - range.begin];
+                        bool valid = sampleMask(tracer, cube, vis, radii, row, candidates, out, lineRays);
+                        if (!valid) out.clear();
+                        vis.valid[row - range.begin] = valid;
+                    }
+                }
+            }
+            rays += lineRays;
+            progress.add(r.size());
+        });
+        progress.finish();
+    });
+    vis.rays = rays;
+
+    uint64_t total = 0;
+    for (const auto& b : bytes) total += b.size();
+    if (total > std::numeric_limits<uint32_t>::max())
+        throw Error(source, "--grid", "masks exceed 4 GiB; use a coarser grid or shards", kExitUsage);
+    vis.offsets.resize(rows + 1);
+    vis.bits.reserve(size_t(total));
+    for (size_t r = 0; r < rows; ++r) {
+        vis.offsets[r] = uint32_t(vis.bits.size());
+        vis.bits.insert(vis.bits.end(), bytes[r].begin(), bytes[r].end());
+        std::vector<uint8_t>().swap(bytes[r]);
+    }
+    vis.offsets[rows] = uint32_t(vis.bits.size());
+    return vis;
+}
+
+Visibility joinShards(std::vector<Visibility> shards, const std::vector<std::string>& files) {
+    if (shards.empty()) throw Error("", "fiv", "no visibility given", kExitUsage);
+    std::vector<size_t> order(shards.size(), size_t(-1));
+    int count = shards[0].shardCount;
+    for (size_t s = 0; s < shards.size(); ++s) {
+        const Visibility& v = shards[s];
+        const Visibility& first = shards[0];
+        if (v.shardCount != count || int(shards.size()) != count)
+            throw Error(files[s], "fiv_mask_offsets", "is shard of " + std::to_string(v.shardCount) + ", but " +
+                                                          std::to_string(shards.size()) + " were given");
+        if (v.grid.azimuth != first.grid.azimuth || v.grid.polar != first.grid.polar ||
+            v.grid.shells != first.grid.shells || v.grid.shellMin != first.grid.shellMin ||
+            v.grid.shellMax != first.grid.shellMax || v.cube != first.cube || v.supersample != first.supersample ||
+            v.sphere.radius != first.sphere.radius)
+            throw Error(files[s], "fiv_mask_offsets", "belongs to another run than " + files[0]);
+        if (v.shardIndex < 0 || v.shardIndex >= count || order[size_t(v.shardIndex)] != size_t(-1))
+            throw Error(files[s], "fiv_mask_offsets", "shard " + std::to_string(v.shardIndex) + " repeats or is out of range");
+        order[size_t(v.shardIndex)] = s;
+    }
+    Visibility joined = std::move(shards[order[0]]);
+    for (int index = 1; index < count; ++index) {
+        Visibility& part = shards[order[size_t(index)]];
+        if (part.rowBegin != joined.rowEnd)
+            throw Error(files[order[size_t(index)]], "fiv_mask_offsets", "rows do not follow the previous shard");
+        uint64_t base = joined.bits.size();
+        if (base + part.bits.size() > std::numeric_limits<uint32_t>::max())
+            throw Error(files[order[size_t(index)]], "fiv_mask_bits", "joined masks exceed 4 GiB");
+        joined.offsets.pop_back();
+        for (uint32_t offset : part.offsets) joined.offsets.push_back(uint32_t(base + offset));
+        joined.bits.insert(joined.bits.end(), part.bits.begin(), part.bits.end());
+        joined.valid.insert(joined.valid.end(), part.valid.begin(), part.valid.end());
+        joined.rowEnd = part.rowEnd;
+        joined.rays += part.rays;
+        joined.naiveRays += part.naiveRays;
+    }
+    joined.shardIndex = 0;
+    joined.shardCount = 1;
+    return joined;
+}
+
+} // namespace prt::fiv

@@ -1,0 +1,204 @@
+// Adaptive transfer in the runtime: loading the ragged, quantised and clustered-PCA layers of `prt adapt`
+// (docs/bundle.md, "Adaptive transfer") and relighting each vertex with only its own bands.
+#include "runtime.h"
+
+#include "core.h"
+#include "runtime_internal.h"
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace prt {
+
+namespace {
+
+const Layer& requireLayer(const Bundle& bundle, const nlohmann::json& params, const char* member,
+                          const std::string& source, const std::string& place) {
+    if (!params.contains(member) || !params[member].is_string())
+        throw Error(source, place, std::string("params.") + member + " does not name a layer");
+    const std::string name = params[member].get<std::string>();
+    const Layer* layer = findLayer(bundle, name);
+    if (!layer) throw Error(source, place, "names layer \"" + name + "\" in params." + member + ", which is absent");
+    return *layer;
+}
+
+void requireShape(const Layer& layer, const std::vector<uint64_t>& shape, const std::string& type,
+                  const std::string& source) {
+    const std::string place = "layer \"" + layer.name + "\"";
+    if (layer.shape != shape) {
+        std::string expected;
+        for (uint64_t axis : shape) expected += (expected.empty() ? "" : ", ") + std::to_string(axis);
+        throw Error(source, place, "shape does not match [" + expected + "]");
+    }
+    if (!type.empty() && layer.componentType != type)
+        throw Error(source, place, "is " + layer.componentType + ", expected " + type);
+    uint64_t count = 1;
+    for (uint64_t axis : shape) count *= axis;
+    bool integer = layer.componentType.rfind("uint", 0) == 0;
+    if ((integer ? layer.integers.size() : layer.data.size()) != count)
+        throw Error(source, place, "holds the wrong number of values for its shape");
+}
+
+int layerOrder(const Layer& layer, const std::string& source) {
+    const std::string place = "layer \"" + layer.name + "\"";
+    if (!layer.params.contains("order") || !layer.params["order"].is_number_integer())
+        throw Error(source, place, "params.order is missing");
+    int64_t order = layer.params["order"].get<int64_t>();
+    if (order > kMaxRuntimeOrder)
+        throw Error(source, place, "asks for " + std::to_string(order) + " SH bands; this runtime evaluates at most " +
+                                       std::to_string(kMaxRuntimeOrder) + " (a newer prt, or `prt adapt` at a lower order)");
+    if (order < 1) throw Error(source, place, "params.order " + std::to_string(order) + " is not a band count");
+    return int(order);
+}
+
+RelightModel raggedModel(Bundle& bundle, const std::string& source) {
+    Layer& data = const_cast<Layer&>(*findLayer(bundle, "transfer_ragged"));
+    const std::string place = "layer \"transfer_ragged\"";
+    const size_t V = bundle.mesh.vertexCount();
+    if (data.domain != "vertex_ragged") throw Error(source, place, "domain \"" + data.domain + "\", expected vertex_ragged");
+    const int order = layerOrder(data, source);
+    const Layer& offsetsLayer = requireLayer(bundle, data.params, "offsets", source, place);
+    if (offsetsLayer.domain != "vertex_offsets")
+        throw Error(source, "layer \"" + offsetsLayer.name + "\"", "domain \"" + offsetsLayer.domain + "\", expected vertex_offsets");
+    requireShape(offsetsLayer, {V + 1}, "uint32", source);
+    const std::vector<uint32_t>& offsets = offsetsLayer.integers;
+    if (offsets[0] != 0) throw Error(source, "layer \"" + offsetsLayer.name + "\"", "does not start at 0");
+    for (size_t v = 0; v < V; ++v) {
+        if (offsets[v + 1] < offsets[v])
+            throw Error(source, "layer \"" + offsetsLayer.name + "\", vertex " + std::to_string(v), "offsets descend");
+        uint32_t count = offsets[v + 1] - offsets[v];
+        int n = int(std::lround(std::sqrt(double(count))));
+        if (n < 1 || uint32_t(n) * uint32_t(n) != count)
+            throw Error(source, place + ", vertex " + std::to_string(v),
+                        std::to_string(count) + " coefficients is not a whole number of bands (n^2, n >= 1)");
+        if (n > kMaxRuntimeOrder)
+            throw Error(source, place + ", vertex " + std::to_string(v),
+                        "asks for " + std::to_string(n) + " SH bands; this runtime evaluates at most " +
+                            std::to_string(kMaxRuntimeOrder));
+        if (n > order)
+            throw Error(source, place + ", vertex " + std::to_string(v),
+                        "has " + std::to_string(n) + " bands, more than the layer's order " + std::to_string(order));
+    }
+    const uint64_t rows = offsets[V];
+    RelightModel model;
+    model.vertexCount = uint32_t(V);
+    model.order = order;
+    const std::string& type = data.componentType;
+    if (type == "float32" || type == "float16") {
+        if (data.semantic != "sh_transfer_rgb")
+            throw Error(source, place, "semantic \"" + data.semantic + "\", expected sh_transfer_rgb");
+        requireShape(data, {rows, 3}, "", source);
+        checkFiniteRows(data.data, 3, source, place, "row");
+        model.transfer = std::move(data.data);
+    } else if (type == "uint8" || type == "uint16") {
+        if (data.semantic != "sh_transfer_rgb_quantised")
+            throw Error(source, place, "semantic \"" + data.semantic + "\", expected sh_transfer_rgb_quantised");
+        requireShape(data, {rows, 3}, "", source);
+        const int bits = type == "uint8" ? 8 : 16;
+        const uint32_t centre = (1u << (bits - 1)) - 1;
+        const Layer& scales = requireLayer(bundle, data.params, "scale_layer", source, place);
+        const std::vector<uint32_t>* cluster = nullptr;
+        size_t clusterCount = 0;
+        if (scales.domain == "cluster") {
+            const Layer& clusterLayer = requireLayer(bundle, data.params, "cluster_layer", source, place);
+            if (scales.shape.size() != 2) throw Error(source, "layer \"" + scales.name + "\"", "shape is not [clusters, order]");
+            clusterCount = scales.shape[0];
+            requireShape(scales, {clusterCount, uint64_t(order)}, "", source);
+            requireShape(clusterLayer, {V}, "", source);
+            for (size_t v = 0; v < V; ++v)
+                if (clusterLayer.integers[v] >= clusterCount)
+                    throw Error(source, "layer \"" + clusterLayer.name + "\", vertex " + std::to_string(v),
+                                "cluster index out of range");
+            cluster = &clusterLayer.integers;
+        } else if (scales.domain == "vertex_bands") {
+            uint64_t bands = 0;
+            for (size_t v = 0; v < V; ++v) bands += uint64_t(std::lround(std::sqrt(double(offsets[v + 1] - offsets[v]))));
+            requireShape(scales, {bands}, "", source);
+        } else {
+            throw Error(source, "layer \"" + scales.name + "\"", "domain \"" + scales.domain + "\", expected vertex_bands or cluster");
+        }
+        checkFiniteRows(scales.data, 1, source, "layer \"" + scales.name + "\"", "scale");
+        model.transfer.resize(rows * 3);
+        const float c = float(centre);
+        size_t bandOffset = 0;
+        for (size_t v = 0; v < V; ++v) {
+            const size_t base = size_t(offsets[v]) * 3;
+            const int n = int(std::lround(std::sqrt(double(offsets[v + 1] - offsets[v]))));
+            for (int l = 0; l < n; ++l) {
+                const float scale = cluster ? scales.data[size_t((*cluster)[v]) * order + l] : scales.data[bandOffset + l];
+                for (size_t i = base + size_t(l) * l * 3; i < base + size_t(l + 1) * (l + 1) * 3; ++i) {
+                    if (data.integers[i] > 2 * centre)
+                        throw Error(source, place + ", row " + std::to_string(i / 3), "code above " + std::to_string(2 * centre));
+                    model.transfer[i] = (float(data.integers[i]) - c) * scale / c; // as lib/adapt's dequantise
+                }
+            }
+            bandOffset += n;
+        }
+    } else {
+        throw Error(source, place, "component type " + type + " is not one this runtime decodes");
+    }
+    model.offsets = offsets;
+    return model;
+}
+
+RelightModel cpcaModel(Bundle& bundle, const std::string& source) {
+    const Layer& basis = *findLayer(bundle, "transfer_cpca_basis");
+    const std::string place = "layer \"transfer_cpca_basis\"";
+    const size_t V = bundle.mesh.vertexCount();
+    const int order = layerOrder(basis, source);
+    if (basis.semantic != "cpca_mean_basis" || basis.shape.size() != 4)
+        throw Error(source, place, "is not a cpca_mean_basis layer [clusters, components + 1, L*L, 3]");
+    const uint64_t clusters = basis.shape[0], components = basis.shape[1] - 1, dim = uint64_t(order) * order * 3;
+    if (basis.shape[1] < 1) throw Error(source, place, "has no mean row");
+    requireShape(basis, {clusters, components + 1, uint64_t(order) * order, 3}, "float32", source);
+    const Layer& weights = requireLayer(bundle, basis.params, "weights_layer", source, place);
+    const Layer& cluster = requireLayer(bundle, basis.params, "cluster_layer", source, place);
+    requireShape(weights, {V, components}, "float32", source);
+    requireShape(cluster, {V}, "", source);
+    checkFiniteRows(basis.data, dim, source, place, "row");
+    checkFiniteRows(weights.data, components ? components : 1, source, "layer \"" + weights.name + "\"", "vertex");
+    RelightModel model;
+    model.vertexCount = uint32_t(V);
+    model.order = order;
+    model.transfer.resize(V * dim);
+    for (size_t v = 0; v < V; ++v) {
+        if (cluster.integers[v] >= clusters)
+            throw Error(source, "layer \"" + cluster.name + "\", vertex " + std::to_string(v), "cluster index out of range");
+        const float* block = basis.data.data() + size_t(cluster.integers[v]) * (components + 1) * dim;
+        for (size_t d = 0; d < dim; ++d) { // the same sums, in the same order, as lib/adapt's reconstruct
+            float value = block[d];
+            for (size_t i = 0; i < components; ++i) value += weights.data[v * components + i] * block[(i + 1) * dim + d];
+            model.transfer[v * dim + d] = value;
+        }
+    }
+    return model;
+}
+
+} // namespace
+
+bool hasAdaptiveTransfer(const Bundle& bundle) {
+    return findLayer(bundle, "transfer_ragged") || findLayer(bundle, "transfer_cpca_basis");
+}
+
+RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source) {
+    if (bundle.mesh.vertexCount() > std::numeric_limits<uint32_t>::max())
+        throw Error(source, "mesh", "too many vertices");
+    if (findLayer(bundle, "transfer_ragged")) return raggedModel(bundle, source);
+    if (findLayer(bundle, "transfer_cpca_basis")) return cpcaModel(bundle, source);
+    throw Error(source, "PRT_bundle", "no adaptive transfer layers (transfer_ragged or transfer_cpca_basis)");
+}
+
+void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance) {
+    const uint32_t* offsets = model.offsets.data();
+    for (size_t v = begin; v < end;) {
+        const uint32_t count = offsets[v + 1] - offsets[v];
+        size_t run = v + 1;
+        while (run < end && offsets[run + 1] - offsets[run] == count) ++run;
+        relight(model.transfer.data() + size_t(offsets[v]) * 3, run - v, int(count), lighting, radiance + (v - begin) * 3);
+        v = run;
+    }
+}
+
+} // namespace prt

@@ -1,0 +1,359 @@
+// FIV shading at run time: DifMap lookups, trilinear FIV fetches and the seed's cases, partial and overlap
+// corrections (runtime.h, docs/fiv.md). std, lib/bundle and lib/core only: an engine can port it to a shader.
+#include "runtime.h"
+
+#include "core.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace prt {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Cube strip faces (docs/conventions.md): axis, direction of increasing column, direction of decreasing row.
+constexpr float kFaces[6][3][3] = {
+    {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}},   {{-1, 0, 0}, {0, 0, -1}, {0, 1, 0}}, {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},
+    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}}, {{0, 0, 1}, {-1, 0, 0}, {0, 1, 0}}, {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}},
+};
+
+float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// Angle between unit vectors, accurate for tiny angles (acos of a dot product is not): 0 for equal vectors.
+double angleBetween(const float* a, const float* b) {
+    double d[3] = {double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]};
+    double chord = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    return 2.0 * std::asin(std::min(1.0, 0.5 * chord));
+}
+
+const Layer& requireLayer(const Bundle& bundle, const char* name, const char* semantic, const std::string& source) {
+    const Layer* layer = findLayer(bundle, name);
+    if (!layer) throw Error(source, name, "layer is missing (not a FIV bundle from `prt fiv`)");
+    if (layer->semantic != semantic) throw Error(source, name, "semantic is \"" + layer->semantic + "\", not " + semantic);
+    for (float v : layer->data)
+        if (!std::isfinite(v)) throw Error(source, name, "holds a non-finite value");
+    return *layer;
+}
+
+void requireShape(const Layer& layer, std::vector<uint64_t> shape, const std::string& source) {
+    if (layer.shape != shape) {
+        std::string want, have;
+        for (uint64_t s : shape) want += (want.empty() ? "" : ",") + std::to_string(s);
+        for (uint64_t s : layer.shape) have += (have.empty() ? "" : ",") + std::to_string(s);
+        throw Error(source, layer.name, "shape [" + have + "] disagrees with the grid header, which needs [" + want + "]");
+    }
+}
+
+int intParam(const Layer& layer, const char* key, const std::string& source, int lo, int hi) {
+    const nlohmann::json& p = layer.params;
+    if (!p.contains(key) || !p.at(key).is_number_integer())
+        throw Error(source, layer.name, std::string("params.") + key + " is missing or not an integer");
+    long long v = p.at(key).get<long long>();
+    if (v < lo || v > hi)
+        throw Error(source, layer.name, std::string("params.") + key + " = " + std::to_string(v) + " is outside " +
+                                            std::to_string(lo) + ".." + std::to_string(hi));
+    return int(v);
+}
+
+std::string stringParam(const Layer& layer, const char* key) {
+    const nlohmann::json& p = layer.params;
+    return p.contains(key) && p.at(key).is_string() ? p.at(key).get<std::string>() : std::string();
+}
+
+// Weighted sum of grid rows into fiv/power; rows with valid == 0 are skipped. Returns the weight used.
+struct Corner {
+    size_t row;
+    float weight;
+};
+
+float gather(const FivOccluder& o, const Corner* corners, int count, float fiv[9], float power[3]) {
+    float total = 0.0f;
+    std::fill(fiv, fiv + 9, 0.0f);
+    std::fill(power, power + 3, 0.0f);
+    for (int c = 0; c < count; ++c) {
+        if (corners[c].weight <= 0.0f || !o.valid[corners[c].row]) continue;
+        float w = corners[c].weight;
+        const float* f = &o.fiv[9 * corners[c].row];
+        const float* p = &o.power[3 * corners[c].row];
+        for (int e = 0; e < 9; ++e) fiv[e] += w * f[e];
+        for (int e = 0; e < 3; ++e) power[e] += w * p[e];
+        total += w;
+    }
+    return total;
+}
+
+// Irradiance the occluder hides from a receiver whose tangent plane lies `d` from the sphere centre, per channel.
+void occludedIrradiance(const float n[3], const float fiv[9], const float power[3], float d, float radius,
+                        FivPartial partial, float out[3]) {
+    for (int c = 0; c < 3; ++c) {
+        const float* f = &fiv[3 * c];
+        float raw = dot3(n, f);
+        if (d >= radius || partial == FivPartial::None) {
+            out[c] = std::max(0.0f, raw);
+        } else if (partial == FivPartial::Literal) {
+            out[c] = std::max(0.0f, (d + radius) / (2.0f * radius) * raw);
+        } else {
+            double length = std::sqrt(double(dot3(f, f)));
+            if (!(length > 0.0) || !(power[c] > 0.0f)) {
+                out[c] = 0.0f;
+                continue;
+            }
+            // A uniform cap with the same power P and vector |F| has mean cosine |F| / P = (1 + cos sigma) / 2.
+            double cosSigma = std::clamp(2.0 * length / power[c] - 1.0, 0.0, 1.0 - 1e-7);
+            double sin2 = 1.0 - cosSigma * cosSigma;
+            double radiance = power[c] / (2.0 * kPi * (1.0 - cosSigma));
+            out[c] = float(std::max(0.0, radiance * clippedCapIrradiance(raw / length, sin2)));
+        }
+    }
+}
+
+} // namespace
+
+double clippedCapIrradiance(double cosTheta, double sinSigmaSquared) {
+    // Snyder's (1996) sphere-light form factor with horizon clipping, as in Lagarde and de Rousiers (2014).
+    cosTheta = std::clamp(cosTheta, -1.0, 1.0);
+    sinSigmaSquared = std::clamp(sinSigmaSquared, 1e-12, 1.0);
+    if (cosTheta * cosTheta > sinSigmaSquared) return cosTheta > 0.0 ? kPi * sinSigmaSquared * cosTheta : 0.0;
+    double sinTheta = std::sqrt(1.0 - cosTheta * cosTheta);
+    double x = std::sqrt(std::max(1.0 / sinSigmaSquared - 1.0, 0.0));
+    if (sinTheta < 1e-12) return 0.0;
+    double y = std::clamp(-x * cosTheta / sinTheta, -1.0, 1.0);
+    double sinThetaSqrtY = sinTheta * std::sqrt(1.0 - y * y);
+    double value = (cosTheta * std::acos(y) - x * sinThetaSqrtY) * sinSigmaSquared +
+                   (x > 0.0 ? std::atan(sinThetaSqrtY / x) : kPi / 2.0);
+    return std::max(0.0, value);
+}
+
+double discOverlap(double r1, double r2, double s) {
+    if (s >= r1 + r2) return 0.0;
+    if (s <= std::abs(r1 - r2)) return kPi * std::pow(std::min(r1, r2), 2);
+    double a = std::clamp((s * s + r1 * r1 - r2 * r2) / (2.0 * s * r1), -1.0, 1.0);
+    double b = std::clamp((s * s + r2 * r2 - r1 * r1) / (2.0 * s * r2), -1.0, 1.0);
+    double k = (-s + r1 + r2) * (s + r1 - r2) * (s - r1 + r2) * (s + r1 + r2);
+    return r1 * r1 * std::acos(a) + r2 * r2 * std::acos(b) - 0.5 * std::sqrt(std::max(0.0, k));
+}
+
+FivOccluder fivOccluder(const Bundle& bundle, const std::string& source) {
+    const Layer& fiv = requireLayer(bundle, "fiv", "fiv_occluded_rgb", source);
+    FivOccluder o;
+    o.azimuth = intParam(fiv, "azimuth", source, 3, 4096);
+    o.polar = intParam(fiv, "polar", source, 2, 2049);
+    o.shells = intParam(fiv, "shells", source, 1, 1024);
+    uint64_t rows = uint64_t(o.azimuth) * o.polar * o.shells;
+    requireShape(fiv, {rows, 3, 3}, source);
+    const Layer& power = requireLayer(bundle, "fiv_power", "occluded_power_rgb", source);
+    requireShape(power, {rows, 3}, source);
+    const Layer* valid = findLayer(bundle, "fiv_valid");
+    if (!valid) throw Error(source, "fiv_valid", "layer is missing");
+    requireShape(*valid, {rows}, source);
+    const nlohmann::json& p = fiv.params;
+    if (!p.contains("radius") || !p.at("radius").is_number() || !(p.at("radius").get<double>() > 0.0))
+        throw Error(source, "fiv", "params.radius is missing or not positive");
+    o.radius = float(p.at("radius").get<double>());
+    if (!p.contains("centre") || !p.at("centre").is_array() || p.at("centre").size() != 3)
+        throw Error(source, "fiv", "params.centre is not 3 numbers");
+    for (int c = 0; c < 3; ++c) o.centre[c] = float(p.at("centre")[size_t(c)].get<double>());
+    if (!p.contains("shell_radii") || !p.at("shell_radii").is_array() || p.at("shell_radii").size() != size_t(o.shells))
+        throw Error(source, "fiv", "params.shell_radii does not hold `shells` radii");
+    for (const auto& r : p.at("shell_radii")) {
+        double rho = r.get<double>();
+        if (!(rho > 0.0) || (!o.shellRadii.empty() && !(rho * o.radius > o.shellRadii.back())))
+            throw Error(source, "fiv", "params.shell_radii are not positive and ascending");
+        o.shellRadii.push_back(float(rho * o.radius));
+    }
+    o.fiv = fiv.data;
+    o.power = power.data;
+    o.valid.assign(valid->integers.begin(), valid->integers.end());
+    o.envHash = stringParam(fiv, "env");
+    return o;
+}
+
+FivLighting fivLighting(const Bundle& bundle, const std::string& source) {
+    const Layer& difmap = requireLayer(bundle, "difmap", "irradiance_cube_rgb", source);
+    FivLighting l;
+    l.difmapSize = intParam(difmap, "size", source, 1, 1024);
+    requireShape(difmap, {6 * uint64_t(l.difmapSize) * l.difmapSize, 3}, source);
+    const Layer& env = requireLayer(bundle, "fiv_env", "fiv_environment_rgb", source);
+    requireShape(env, {1, 3, 3}, source);
+    l.difmap = difmap.data;
+    std::copy(env.data.begin(), env.data.end(), l.fivEnv);
+    l.envHash = stringParam(difmap, "env");
+    return l;
+}
+
+void fivDifmap(const FivLighting& lighting, const float n[3], float out[3]) {
+    int axis = 0;
+    for (int c = 1; c < 3; ++c)
+        if (std::abs(n[c]) > std::abs(n[axis])) axis = c;
+    int face = 2 * axis + (n[axis] < 0.0f ? 1 : 0);
+    float depth = std::abs(n[axis]);
+    if (!(depth > 0.0f)) {
+        std::fill(out, out + 3, 0.0f);
+        return;
+    }
+    int size = lighting.difmapSize;
+    float a = dot3(kFaces[face][1], n) / depth, b = dot3(kFaces[face][2], n) / depth;
+    float x = std::clamp((a + 1.0f) * 0.5f * size - 0.5f, 0.0f, float(size - 1));
+    float y = std::clamp((1.0f - b) * 0.5f * size - 0.5f, 0.0f, float(size - 1));
+    int x0 = std::min(int(x), size - 1), y0 = std::min(int(y), size - 1);
+    int x1 = std::min(x0 + 1, size - 1), y1 = std::min(y0 + 1, size - 1);
+    float tx = x - x0, ty = y - y0;
+    const float* base = &lighting.difmap[3 * size_t(face) * size * size];
+    for (int c = 0; c < 3; ++c) {
+        float top = (1 - tx) * base[3 * (size_t(y0) * size + x0) + c] + tx * base[3 * (size_t(y0) * size + x1) + c];
+        float bottom = (1 - tx) * base[3 * (size_t(y1) * size + x0) + c] + tx * base[3 * (size_t(y1) * size + x1) + c];
+        out[c] = (1 - ty) * top + ty * bottom;
+    }
+}
+
+bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float power[3]) {
+    float distance = std::sqrt(dot3(offset, offset));
+    float u[3] = {0, 1, 0};
+    if (distance > 0.0f)
+        for (int c = 0; c < 3; ++c) u[c] = offset[c] / distance;
+    float theta = std::acos(std::clamp(u[1], -1.0f, 1.0f));
+    float phi = std::atan2(u[0], -u[2]);
+    if (phi < 0.0f) phi += float(2.0 * kPi);
+    float fj = theta / float(kPi) * float(o.polar - 1);
+    int j0 = std::clamp(int(fj), 0, o.polar - 2);
+    float tj = std::clamp(fj - float(j0), 0.0f, 1.0f);
+    float fi = phi / float(2.0 * kPi) * float(o.azimuth);
+    int i0 = int(fi);
+    float ti = std::clamp(fi - float(i0), 0.0f, 1.0f);
+    i0 %= o.azimuth;
+    int i1 = (i0 + 1) % o.azimuth;
+
+    // Shell: interpolate rho^2 FIV (which tends to a constant far away) between the shells around `distance`.
+    const std::vector<float>& r = o.shellRadii;
+    int k0, k1;
+    float tk;
+    if (distance <= r.front()) {
+        k0 = k1 = 0, tk = 0.0f;
+    } else if (distance >= r.back()) {
+        k0 = k1 = o.shells - 1, tk = 0.0f;
+    } else {
+        k1 = int(std::upper_bound(r.begin(), r.end(), distance) - r.begin());
+        k0 = k1 - 1;
+        tk = (distance - r[size_t(k0)]) / (r[size_t(k1)] - r[size_t(k0)]);
+    }
+    float inverse2 = distance > r.front() ? 1.0f / (distance * distance) : 1.0f / (r.front() * r.front());
+    auto rowOf = [&](int k, int j, int i) { return (size_t(k) * o.polar + size_t(j)) * o.azimuth + size_t(i); };
+    auto shellWeight = [&](int k) { return r[size_t(k)] * r[size_t(k)] * inverse2; };
+    float angular[4] = {(1 - ti) * (1 - tj), ti * (1 - tj), (1 - ti) * tj, ti * tj};
+    Corner corners[8];
+    int ks[2] = {k0, k1};
+    float kt[2] = {1 - tk, tk};
+    for (int s = 0; s < 2; ++s) {
+        float w = kt[s] * shellWeight(ks[s]);
+        corners[4 * s + 0] = {rowOf(ks[s], j0, i0), w * angular[0]};
+        corners[4 * s + 1] = {rowOf(ks[s], j0, i1), w * angular[1]};
+        corners[4 * s + 2] = {rowOf(ks[s], j0 + 1, i0), w * angular[2]};
+        corners[4 * s + 3] = {rowOf(ks[s], j0 + 1, i1), w * angular[3]};
+    }
+    // The weights sum to sum_s kt[s] shellWeight; renormalise to that sum over the usable corners.
+    float full = kt[0] * shellWeight(k0) + kt[1] * shellWeight(k1);
+    float used = gather(o, corners, 8, fiv, power);
+    if (used <= 1e-6f * full) {
+        // All eight inside the occluder: step outwards until a shell has usable corners.
+        used = 0.0f;
+        for (int k = k1 + 1; k < o.shells && used <= 0.0f; ++k) {
+            full = shellWeight(k);
+            for (int c = 0; c < 4; ++c) corners[c].row = rowOf(k, c < 2 ? j0 : j0 + 1, c % 2 ? i1 : i0), corners[c].weight = full * angular[c];
+            used = gather(o, corners, 4, fiv, power);
+        }
+        if (used <= 0.0f) return false;
+    }
+    float scale = full / used;
+    for (int e = 0; e < 9; ++e) fiv[e] *= scale;
+    for (int e = 0; e < 3; ++e) power[e] *= scale;
+    return true;
+}
+
+void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, size_t instanceCount,
+                   const FivInstance* self, const float* positions, const float* normals, size_t count,
+                   const FivShadeOptions& options, float* irradiance) {
+    struct Hidden {
+        float direction[3];
+        float angularRadius, disc;
+        float value[3];
+    };
+    std::vector<Hidden> hidden(instanceCount);
+    for (size_t point = 0; point < count; ++point) {
+        const float* p = &positions[3 * point];
+        const float* n = &normals[3 * point];
+        float total[3], unoccluded[3];
+        fivDifmap(lighting, n, total);
+        std::copy(total, total + 3, unoccluded);
+        float fiv[9], power[3], offset[3];
+        if (self) {
+            const FivOccluder& o = *self->occluder;
+            for (int c = 0; c < 3; ++c) offset[c] = o.centre[c] + self->translation[c] - p[c];
+            if (fivLookup(o, offset, fiv, power))
+                for (int c = 0; c < 3; ++c) unoccluded[c] = dot3(n, &lighting.fivEnv[3 * c]) - dot3(n, &fiv[3 * c]);
+        }
+        size_t used = 0;
+        for (size_t j = 0; j < instanceCount; ++j) {
+            const FivOccluder& o = *instances[j].occluder;
+            for (int c = 0; c < 3; ++c) offset[c] = o.centre[c] + instances[j].translation[c] - p[c];
+            float d = dot3(n, offset);
+            if (d <= -o.radius) continue; // case C: wholly behind the tangent plane
+            Hidden& h = hidden[used];
+            if (!fivLookup(o, offset, fiv, power)) {
+                std::copy(total, total + 3, h.value); // the point lies inside the occluder
+            } else {
+                occludedIrradiance(n, fiv, power, d, o.radius, options.partial, h.value);
+            }
+            if (h.value[0] <= 0.0f && h.value[1] <= 0.0f && h.value[2] <= 0.0f) continue;
+            float distance = std::sqrt(dot3(offset, offset));
+            for (int c = 0; c < 3; ++c) h.direction[c] = distance > 0.0f ? offset[c] / distance : 0.0f;
+            h.angularRadius = distance > o.radius ? std::asin(o.radius / distance) : float(kPi / 2);
+            float green = std::sqrt(dot3(&fiv[3], &fiv[3]));
+            if (options.overlap == FivOverlap::Cap && green > 0.0f && power[1] > 0.0f) {
+                float cosSigma = std::clamp(2.0f * green / power[1] - 1.0f, 0.0f, 1.0f);
+                h.angularRadius = std::max(std::acos(cosSigma), 1e-4f);
+                for (int c = 0; c < 3; ++c) h.direction[c] = fiv[3 + c] / green;
+            }
+            h.disc = float(kPi) * h.angularRadius * h.angularRadius;
+            ++used;
+        }
+        float occluded[3] = {0, 0, 0};
+        if (options.overlap == FivOverlap::Paper || options.overlap == FivOverlap::Cap) {
+            float largest[3] = {0, 0, 0};
+            for (size_t a = 0; a < used; ++a)
+                for (int c = 0; c < 3; ++c) occluded[c] += hidden[a].value[c], largest[c] = std::max(largest[c], hidden[a].value[c]);
+            for (size_t a = 0; a < used; ++a)
+                for (size_t b = a + 1; b < used; ++b) {
+                    float cosine = std::clamp(dot3(hidden[a].direction, hidden[b].direction), -1.0f, 1.0f);
+                    float reach = hidden[a].angularRadius + hidden[b].angularRadius;
+                    if (reach < float(kPi) && cosine <= std::cos(reach)) continue;
+                    double lens = discOverlap(hidden[a].angularRadius, hidden[b].angularRadius,
+                                              angleBetween(hidden[a].direction, hidden[b].direction));
+                    float share = float(lens / (hidden[a].disc + hidden[b].disc));
+                    for (int c = 0; c < 3; ++c) occluded[c] -= share * (hidden[a].value[c] + hidden[b].value[c]);
+                }
+            for (int c = 0; c < 3; ++c) occluded[c] = std::max(occluded[c], largest[c]);
+        } else {
+            for (size_t a = 0; a < used; ++a) {
+                float covered = 0.0f;
+                if (options.overlap == FivOverlap::Shared)
+                    for (size_t b = 0; b < used; ++b) {
+                        if (b == a) continue;
+                        float cosine = std::clamp(dot3(hidden[a].direction, hidden[b].direction), -1.0f, 1.0f);
+                        float reach = hidden[a].angularRadius + hidden[b].angularRadius;
+                        if (reach < float(kPi) && cosine <= std::cos(reach)) continue;
+                        covered += float(discOverlap(hidden[a].angularRadius, hidden[b].angularRadius,
+                                                     angleBetween(hidden[a].direction, hidden[b].direction)) /
+                                         hidden[a].disc);
+                    }
+                for (int c = 0; c < 3; ++c) occluded[c] += hidden[a].value[c] / (1.0f + covered);
+            }
+        }
+        float* out = &irradiance[3 * point];
+        for (int c = 0; c < 3; ++c) out[c] = std::clamp(unoccluded[c] - occluded[c], 0.0f, std::max(total[c], 0.0f));
+    }
+}
+
+} // namespace prt

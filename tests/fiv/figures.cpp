@@ -1,0 +1,350 @@
+// The FIV figures of docs/results.md, measured in one run and printed as JSON (not a test: it takes minutes).
+//   fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--grids 32x17x15,...] [--quick]
+// Scenes (receiver 8x8 plane of 65x65 vertices unless said): the bunny scaled to 2 units hovering 0.5 above the
+// plane; two bunnies with overlapping shadows; three; one straddling the plane; one 0.05 above it (close); one
+// low beside the plane (grazing); the bunny as its own receiver. Maps: courtyard, sunrise (sharp sun), constant.
+// Error: S = L_unoccluded - L_occluded per vertex in luminance, NRMSE = RMS(S - S_ref) / (max S_ref - min S_ref),
+// against the brute-force direct sum over the full-resolution map (prt reference --occluder); also against the
+// same sum over the 6x32x32 cube, which isolates the grid's error from the cube's.
+#include "fiv.h"
+
+#include "core.h"
+#include "image.h"
+#include "mesh.h"
+#include "reference.h"
+#include "runtime.h"
+#include "scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <numbers>
+#include <string>
+
+using namespace prt;
+using nlohmann::json;
+
+namespace {
+
+constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722};
+
+struct SceneSpec {
+    std::string name;
+    bool self = false;
+    std::vector<std::array<float, 3>> placements; // bunny translations
+    bool failureOnly = false;                     // measured under courtyard only (the failure map)
+};
+
+// The map averaged over 2 x 2 texels (equal solid angle per row pair, so power is kept up to the row weights):
+// the reference's rays fall 4-fold while it keeps 21 times the cube's texels.
+EnvironmentMap halve(const EnvironmentMap& env) {
+    EnvironmentMap out;
+    int w = env.radiance.width / 2, h = env.radiance.height / 2;
+    out.radiance.width = w, out.radiance.height = h;
+    out.radiance.rgb.assign(size_t(w) * h * 3, 0.0f);
+    for (int y = 0; y < h; ++y) {
+        // Rows 2y and 2y+1 weighted by their solid angles.
+        double t0 = std::numbers::pi * (2 * y) / env.radiance.height, t1 = std::numbers::pi * (2 * y + 1) / env.radiance.height,
+               t2 = std::numbers::pi * (2 * y + 2) / env.radiance.height;
+        double w0 = std::cos(t0) - std::cos(t1), w1 = std::cos(t1) - std::cos(t2);
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                auto at = [&](int yy, int xx) { return double(env.radiance.rgb[3 * (size_t(yy) * env.radiance.width + xx) + c]); };
+                double top = at(2 * y, 2 * x) + at(2 * y, 2 * x + 1), bottom = at(2 * y + 1, 2 * x) + at(2 * y + 1, 2 * x + 1);
+                out.radiance.rgb[3 * (size_t(y) * w + x) + c] = float(0.5 * (w0 * top + w1 * bottom) / (w0 + w1));
+            }
+    }
+    return out;
+}
+
+std::vector<double> luminance(const std::vector<float>& rgb) {
+    std::vector<double> out(rgb.size() / 3);
+    for (size_t v = 0; v < out.size(); ++v)
+        out[v] = kLuminance[0] * rgb[3 * v] + kLuminance[1] * rgb[3 * v + 1] + kLuminance[2] * rgb[3 * v + 2];
+    return out;
+}
+
+struct Errors {
+    double nrmse = 0, relativeRmse = 0, shadowRange = 0;
+};
+
+Errors errors(const std::vector<float>& freeA, const std::vector<float>& shadedA, const std::vector<float>& freeRef,
+              const std::vector<float>& shadedRef) {
+    std::vector<double> fa = luminance(freeA), sa = luminance(shadedA), fr = luminance(freeRef), sr = luminance(shadedRef);
+    double lo = 1e300, hi = -1e300, sum = 0;
+    for (size_t v = 0; v < fa.size(); ++v) {
+        double s = fa[v] - sa[v], r = fr[v] - sr[v];
+        lo = std::min(lo, r), hi = std::max(hi, r);
+        sum += (s - r) * (s - r);
+    }
+    Errors e;
+    e.shadowRange = hi - lo;
+    e.nrmse = hi > lo ? std::sqrt(sum / double(fa.size())) / (hi - lo) : 0.0;
+    double num = 0, den = 0;
+    for (size_t i = 0; i < shadedA.size(); ++i) num += std::pow(double(shadedA[i]) - shadedRef[i], 2), den += std::pow(double(shadedRef[i]), 2);
+    e.relativeRmse = std::sqrt(num / den);
+    return e;
+}
+
+std::vector<float> shadeFiv(const TriMesh& receiver, const FivLighting& lighting, const FivOccluder* occluder,
+                            const std::vector<std::array<float, 3>>& placements, bool self, FivShadeOptions options) {
+    std::vector<FivInstance> instances;
+    for (const auto& p : placements) instances.push_back({occluder, {p[0], p[1], p[2]}});
+    FivInstance selfInstance{occluder, {0, 0, 0}};
+    std::vector<float> out(receiver.positions.size());
+    fivIrradiance(lighting, instances.data(), instances.size(), self ? &selfInstance : nullptr, receiver.positions.data(),
+                  receiver.normals.data(), receiver.vertexCount(), options, out.data());
+    for (float& v : out) v = float(v / std::numbers::pi); // albedo 1
+    return out;
+}
+
+// Shadow image S of a plane receiver (65 x 65) as a PNG: reference, FIV, and 10 x |difference|.
+void writeShadowPng(const std::string& path, const std::vector<float>& freeA, const std::vector<float>& shadedA,
+                    const std::vector<float>& freeRef, const std::vector<float>& shadedRef, int side) {
+    std::vector<double> fa = luminance(freeA), sa = luminance(shadedA), fr = luminance(freeRef), sr = luminance(shadedRef);
+    double hi = 1e-12;
+    for (size_t v = 0; v < fa.size(); ++v) hi = std::max(hi, fr[v] - sr[v]);
+    int width = 3 * side + 2;
+    std::vector<float> pixels(size_t(width) * side * 3, 1.0f);
+    for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) {
+            size_t v = size_t(y) * side + x;
+            double values[3] = {(fr[v] - sr[v]) / hi, (fa[v] - sa[v]) / hi, 10.0 * std::abs((fa[v] - sa[v]) - (fr[v] - sr[v])) / hi};
+            for (int panel = 0; panel < 3; ++panel)
+                for (int c = 0; c < 3; ++c)
+                    pixels[3 * (size_t(y) * width + panel * (side + 1) + x) + c] = float(std::clamp(1.0 - values[panel], 0.0, 1.0));
+        }
+    writeImagePixels(path, width, side, {"R", "G", "B"}, pixels.data(), PixelStorage::U8);
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 4) {
+        std::fprintf(stderr, "usage: fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--quick]\n");
+        return 2;
+    }
+    std::string bunnyPath = argv[1], envDir = argv[2], outDir = argv[3];
+    bool quick = argc > 4 && std::string(argv[4]) == "--quick";
+    setLogOptions({true, false});
+    try {
+        // The bunny, 2 units across, normals from lib/mesh.
+        MeshprepOptions prep;
+        prep.input = bunnyPath;
+        TriMesh bunny = prepareMesh(prep).mesh;
+        Bounds bounds = computeBounds(bunny);
+        float extent = 0;
+        for (int c = 0; c < 3; ++c) extent = std::max(extent, bounds.max[size_t(c)] - bounds.min[size_t(c)]);
+        float scale = 2.0f / extent;
+        for (float& p : bunny.positions) p *= scale;
+        bounds = computeBounds(bunny);
+        float cx = 0.5f * (bounds.min[0] + bounds.max[0]), cz = 0.5f * (bounds.min[2] + bounds.max[2]);
+        float cy = 0.5f * (bounds.min[1] + bounds.max[1]);
+        std::array<float, 3> hover{-cx, 0.5f - bounds.min[1], -cz};
+        auto shifted = [&](float x, float y, float z) { return std::array<float, 3>{hover[0] + x, hover[1] + y, hover[2] + z}; };
+        TriMesh plane = makePlane(8.0f, 64);
+        std::vector<SceneSpec> scenes = {
+            {"one bunny", false, {hover}},
+            {"two bunnies", false, {shifted(-1.1f, 0, 0), shifted(1.1f, 0.6f, 0.4f)}},
+            {"three bunnies", false, {shifted(-1.1f, 0, 0), shifted(1.1f, 0.6f, 0.4f), shifted(0.0f, 1.4f, -0.9f)}, true},
+            {"straddling", false, {{-cx, -cy, -cz}}},
+            {"close (0.05 above)", false, {shifted(0, -0.45f, 0)}, true},
+            {"grazing (beside the plane)", false, {{-cx + 5.5f, -cy + 0.3f, -cz}}, true},
+            {"self-shadow", true, {}},
+        };
+        std::vector<std::string> maps = {"courtyard", "sunrise", "constant"};
+        struct GridChoice { int nt, np, nr; };
+        std::vector<GridChoice> grids = {{32, 17, 15}, {64, 33, 15}, {64, 33, 30}, {128, 65, 30}};
+        if (quick) grids = {{32, 17, 15}, {64, 33, 15}};
+        json report;
+        report["bunny"] = {{"vertices", bunny.vertexCount()}, {"triangles", bunny.triangleCount()}, {"scale", scale}};
+
+        std::map<std::string, EnvironmentMap> envs;
+        std::map<std::string, std::array<int, 2>> fullSize;
+        for (const std::string& m : maps) {
+            if (m == "constant") {
+                EnvironmentMap env;
+                env.radiance.width = 64, env.radiance.height = 32;
+                env.radiance.rgb.assign(64 * 32 * 3, 1.0f);
+                envs[m] = env;
+            } else {
+                envs[m] = readEnvironmentMap(envDir + "/" + m + ".exr");
+                fullSize[m] = {envs[m].radiance.width, envs[m].radiance.height};
+            }
+        }
+
+        // References: brute-force over the full map, shadowed and unshadowed, and over the 32^2 cube.
+        std::map<std::string, std::vector<float>> refShadowed, refFree, cubeShadowed, cubeFree;
+        json referenceCost = json::array();
+        for (const SceneSpec& s : scenes)
+            for (const std::string& m : maps) {
+                if (s.failureOnly && m != "courtyard") continue;
+                const TriMesh& receiver = s.self ? bunny : plane;
+                std::vector<DirectOccluder> occluders;
+                for (const auto& p : s.placements) occluders.push_back({bunny, p});
+                DirectOptions shadowed, unshadowed;
+                shadowed.threads = unshadowed.threads = 2;
+                unshadowed.shadows = false;
+                shadowed.albedo = unshadowed.albedo = std::array<float, 3>{1, 1, 1};
+                std::string key = s.name + "|" + m;
+                double t0 = nowSeconds();
+                EnvironmentMap referenceMap = envs[m].radiance.width > 512 ? halve(envs[m]) : envs[m];
+                // Cached next to the figures: the references cost minutes and do not depend on the grid.
+                std::string cache = outDir + "/reference-" + std::to_string(std::hash<std::string>()(key)) + ".npy";
+                ReferenceRadiance r;
+                if (std::filesystem::exists(cache)) {
+                    std::vector<size_t> shape;
+                    r.radiance = readNpy(cache, &shape);
+                } else {
+                    r = referenceDirectRadiance(receiver, occluders, referenceMap, shadowed);
+                    writeNpy(cache, r.radiance, {receiver.vertexCount(), 3});
+                }
+                double seconds = nowSeconds() - t0;
+                refShadowed[key] = r.radiance;
+                refFree[key] = referenceDirectRadiance(receiver, {}, referenceMap, unshadowed).radiance;
+                EnvironmentMap cube = fiv::cubeAsEnvironmentMap(fiv::resampleToCube(envs[m], 32));
+                cubeShadowed[key] = referenceDirectRadiance(receiver, occluders, cube, shadowed).radiance;
+                cubeFree[key] = referenceDirectRadiance(receiver, {}, cube, unshadowed).radiance;
+                referenceCost.push_back({{"scene", s.name}, {"map", m}, {"seconds", seconds}, {"rays", r.rays},
+                                         {"map_texels", {referenceMap.radiance.width, referenceMap.radiance.height}}});
+                std::fprintf(stderr, "reference %s: %.1f s, %llu rays\n", key.c_str(), seconds, (unsigned long long)r.rays);
+            }
+        report["reference_cost"] = referenceCost;
+        json cubeError = json::array();
+        for (const SceneSpec& s : scenes)
+            for (const std::string& m : maps) {
+                if (s.failureOnly && m != "courtyard") continue;
+                std::string key = s.name + "|" + m;
+                Errors e = errors(cubeFree[key], cubeShadowed[key], refFree[key], refShadowed[key]);
+                cubeError.push_back({{"scene", s.name}, {"map", m}, {"nrmse", e.nrmse}, {"relative_rmse", e.relativeRmse}});
+            }
+        report["cube_only_error"] = cubeError;
+
+        json results = json::array(), precompute = json::array();
+        for (const GridChoice& g : grids) {
+            fiv::VisibilityOptions options;
+            options.grid.azimuth = g.nt, options.grid.polar = g.np, options.grid.shells = g.nr;
+            options.cube = 32;
+            options.allowOpen = true; // the npm bunny has holes in its base
+            options.threads = 2;
+            double t0 = nowSeconds();
+            fiv::Visibility vis = fiv::sampleVisibility(bunny, options, "bunny");
+            double visibilitySeconds = nowSeconds() - t0;
+            std::string gridName = std::to_string(g.nt) + "x" + std::to_string(g.np) + "x" + std::to_string(g.nr);
+            size_t invalid = 0;
+            for (uint8_t v : vis.valid) invalid += v == 0;
+            json cost = {{"grid", gridName}, {"samples", options.grid.sampleCount()}, {"visibility_seconds", visibilitySeconds},
+                         {"rays", vis.rays}, {"naive_rays", vis.naiveRays},
+                         {"rays_per_sample", double(vis.rays) / double(options.grid.sampleCount())},
+                         {"mask_bytes", vis.bits.size()}, {"invalid_samples", invalid}, {"threads", 2}};
+            std::fprintf(stderr, "visibility %s: %.1f s, %.0f rays/sample\n", gridName.c_str(), visibilitySeconds,
+                         double(vis.rays) / double(options.grid.sampleCount()));
+            json reductions = json::array();
+            for (const std::string& m : maps) {
+                double r0 = nowSeconds();
+                fiv::CubeEnvironment cube = fiv::resampleToCube(envs[m], 32);
+                fiv::FivGrid grid = fiv::reduceVisibility(vis, cube);
+                std::vector<float> difmap = fiv::difMap(cube, 32);
+                std::array<double, 9> fivEnv = fiv::environmentFiv(cube);
+                double reductionSeconds = nowSeconds() - r0;
+                reductions.push_back({{"map", m}, {"seconds", reductionSeconds}});
+                for (bool half : {true, false}) {
+                    fiv::FivBundleOptions bundleOptions;
+                    bundleOptions.half = half;
+                    Bundle bundle = fiv::fivBundle(bunny, grid, difmap, fivEnv, bundleOptions, {});
+                    if (half) // what a reader gets back from a float16 layer
+                        for (Layer& layer : bundle.layers)
+                            if (layer.componentType == "float16")
+                                for (float& v : layer.data) v = halfToFloat(floatToHalf(v));
+                    FivOccluder occluder = fivOccluder(bundle, "bunny");
+                    FivLighting lighting = fivLighting(bundle, "bunny");
+                    for (const SceneSpec& s : scenes) {
+                        if (s.failureOnly && m != "courtyard") continue;
+                        std::string key = s.name + "|" + m;
+                        const TriMesh& receiver = s.self ? bunny : plane;
+                        std::vector<float> free = shadeFiv(receiver, lighting, &occluder, {}, false, {});
+                        struct Mode { std::string name; FivShadeOptions options; };
+                        std::vector<Mode> modes = {{"cap+paper", {FivPartial::Cap, FivOverlap::Paper}}};
+                        if (half && (s.name == "straddling" || s.name == "grazing (beside the plane)" || s.name == "one bunny"))
+                            modes.push_back({"literal+paper", {FivPartial::Literal, FivOverlap::Paper}}),
+                                modes.push_back({"none+paper", {FivPartial::None, FivOverlap::Paper}});
+                        if (half && s.placements.size() > 1)
+                            modes.push_back({"cap+none", {FivPartial::Cap, FivOverlap::None}}),
+                                modes.push_back({"cap+shared", {FivPartial::Cap, FivOverlap::Shared}}),
+                                modes.push_back({"cap+cap", {FivPartial::Cap, FivOverlap::Cap}});
+                        if (!half) modes = {{"cap+paper", {FivPartial::Cap, FivOverlap::Paper}}};
+                        for (const Mode& mode : modes) {
+                            std::vector<float> shaded = shadeFiv(receiver, lighting, &occluder, s.placements, s.self, mode.options);
+                            Errors full = errors(free, shaded, refFree[key], refShadowed[key]);
+                            Errors grid32 = errors(free, shaded, cubeFree[key], cubeShadowed[key]);
+                            results.push_back({{"grid", gridName}, {"samples", options.grid.sampleCount()}, {"map", m},
+                                               {"scene", s.name}, {"mode", mode.name}, {"storage", half ? "float16" : "float32"},
+                                               {"nrmse", full.nrmse}, {"relative_rmse", full.relativeRmse},
+                                               {"nrmse_vs_cube_reference", grid32.nrmse}, {"shadow_range", full.shadowRange},
+                                               {"visibility_seconds", visibilitySeconds}});
+                            if (half && mode.name == "cap+paper" && !s.self && g.nt == grids.back().nt && g.nr == grids.back().nr) {
+                                std::string file = s.name.substr(0, s.name.find(' ')) + "-" + m + "-" + gridName + ".png";
+                                writeShadowPng(outDir + "/fiv_shadow_" + file, free, shaded, refFree[key], refShadowed[key], 65);
+                            }
+                        }
+                    }
+                }
+            }
+            cost["reductions"] = reductions;
+            precompute.push_back(cost);
+            // Supersampled masks against the binary mask, at the two smallest grids, under the sharp sun.
+            if (g.nt <= 64 && g.nr == 15) {
+                for (int variant = 0; variant < 2; ++variant) {
+                fiv::VisibilityOptions ss = options;
+                if (variant == 0) ss.supersample = 2;
+                else ss.cube = 64;
+                if (variant == 1 && g.nt != 64) continue;
+                std::string variantName = variant == 0 ? "cap+paper, supersample 2" : "cap+paper, cube 64";
+                double s0 = nowSeconds();
+                fiv::Visibility vis2 = fiv::sampleVisibility(bunny, ss, "bunny");
+                double ssSeconds = nowSeconds() - s0;
+                for (const std::string& m : {std::string("sunrise"), std::string("courtyard")}) {
+                    fiv::CubeEnvironment cube = fiv::resampleToCube(envs[m], ss.cube);
+                    Bundle bundle = fiv::fivBundle(bunny, fiv::reduceVisibility(vis2, cube), fiv::difMap(cube, 32),
+                                                   fiv::environmentFiv(cube), {}, {});
+                    for (Layer& layer : bundle.layers)
+                        if (layer.componentType == "float16")
+                            for (float& v : layer.data) v = halfToFloat(floatToHalf(v));
+                    FivOccluder occluder = fivOccluder(bundle, "bunny");
+                    FivLighting lighting = fivLighting(bundle, "bunny");
+                    for (const SceneSpec& s : scenes) {
+                        if (s.name != "one bunny" && s.name != "self-shadow") continue;
+                        std::string key = s.name + "|" + m;
+                        const TriMesh& receiver = s.self ? bunny : plane;
+                        std::vector<float> free = shadeFiv(receiver, lighting, &occluder, {}, false, {});
+                        std::vector<float> shaded = shadeFiv(receiver, lighting, &occluder, s.placements, s.self, {});
+                        Errors full = errors(free, shaded, refFree[key], refShadowed[key]);
+                        Errors grid32 = errors(free, shaded, cubeFree[key], cubeShadowed[key]);
+                        results.push_back({{"grid", gridName}, {"samples", options.grid.sampleCount()}, {"map", m},
+                                           {"scene", s.name}, {"mode", variantName}, {"storage", "float16"},
+                                           {"nrmse", full.nrmse}, {"relative_rmse", full.relativeRmse},
+                                           {"nrmse_vs_cube_reference", grid32.nrmse}, {"shadow_range", full.shadowRange},
+                                           {"visibility_seconds", ssSeconds}});
+                    }
+                }
+                }
+            }
+        }
+        report["precompute"] = precompute;
+        report["results"] = results;
+        report["bytes_per_sample"] = {{"float16", 25}, {"float32", 49}, {"seed", 36}};
+        std::ofstream(outDir + "/fiv_figures.json") << report.dump(1) << "\n";
+        std::cout << report.dump(1) << "\n";
+    } catch (const Error& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return e.exitCode();
+    }
+    return 0;
+}
