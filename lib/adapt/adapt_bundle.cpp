@@ -160,11 +160,20 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
             if (options.perVertexBudget) {
                 std::vector<float> error = truncationError(full.data(), V, order, lightings, options.prior);
                 orders = selectOrders(error, V, order, options.maxError);
+                stats.raisedBySmoothing = smoothOrders(bundle.mesh.indices, orders, options.maxStep);
             } else {
+                // Truncation error is not monotone in the order (bands can cancel), so grading can overshoot the
+                // budget: then spend a smaller one until the graded field fits (at worst the full order, exact).
                 std::vector<double> error = truncationErrorSquared(full.data(), V, order, lightings, options.prior);
-                orders = budgetOrders(error, lightings.size(), V, order, options.maxError);
+                for (double budget = options.maxError;; budget *= 0.9) {
+                    orders = budgetOrders(error, lightings.size(), V, order, budget < 1e-4 * options.maxError ? 0.0 : budget);
+                    stats.raisedBySmoothing = smoothOrders(bundle.mesh.indices, orders, options.maxStep);
+                    std::vector<float> truncated = denseTransfer(raggedTransfer(full.data(), V, order, orders));
+                    if (budget < 1e-4 * options.maxError ||
+                        priorRelativeRmse(truncated.data(), full.data(), V, order, lightings) <= options.maxError)
+                        break;
+                }
             }
-            stats.raisedBySmoothing = smoothOrders(bundle.mesh.indices, orders, options.maxStep);
         }
         RaggedTransfer ragged = raggedTransfer(full.data(), V, order, orders);
         for (uint8_t n : orders) ++stats.orderHistogram[n];
