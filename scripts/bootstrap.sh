@@ -10,6 +10,7 @@ packages=(
   pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
   libtbb-dev libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev libspdlog-dev libtomlplusplus-dev
   libxxhash-dev libgtest-dev libbenchmark-dev
+  clang-14 libclang-rt-14-dev
   python3-numpy python3-matplotlib python3-openimageio
   slurm-wlm munge
   chromium

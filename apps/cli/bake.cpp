@@ -56,8 +56,8 @@ void addBakeCommand(CLI::App& app) {
                                          "lightmap atlas when it has none")
         ->required();
     command->add_option("-o,--output", o.output,
-                        "Output bundle (.glb); the textures go next to it as NAME.transfer.exr (or NAME.transfer.json "
-                        "and NAME.transfer.TJJJ.png with --format u8) and NAME.normal.png")
+                        "Output bundle (.glb); the textures go next to it as NAME.transfer.HASH.exr (or NAME.transfer.HASH.json "
+                        "and NAME.transfer.TJJJ.HASH.png with --format u8) and NAME.normal.HASH.png, HASH from their content")
         ->required();
     command->add_option("--high", o.high, "High-resolution mesh with normals: normals, positions and shadows come "
                                           "from it (cage projection along the low normals)");

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <string>
@@ -34,8 +35,14 @@ void addFivVisibilityCommand(CLI::App& app);
 void addFivshadeCommand(CLI::App& app);
 void addGlossyCommand(CLI::App& app);
 
+// What a pipeline cache key holds about this prt (`prt --build-info`): its version, build type, compiler, the
+// content hash of its executable, and the versions of the libraries it was compiled against and has loaded.
+nlohmann::json buildInfo();
+
 // Runs the driver. With `onlyCommand`, behaves as if argv[1] were that subcommand (the standalone apps).
-int runDriver(int argc, char** argv, const char* onlyCommand = nullptr);
+// With `answer`, only --build-info and --resolved-options are answered, into *answer (`prt run` asks itself
+// these in-process instead of starting prt again); anything else is a usage error.
+int runDriver(int argc, char** argv, const char* onlyCommand = nullptr, nlohmann::json* answer = nullptr);
 
 // Parses --albedo: "R,G,B" or a single grey value, each in [0, 1], kept in double so bundles record what was
 // typed. Throws prt::Error(kExitUsage) naming --albedo otherwise.

@@ -5,6 +5,7 @@
 #include <csignal>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <vector>
 
 #ifndef PRT_VERSION
@@ -13,19 +14,54 @@
 
 namespace prt::cli {
 
-int runDriver(int argc, char** argv, const char* onlyCommand) {
+int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* answer) {
     std::vector<char*> args(argv, argv + argc);
     std::string command = onlyCommand ? onlyCommand : "";
     if (onlyCommand) args.insert(args.begin() + 1, command.data());
 
     CLI::App app{"prt: precomputed radiance transfer toolchain", "prt"};
     app.set_version_flag("--version", std::string("prt ") + PRT_VERSION);
-    app.require_subcommand(1);
+    app.require_subcommand(0, 1);
     app.fallthrough();
+    // Every option records its default, so --resolved-options can print what a stage will run with.
+    app.option_defaults()->always_capture_default();
     LogOptions log;
+    bool printBuildInfo = false, printResolved = false;
     app.add_flag("-q,--quiet", log.quiet, "No progress or info output on stderr");
     app.add_flag("--log-json", log.json, "Log to stderr as JSON lines");
-    app.parse_complete_callback([&] { setLogOptions(log); });
+    app.add_flag("--build-info", printBuildInfo, "Print this build's identity and library versions as JSON, and exit");
+    app.add_flag("--resolved-options", printResolved,
+                 "Print the options STAGE would run with, defaults included, as JSON, and exit without running it");
+    // With `answer`, the questions below are answered into it, and this process's logging is left as it is.
+    auto reply = [&](const nlohmann::json& value) {
+        if (answer) *answer = value;
+        else std::fputs((value.dump() + "\n").c_str(), stdout);
+        throw CLI::Success();
+    };
+    app.parse_complete_callback([&] {
+        if (!answer) setLogOptions(log);
+        if (printBuildInfo) reply(buildInfo());
+        if (app.get_subcommands().empty()) throw CLI::RequiredError("A subcommand");
+        if (printResolved) {
+            // Option name -> its values as given, or its default; positionals by name. Pipeline cache keys hold this.
+            nlohmann::json resolved = nlohmann::json::object();
+            std::function<void(CLI::App*)> collect = [&](CLI::App* command) {
+                for (const CLI::Option* option : command->get_options()) {
+                    std::string name = option->get_name(false, true);
+                    if (name == "--help" || name == "-h,--help") continue;
+                    resolved[name] = option->count() > 0 ? nlohmann::json(option->results())
+                                                         : nlohmann::json(option->get_default_str());
+                }
+                // Option groups are nameless subcommands.
+                for (CLI::App* group : command->get_subcommands([](CLI::App* a) { return a->get_name().empty(); }))
+                    collect(group);
+            };
+            for (CLI::App* sub : app.get_subcommands()) collect(sub);
+            reply(resolved);
+        }
+        if (answer) throw CLI::RequiredError("--build-info or --resolved-options");
+        checkpoint("command"); // the questions above are not kill points: they change nothing
+    });
 
     addSceneCommand(app);
     addMeshprepCommand(app);

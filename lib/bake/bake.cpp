@@ -11,6 +11,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <unistd.h>
 
 namespace prt {
 
@@ -79,15 +81,63 @@ std::vector<float> scatter(const TexelSamples& samples, const float* rows, int c
     return atlas;
 }
 
-// Files written so far; removed again unless the stage completes, so a failure leaves no output behind.
+// The textures of one bake. Each is named by its content (NAME.KIND.<16 hex>.EXT), so a new bake never
+// overwrites a file the previous bundle references: until the new bundle replaces it, the last good result stays
+// whole, and a failure removes only the files this bake created. Once committed, the previous bundle's textures
+// that the new one does not use are removed.
 struct WrittenFiles {
-    std::vector<std::string> paths;
+    std::vector<std::string> paths;   // every texture the new bundle references
+    std::vector<std::string> created; // those that did not exist before
+    std::vector<std::string> previous; // the textures of the bundle being replaced
     bool committed = false;
     ~WrittenFiles() {
-        if (committed) return;
-        for (const std::string& path : paths) std::remove(path.c_str());
+        if (committed) {
+            for (const std::string& path : previous)
+                if (std::find(paths.begin(), paths.end(), path) == paths.end()) std::remove(path.c_str());
+            return;
+        }
+        for (const std::string& path : created) std::remove(path.c_str());
     }
 };
+
+// Writes a texture through `write` (into a hidden temporary file with the right extension, which the writer needs)
+// and moves it to BASE.KIND.<first 16 hex digits of its content hash>.EXTENSION; returns that path.
+std::string writeContentAddressed(const std::string& base, const std::string& kind, const std::string& extension,
+                                  WrittenFiles& written, const std::function<void(const std::string&)>& write) {
+    std::filesystem::path stem(base);
+    std::string tmp = (stem.parent_path() / ("." + stem.filename().string() + "." + kind + ".tmp-" +
+                                             std::to_string(getpid()) + "." + extension)).string();
+    write(tmp);
+    std::string hash = hashFile(tmp);
+    std::string path = base + "." + kind + "." + hash.substr(hash.find(':') + 1, 16) + "." + extension;
+    std::error_code error;
+    if (std::filesystem::exists(path, error)) {
+        std::remove(tmp.c_str()); // the same name holds the same bytes
+    } else {
+        std::filesystem::rename(tmp, path);
+        written.created.push_back(path);
+    }
+    written.paths.push_back(path);
+    return path;
+}
+
+// The external files of the bundle at `path` (params.files of its layers), if it is a readable bundle.
+std::vector<std::string> bundleTextures(const std::string& path) {
+    std::vector<std::string> files;
+    std::error_code error;
+    if (!std::filesystem::exists(path, error)) return files;
+    try {
+        std::filesystem::path folder = std::filesystem::path(path).parent_path();
+        for (const Layer& layer : readBundle(path).layers)
+            if (layer.params.contains("files") && layer.params["files"].is_array())
+                for (const nlohmann::json& name : layer.params["files"])
+                    if (name.is_string() && std::filesystem::path(name.get<std::string>()).filename() == name.get<std::string>())
+                        files.push_back((folder / name.get<std::string>()).string());
+    } catch (const Error&) {
+        // Not a bundle we can read: nothing of it to clean up.
+    }
+    return files;
+}
 
 std::string fileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
@@ -357,6 +407,7 @@ void runBake(const BakeOptions& options) {
     // Textures first, the bundle that references them last.
     std::string base = options.output.substr(0, options.output.size() - 4);
     WrittenFiles written;
+    written.previous = bundleTextures(options.output);
     Layer layer;
     layer.name = "texel_transfer";
     layer.domain = "texel";
@@ -378,11 +429,11 @@ void runBake(const BakeOptions& options) {
             for (int j = 0; j < coefficients; ++j) {
                 for (size_t t = 0; t < texelCount; ++t)
                     for (int c = 0; c < 3; ++c) plane[3 * t + c] = compressed.values[t * channels + 3 * j + c];
-                char suffix[32];
-                std::snprintf(suffix, sizeof suffix, ".transfer.T%03d.png", j);
-                std::string path = base + suffix;
-                written.paths.push_back(path);
-                writeImagePixels(path, size, size, {"R", "G", "B"}, plane.data());
+                char kind[32];
+                std::snprintf(kind, sizeof kind, "transfer.T%03d", j);
+                std::string path = writeContentAddressed(base, kind, "png", written, [&](const std::string& tmp) {
+                    writeImagePixels(tmp, size, size, {"R", "G", "B"}, plane.data());
+                });
                 storedBytes += std::filesystem::file_size(path);
                 layers.push_back({{"coefficient", j}, {"uri", fileName(path)}, {"hash", hashFile(path)},
                                   {"min", compressed.range[2 * j]}, {"max", compressed.range[2 * j + 1]}});
@@ -391,14 +442,13 @@ void runBake(const BakeOptions& options) {
                                       {"order", options.order},
                                       {"decode", "value = min + q * (max - min) / 255, per coefficient layer"},
                                       {"layers", layers}};
-            transferPath = base + ".transfer.json";
-            written.paths.push_back(transferPath);
-            writeBytesAtomic(transferPath, sidecar.dump(2) + "\n");
+            transferPath = writeContentAddressed(base, "transfer", "json", written, [&](const std::string& tmp) {
+                writeBytesAtomic(tmp, sidecar.dump(2) + "\n");
+            });
         } else {
-            transferPath = base + ".transfer.exr";
-            written.paths.push_back(transferPath);
-            writeCoefficientExr(transferPath, baked.transfer.data(), size, size, coefficients,
-                                options.format == TexelFormat::Half);
+            transferPath = writeContentAddressed(base, "transfer", "exr", written, [&](const std::string& tmp) {
+                writeCoefficientExr(tmp, baked.transfer.data(), size, size, coefficients, options.format == TexelFormat::Half);
+            });
             layer.params["channels"] = "T{j:03d}.{R,G,B} for coefficient j";
         }
         storedBytes += std::filesystem::file_size(transferPath);
@@ -411,9 +461,9 @@ void runBake(const BakeOptions& options) {
     std::vector<uint8_t> normalBytes(baked.normals.size());
     for (size_t i = 0; i < normalBytes.size(); ++i)
         normalBytes[i] = uint8_t(std::lround(std::clamp((double(baked.normals[i]) + 1.0) * 127.5, 0.0, 255.0)));
-    std::string normalPath = base + ".normal.png";
-    written.paths.push_back(normalPath);
-    writeImagePixels(normalPath, size, size, {"R", "G", "B"}, normalBytes.data());
+    std::string normalPath = writeContentAddressed(base, "normal", "png", written, [&](const std::string& tmp) {
+        writeImagePixels(tmp, size, size, {"R", "G", "B"}, normalBytes.data());
+    });
     Layer normalLayer;
     normalLayer.name = "normal_map";
     normalLayer.domain = "texel";

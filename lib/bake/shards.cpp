@@ -117,7 +117,10 @@ std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface
                         "holds no [" + std::to_string(end - begin) + ", " + std::to_string(rowWidth / 3) +
                             ", 3] rows for its range",
                         kExitInput);
-        float offset = layer.params.value("ray_offset", 0.0f);
+        const nlohmann::json& recorded = layer.params.contains("ray_offset") ? layer.params["ray_offset"] : nlohmann::json(0.0);
+        if (!recorded.is_number())
+            throw Error(file, std::string("layer ") + kShardLayer + ", params.ray_offset", "is not a number", kExitInput);
+        float offset = recorded.get<float>();
         if (index > 0 && offset != rayOffset)
             throw Error(file, std::string("layer ") + kShardLayer + ", params.ray_offset",
                         "differs from shard 0's: the shards traced other geometry", kExitInput);

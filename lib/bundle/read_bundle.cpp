@@ -6,6 +6,8 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <algorithm>
 #include <limits>
 #include <set>
 
@@ -18,6 +20,54 @@ static_assert(std::endian::native == std::endian::little, "GLB buffers are littl
 // prt reads geometry only; leaving images undecoded saves time and never fails a load over a texture.
 static bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
     return true;
+}
+
+// tinygltf's file-system callbacks for external buffers: a URI is followed only when the file it names, links
+// resolved, lies inside the glTF file's own folder (tinygltf also tries the working directory; that is refused
+// the same way), and only up to the glTF size limit. What was refused is kept for the error message.
+struct ExternalFiles {
+    std::filesystem::path folder; // canonical
+    std::string refused;
+};
+
+static bool insideFolder(const std::string& candidate, ExternalFiles& files) {
+    std::error_code error;
+    std::filesystem::path resolved = std::filesystem::weakly_canonical(candidate, error);
+    if (error) return false;
+    auto mismatch = std::mismatch(files.folder.begin(), files.folder.end(), resolved.begin(), resolved.end());
+    if (mismatch.first == files.folder.end() && resolved != files.folder) return true;
+    if (files.refused.empty() && std::filesystem::exists(resolved, error)) files.refused = resolved.string();
+    return false;
+}
+
+static bool externalFileExists(const std::string& candidate, void* user) {
+    ExternalFiles& files = *static_cast<ExternalFiles*>(user);
+    std::error_code error;
+    return insideFolder(candidate, files) && std::filesystem::is_regular_file(candidate, error);
+}
+
+static std::string externalExpand(const std::string& candidate, void*) { return candidate; }
+
+static bool readExternalFile(std::vector<unsigned char>* out, std::string* err, const std::string& candidate, void* user) {
+    ExternalFiles& files = *static_cast<ExternalFiles*>(user);
+    if (!insideFolder(candidate, files)) {
+        if (err) *err += "outside the glTF file's folder";
+        return false;
+    }
+    std::error_code error;
+    uintmax_t size = std::filesystem::file_size(candidate, error);
+    if (error || size > std::numeric_limits<unsigned int>::max()) {
+        if (err) *err += error ? error.message() : "larger than 4 GiB, the glTF limit";
+        return false;
+    }
+    std::string bytes = readFileBytes(candidate);
+    out->assign(bytes.begin(), bytes.end());
+    return true;
+}
+
+static bool refuseWrite(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+    if (err) *err += "prt never writes through a glTF reader";
+    return false;
 }
 
 static tinygltf::Model loadModel(const std::string& path) {
@@ -35,7 +85,10 @@ static tinygltf::Model loadModel(const std::string& path) {
 
     size_t slash = path.find_last_of('/');
     std::string folder = slash == std::string::npos ? "." : path.substr(0, slash); // for external buffers of a .gltf
+    std::error_code folderError;
+    ExternalFiles files{std::filesystem::weakly_canonical(std::filesystem::absolute(folder), folderError), ""};
     tinygltf::TinyGLTF loader;
+    loader.SetFsCallbacks({externalFileExists, externalExpand, readExternalFile, refuseWrite, &files});
     loader.SetStoreOriginalJSONForExtrasAndExtensions(true);
     loader.SetImageLoader(skipImage, nullptr);
     tinygltf::Model model;
@@ -50,6 +103,9 @@ static tinygltf::Model loadModel(const std::string& path) {
     }
     if (!loaded) {
         while (!error.empty() && std::isspace((unsigned char)error.back())) error.pop_back();
+        if (!files.refused.empty())
+            throw Error(path, place, "an external URI resolves to " + files.refused +
+                                         ", outside the file's folder; prt follows URIs only into the glTF file's own folder");
         throw Error(path, place, error.empty() ? "not a glTF file" : error);
     }
     return model;
@@ -92,6 +148,7 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, const B
         count *= layer.shape.back();
     }
     if (overflow) refuse("shape is too large");
+    checkElementCount(count, "layer values", path, place + ".shape");
     size_t vertexCount = objectMesh(bundle, layer.object).vertexCount();
     if (layer.domain == "vertex" && layer.shape[0] != vertexCount)
         refuse("vertex layer has " + std::to_string(layer.shape[0]) + " rows but the mesh has " + std::to_string(vertexCount) + " vertices");
@@ -234,7 +291,10 @@ static void readRecords(const json& extension, const tinygltf::Model& model, con
 
 Bundle readBundle(const std::string& path) {
     tinygltf::Model model = loadModel(path);
-    bool hasExtension = model.extensions.count(kBundleExtension) > 0;
+    // tinygltf drops an extension whose value is not an object; the original JSON still names it, and a file that
+    // claims to be a bundle is read as one (and refused), never silently as a plain mesh.
+    bool hasExtension = model.extensions.count(kBundleExtension) > 0 ||
+                        json::parse(model.extensions_json_string, nullptr, false).contains(kBundleExtension);
     Bundle bundle;
     try {
         json extension = hasExtension ? verifiedExtension(model, path) : json();

@@ -135,7 +135,42 @@ struct MeshBuilder {
     bool allTexcoords = true;
     bool anyAlbedo = false;
     size_t skippedPrimitives = 0;
+    uint64_t primitiveInstances = 0;
 };
+
+// glTF instancing (one mesh under many nodes) multiplies what a small file expands to: this many primitive
+// instances at most, besides the element cap on the vertices they add up to.
+constexpr uint64_t kMaxPrimitiveInstances = 1u << 20;
+constexpr size_t kMaxNodes = 1u << 20;
+
+// Triangle-list corners of a TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive's `corners`, by the glTF 2.0
+// rule for each mode (strips alternate winding so every triangle keeps the first one's). Strip and fan
+// triangles that repeat a corner (the usual way of joining strips) are dropped.
+std::vector<uint32_t> triangleList(int mode, const std::vector<uint32_t>& corners, const std::string& file,
+                                   const std::string& place) {
+    if (mode == TINYGLTF_MODE_TRIANGLES || mode == -1) {
+        if (corners.size() % 3 != 0) throw Error(file, place, "index count is not a multiple of 3");
+        return corners;
+    }
+    std::vector<uint32_t> list;
+    if (corners.size() < 3) return list;
+    list.reserve(3 * (corners.size() - 2));
+    for (size_t i = 0; i + 2 < corners.size(); ++i) {
+        uint32_t a, b, c;
+        if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+            a = corners[i];
+            b = corners[i + 1 + i % 2];
+            c = corners[i + 2 - i % 2];
+        } else {
+            a = corners[i + 1];
+            b = corners[i + 2];
+            c = corners[0];
+        }
+        if (a == b || b == c || a == c) continue;
+        list.insert(list.end(), {a, b, c});
+    }
+    return list;
+}
 
 void transformPoints(std::vector<float>& xyz, size_t first, const Matrix& m) {
     for (size_t i = first; i < xyz.size(); i += 3) {
@@ -168,10 +203,14 @@ double linearDeterminant(const Matrix& m) {
 }
 
 void addPrimitive(MeshBuilder& builder, const tinygltf::Primitive& primitive, const Matrix& world, const std::string& place) {
-    if (primitive.mode != TINYGLTF_MODE_TRIANGLES && primitive.mode != -1) {
+    if (primitive.mode != TINYGLTF_MODE_TRIANGLES && primitive.mode != -1 && primitive.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+        primitive.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
         ++builder.skippedPrimitives;
         return;
     }
+    if (++builder.primitiveInstances > kMaxPrimitiveInstances)
+        throw Error(builder.file, place, "more than " + std::to_string(kMaxPrimitiveInstances) +
+                                             " primitive instances (nodes times primitives); prt refuses larger scenes");
     TriMesh& mesh = builder.mesh;
     const tinygltf::Model& model = builder.model;
     auto attribute = [&](const char* name) {
@@ -180,6 +219,11 @@ void addPrimitive(MeshBuilder& builder, const tinygltf::Primitive& primitive, co
     };
     if (attribute("POSITION") < 0) throw Error(builder.file, place, "primitive has no POSITION");
     size_t base = mesh.vertexCount();
+    {
+        int position = attribute("POSITION");
+        uint64_t claimed = position >= 0 && size_t(position) < model.accessors.size() ? model.accessors[position].count : 0;
+        checkElementCount(uint64_t(base) + claimed, "vertices", builder.file, place + ".POSITION");
+    }
     size_t count = appendFloats(model, attribute("POSITION"), 3, mesh.positions, builder.file, place + ".POSITION");
 
     bool identity = world == kIdentity;
@@ -222,7 +266,7 @@ void addPrimitive(MeshBuilder& builder, const tinygltf::Primitive& primitive, co
         indices.resize(count);
         for (size_t i = 0; i < count; ++i) indices[i] = uint32_t(i);
     }
-    if (indices.size() % 3 != 0) throw Error(builder.file, place, "index count is not a multiple of 3");
+    indices = triangleList(primitive.mode, indices, builder.file, place);
     for (uint32_t& index : indices) index = index < count ? uint32_t(base + index) : std::numeric_limits<uint32_t>::max();
     // A mirroring transform turns counter-clockwise triangles clockwise.
     if (determinant < 0)
@@ -239,16 +283,63 @@ void addMesh(MeshBuilder& builder, int meshIndex, const Matrix& world, const std
                      "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(p) + "]");
 }
 
-void visitNode(MeshBuilder& builder, int nodeIndex, const Matrix& parent, std::vector<char>& onPath) {
-    std::string place = "nodes[" + std::to_string(nodeIndex) + "]";
-    if (nodeIndex < 0 || size_t(nodeIndex) >= builder.model.nodes.size()) throw Error(builder.file, place, "node does not exist");
-    if (onPath[nodeIndex]) throw Error(builder.file, place, "node is its own ancestor");
-    onPath[nodeIndex] = 1;
-    const tinygltf::Node& node = builder.model.nodes[nodeIndex];
-    Matrix world = multiply(parent, localMatrix(node));
-    if (node.mesh >= 0) addMesh(builder, node.mesh, world, place);
-    for (int child : node.children) visitNode(builder, child, world, onPath);
-    onPath[nodeIndex] = 0;
+// The node forest of `sceneIndex`, walked without recursion. glTF requires a forest: no node has two parents
+// (which includes being listed twice by one), scene roots have none and nothing is its own ancestor. A file that
+// breaks the rule is refused up front, so a tiny DAG can never expand exponentially.
+void addScene(MeshBuilder& builder, int sceneIndex) {
+    const tinygltf::Model& model = builder.model;
+    const size_t nodeCount = model.nodes.size();
+    auto nodePlace = [](size_t n) { return "nodes[" + std::to_string(n) + "]"; };
+    std::vector<int> parent(nodeCount, -1);
+    for (size_t n = 0; n < nodeCount; ++n)
+        for (int child : model.nodes[n].children) {
+            if (child < 0 || size_t(child) >= nodeCount)
+                throw Error(builder.file, nodePlace(n) + ".children", "node " + std::to_string(child) + " does not exist");
+            if (parent[child] >= 0)
+                throw Error(builder.file, nodePlace(n) + ".children",
+                            "node " + std::to_string(child) + " already has parent " + std::to_string(parent[child]) +
+                                "; glTF nodes have at most one parent");
+            parent[child] = int(n);
+        }
+    struct Pending {
+        int node;
+        Matrix parentWorld;
+    };
+    std::vector<char> visited(nodeCount, 0);
+    std::vector<Pending> stack;
+    const std::string scenePlace = "scenes[" + std::to_string(sceneIndex) + "].nodes";
+    const std::vector<int>& roots = model.scenes[sceneIndex].nodes;
+    for (auto root = roots.rbegin(); root != roots.rend(); ++root) {
+        if (*root < 0 || size_t(*root) >= nodeCount)
+            throw Error(builder.file, scenePlace, "node " + std::to_string(*root) + " does not exist");
+        if (parent[*root] >= 0)
+            throw Error(builder.file, scenePlace, "node " + std::to_string(*root) + " is a root but has parent " +
+                                                      std::to_string(parent[*root]));
+        stack.push_back({*root, kIdentity});
+    }
+    while (!stack.empty()) {
+        Pending item = stack.back();
+        stack.pop_back();
+        // Single parents and parent-free roots leave only a repeated root or a cycle to revisit a node.
+        if (visited[item.node])
+            throw Error(builder.file, nodePlace(size_t(item.node)), "is reached twice (listed twice as a root, or its own ancestor)");
+        visited[item.node] = 1;
+        const tinygltf::Node& node = model.nodes[item.node];
+        Matrix world = multiply(item.parentWorld, localMatrix(node));
+        if (node.mesh >= 0) addMesh(builder, node.mesh, world, nodePlace(size_t(item.node)));
+        for (auto child = node.children.rbegin(); child != node.children.rend(); ++child) stack.push_back({*child, world});
+    }
+    for (size_t n = 0; n < nodeCount; ++n)
+        if (!visited[n] && parent[n] >= 0) {
+            // A cycle that no root reaches: harmless to the mesh, but the file is not a valid node forest.
+            size_t top = n;
+            std::vector<char> seen(nodeCount, 0);
+            while (parent[top] >= 0 && !seen[top]) {
+                seen[top] = 1;
+                top = size_t(parent[top]);
+            }
+            if (parent[top] >= 0) throw Error(builder.file, nodePlace(top), "is its own ancestor");
+        }
 }
 
 } // namespace
@@ -256,7 +347,7 @@ void visitNode(MeshBuilder& builder, int nodeIndex, const Matrix& parent, std::v
 // What every reader does once the primitives are gathered: drop arrays not every primitive had, refuse no triangles.
 static TriMesh finishMesh(MeshBuilder& builder, const std::string& noTriangles) {
     if (builder.skippedPrimitives > 0)
-        logWarn(builder.file + ": skipped primitives that are not triangle lists: " + std::to_string(builder.skippedPrimitives));
+        logWarn(builder.file + ": skipped primitives that are points or lines: " + std::to_string(builder.skippedPrimitives));
     TriMesh& mesh = builder.mesh;
     if (mesh.indices.empty()) throw Error(builder.file, "", noTriangles);
     if (!builder.allNormals) mesh.normals.clear();
@@ -265,19 +356,30 @@ static TriMesh finishMesh(MeshBuilder& builder, const std::string& noTriangles) 
     return std::move(mesh);
 }
 
+// glTF 1.0 parses far enough to find no glTF 2.0 meshes; say what it is instead of "no triangles".
+static void requireGltf2(const tinygltf::Model& model, const std::string& file) {
+    if (!model.asset.version.empty() && model.asset.version[0] == '1')
+        throw Error(file, "asset.version", "glTF " + model.asset.version + " is not supported; prt reads glTF 2.0 "
+                                           "(convert the file, for example with the Khronos glTF 1.0 to 2.0 converter)");
+}
+
 TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
+    requireGltf2(model, file);
+    if (model.nodes.size() > kMaxNodes)
+        throw Error(file, "nodes", std::to_string(model.nodes.size()) + " nodes, more than the " + std::to_string(kMaxNodes) +
+                                       " prt reads");
     MeshBuilder builder{model, file, TriMesh{}};
     if (model.scenes.empty()) {
         for (size_t m = 0; m < model.meshes.size(); ++m) addMesh(builder, int(m), kIdentity, "meshes");
     } else {
         int sceneIndex = model.defaultScene >= 0 && size_t(model.defaultScene) < model.scenes.size() ? model.defaultScene : 0;
-        std::vector<char> onPath(model.nodes.size(), 0);
-        for (int root : model.scenes[sceneIndex].nodes) visitNode(builder, root, kIdentity, onPath);
+        addScene(builder, sceneIndex);
     }
-    return finishMesh(builder, "no triangles: no TRIANGLES primitive is reachable from the scene");
+    return finishMesh(builder, "no triangles: no TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive is reachable from the scene");
 }
 
 TriMesh readGltfMeshAt(const tinygltf::Model& model, int meshIndex, const std::string& file) {
+    requireGltf2(model, file);
     MeshBuilder builder{model, file, TriMesh{}};
     addMesh(builder, meshIndex, kIdentity, "meshes");
     return finishMesh(builder, "no triangles in meshes[" + std::to_string(meshIndex) + "]");

@@ -47,6 +47,14 @@ std::string readFileBytes(const std::string& path);
 // Temporary names are ".NAME.tmp-PID-N", so a SIGKILLed stage leaves at most such a file, never `path`.
 void writeFileAtomic(const std::string& path, const std::function<void(const std::string& tmpPath)>& write);
 
+// A point where a SIGKILL must leave no corrupt artifact: before and after every rename into place, at the
+// start of every command, at each progress step, around store commits. Environment (tests only):
+// PRT_KILL_AT=N makes the process SIGKILL itself at the Nth checkpoint (N <= 0 or unset: never);
+// PRT_KILL_COUNTER=FILE counts checkpoints across every process sharing FILE (a `prt run` and its stages), else
+// each process counts its own; PRT_KILL_TRACE=FILE appends "PID N NAME" per checkpoint, so a test learns how
+// many points a clean run passes.
+void checkpoint(const char* name);
+
 // Convenience over writeFileAtomic for an in-memory buffer.
 void writeBytesAtomic(const std::string& path, std::string_view bytes);
 
@@ -110,6 +118,18 @@ struct RowRange {
 inline RowRange shardRows(size_t rows, int index, int count) {
     return {rows * size_t(index) / size_t(count), rows * size_t(index + 1) / size_t(count)};
 }
+
+// ---- memory caps ------------------------------------------------------------------------------------------
+// Every count read from a file (vertices, faces, texels, grid samples, array elements) is checked against one cap
+// before anything is allocated for it. The cap is kDefaultMaxElements unless the environment variable
+// PRT_MAX_ELEMENTS holds another positive integer (a bad value is a command-line error, exit 2).
+inline constexpr uint64_t kDefaultMaxElements = uint64_t(1) << 30;
+uint64_t maxElements();
+// Throws Error(file, place, "claims COUNT WHAT, above the limit of N (PRT_MAX_ELEMENTS ...)") above the cap.
+void checkElementCount(uint64_t count, const std::string& what, const std::string& file, const std::string& place);
+// The product of `factors` (a shape), after the same check; an overflowing product is refused the same way.
+uint64_t checkedProduct(const std::vector<uint64_t>& factors, const std::string& what, const std::string& file,
+                        const std::string& place);
 
 // ---- .npy arrays --------------------------------------------------------------------------------------------
 // float32, C order. Used for per-vertex radiance [V,3] and other per-element outputs.

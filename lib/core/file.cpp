@@ -47,6 +47,7 @@ void writeFileAtomic(const std::string& path, const std::function<void(const std
         struct stat info;
         if (stat(tmp.c_str(), &info) != 0) throw Error(path, "", "writer produced no file", kExitOutput);
         syncPath(tmp, false);
+        checkpoint("before rename");
         if (std::rename(tmp.c_str(), path.c_str()) != 0)
             throw Error(path, "", std::string("cannot rename into place: ") + std::strerror(errno), kExitOutput);
     } catch (...) {
@@ -55,6 +56,7 @@ void writeFileAtomic(const std::string& path, const std::function<void(const std
     }
     size_t slash = path.find_last_of('/');
     syncPath(slash == std::string::npos ? "." : path.substr(0, slash + 1), true);
+    checkpoint("after rename");
 }
 
 void writeBytesAtomic(const std::string& path, std::string_view bytes) {

@@ -105,6 +105,7 @@ Progress::~Progress() {
 }
 
 void Progress::add(uint64_t done) {
+    checkpoint("progress");
     std::lock_guard<std::mutex> lock(state_->mutex);
     state_->done += done;
     if (gOptions.quiet) return;

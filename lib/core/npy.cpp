@@ -49,22 +49,29 @@ std::vector<float> readNpy(const std::string& path, std::vector<size_t>* shape) 
     size_t open = header.find('(', header.find("'shape'")), close = header.find(')', open);
     if (open == std::string::npos || close == std::string::npos) throw Error(path, "header", "no shape");
     std::vector<size_t> dims;
-    size_t count = 1;
+    std::vector<uint64_t> extents;
     for (size_t i = open + 1; i < close;) {
         while (i < close && (header[i] == ' ' || header[i] == ',')) ++i;
         if (i >= close) break;
-        size_t end;
-        unsigned long long n = std::stoull(header.substr(i, close - i), &end);
+        // Digits only: std::stoull would accept signs and throw on anything else.
+        uint64_t n = 0;
+        size_t digits = 0;
+        for (; i < close && header[i] >= '0' && header[i] <= '9'; ++i, ++digits) {
+            if (n > (UINT64_MAX - 9) / 10) throw Error(path, "header", "shape extent is too large");
+            n = n * 10 + uint64_t(header[i] - '0');
+        }
+        if (digits == 0) throw Error(path, "header", "shape holds something other than non-negative integers");
+        if (dims.size() >= 32) throw Error(path, "header", "shape has more than 32 dimensions");
         dims.push_back(size_t(n));
-        count *= size_t(n);
-        i += end;
+        extents.push_back(n);
     }
+    uint64_t count = checkedProduct(extents, "floats", path, "header shape");
     size_t dataOffset = offset + headerLength;
-    if (bytes.size() - dataOffset != count * sizeof(float))
+    if ((bytes.size() - dataOffset) % sizeof(float) != 0 || (bytes.size() - dataOffset) / sizeof(float) != count)
         throw Error(path, "data", "expected " + std::to_string(count) + " floats, file holds " +
                                       std::to_string((bytes.size() - dataOffset) / sizeof(float)));
     std::vector<float> data(count);
-    std::memcpy(data.data(), bytes.data() + dataOffset, count * sizeof(float));
+    if (count > 0) std::memcpy(data.data(), bytes.data() + dataOffset, count * sizeof(float)); // memcpy of null is UB
     if (shape) *shape = dims;
     return data;
 }

@@ -50,7 +50,7 @@ struct Tracer {
     EmbreeScene embree;
     std::vector<std::array<float, 3>> votes = voteDirections();
 
-    explicit Tracer(const TriMesh& m) : mesh(m), embree(m, /*robust=*/true) {}
+    explicit Tracer(const TriMesh& m) : mesh(m), embree(m) {} // EmbreeScene is always robust (lib/raycast)
 
     bool occluded(const float origin[3], const float d[3]) const {
         RTCIntersectContext context;

@@ -33,6 +33,8 @@ ImageChannels readImageChannels(const std::string& path, const std::vector<std::
     ImageChannels image;
     image.width = spec.width;
     image.height = spec.height;
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.deep) throw Error(path, "", "image has no flat pixels");
+    checkedProduct({uint64_t(spec.width), uint64_t(spec.height), uint64_t(spec.nchannels)}, "texel values", path, "header");
     size_t pixels = size_t(spec.width) * spec.height;
     std::vector<float> file(pixels * spec.nchannels);
     if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, file.data()))

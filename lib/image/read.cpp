@@ -28,6 +28,7 @@ static Image readWithSpec(const std::string& path, OIIO::ImageSpec* specOut) {
         throw Error(path, "", "image has no pixels");
 
     int channels = spec.nchannels;
+    checkedProduct({uint64_t(spec.width), uint64_t(spec.height), uint64_t(channels)}, "texel values", path, "header");
     std::vector<float> pixels(size_t(spec.width) * spec.height * channels);
     if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
         throw Error(path, "pixels", "cannot read (" + input->geterror() + ")");

@@ -237,6 +237,8 @@ CheckedFile checkOff(std::string_view text, const std::string& path) {
         if (size_t(k) >= tokens.size() || !parseInteger(tokens[k], declared[k]) || declared[k] < 0)
             throw Error(path, lineName(lines.number), "expected three counts: vertices faces edges");
 
+    checkElementCount(uint64_t(declared[0]), "vertices", path, lineName(lines.number));
+    checkElementCount(uint64_t(declared[1]), "faces", path, lineName(lines.number));
     CheckedFile counts;
     counts.vertices = size_t(declared[0]);
     counts.faces = size_t(declared[1]);
@@ -360,6 +362,8 @@ CheckedFile checkPly(std::string_view bytes, const std::string& path) {
             sawFormat = true;
         } else if (tokens[0] == "element") {
             long long count = 0;
+            if (tokens.size() == 3 && parseInteger(tokens[2], count) && count >= 0)
+                checkElementCount(uint64_t(count), "'" + std::string(tokens[1]) + "' elements", path, place);
             if (tokens.size() != 3 || !parseInteger(tokens[2], count) || count < 0 || count > UINT32_MAX)
                 throw Error(path, place, "expected 'element NAME COUNT' with a count below 2^32");
             elements.push_back({std::string(tokens[1]), uint64_t(count), {}});

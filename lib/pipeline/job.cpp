@@ -5,6 +5,7 @@
 
 #include "core.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -36,6 +37,12 @@ void syncFolder(const std::string& path) {
 std::string storeDir(const RunOptions& options) { return options.cacheDir + "/store"; }
 
 std::string absolutePath(const std::string& path) { return fs::absolute(path).lexically_normal().string(); }
+
+std::string shellQuote(const std::string& text) {
+    std::string quoted = "'";
+    for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
 
 std::map<std::string, std::string> inputHashes(const StageInputs& inputs) {
     std::map<std::string, std::string> hashes;
@@ -187,8 +194,11 @@ std::vector<std::string> stageCommand(const PipelineStage& stage, const StageInp
     for (const PortSpec& port : spec.inputs) {
         auto input = inputs.find(port.name);
         if (input == inputs.end()) continue;
-        std::string link = "input-" + port.name + "." + fileExtension(input->second.path);
-        fs::create_symlink(absolutePath(input->second.path), dir + "/" + link);
+        std::string link = "input-" + port.name;
+        if (!dir.empty()) { // else only the arguments are wanted (stageArguments)
+            link += "." + fileExtension(input->second.path);
+            fs::create_symlink(absolutePath(input->second.path), dir + "/" + link);
+        }
         if (port.flag.empty()) args.push_back(link);
         else flagged.insert(flagged.end(), {port.flag, link});
     }
@@ -216,6 +226,19 @@ std::vector<std::string> stageCommand(const PipelineStage& stage, const StageInp
     }
     return args;
 }
+
+} // namespace
+
+std::vector<std::string> stageArguments(const PipelineStage& stage) {
+    StageInputs placeholders;
+    for (const StageInput& input : stage.inputs) placeholders[input.port] = {"", ""};
+    RunOptions noThreads;
+    std::vector<std::string> args = stageCommand(stage, placeholders, noThreads, "", 0, 1, {});
+    args.erase(args.begin(), args.begin() + 2); // prt --log-json
+    return args;
+}
+
+namespace {
 
 nlohmann::json describeOutputs(const StageSpec& spec, const std::string& dir, const std::string& label) {
     nlohmann::json outputs = nlohmann::json::object();
@@ -332,8 +355,14 @@ nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, con
     }
 }
 
-nlohmann::json runStageJob(const Pipeline& pipeline, const PipelineStage& stage, const RunOptions& options,
+nlohmann::json runStageJob(const Pipeline& given, const PipelineStage& givenStage, const RunOptions& options,
                            int shardIndex, int shardCount, bool force) {
+    Pipeline pipeline = given;
+    resolveStageOptions(pipeline, options); // the keys must be the ones the planner computed
+    auto same = std::find_if(pipeline.stages.begin(), pipeline.stages.end(),
+                             [&](const PipelineStage& s) { return s.id == givenStage.id; });
+    if (same == pipeline.stages.end()) throw Error(given.file, givenStage.id, "is not a stage of this pipeline", kExitFailure);
+    const PipelineStage& stage = *same;
     std::map<std::string, InputFile> pipelineInputs = hashPipelineInputs(pipeline);
     std::map<std::string, StoreEntry> entries;
     for (const PipelineStage& upstream : pipeline.stages) {

@@ -437,6 +437,17 @@ Pipeline parsePipeline(std::string_view text, const std::string& file) {
             }
         }
     }
+    // The name goes into Slurm job names and scripts, so the default (the file stem) obeys the same rule.
+    if (!isName(pipeline.name)) {
+        std::string shown;
+        for (char c : pipeline.name) {
+            char escaped[8];
+            std::snprintf(escaped, sizeof escaped, "\\x%02x", unsigned((unsigned char)c));
+            shown += std::isprint((unsigned char)c) ? std::string(1, c) : std::string(escaped);
+        }
+        context.fail(1, "pipeline.name", "the file stem '" + shown + "' is the default name but is not one (letters, digits, "
+                                         "'_' and '-'): rename the file or set name in a [pipeline] table");
+    }
     if (const toml::node* node = root.get("inputs")) parseInputs(context, requireTable(context, *node, "inputs"), pipeline);
 
     const toml::node* stagesNode = root.get("stages");

@@ -3,8 +3,10 @@
 // store. docs/pipelines.md is the reference for the file format, the cache and the executors.
 //
 // Cache key of a stage = XXH3-128 of a canonical JSON of: the stage's name, its code version (kStage table in
-// stages.cpp), its parameters as given, and the content hashes of the files it reads. A shard's key adds
-// [index, count]. Store layout: STORE/<key hex>/ holds the stage's outputs under fixed names, its log and
+// stages.cpp), its parameters as given, the options the stage resolves them to (defaults included, as the prt
+// binary reports them), the prt build (version, build type, compiler, content hash of the executable) and the
+// library versions it was compiled against and loads, and the content hashes of the files it reads. A shard's
+// key adds [index, count]. So a changed default, a rebuilt prt or an upgraded library never serves old bytes. Store layout: STORE/<key hex>/ holds the stage's outputs under fixed names, its log and
 // manifest.json. An entry is built in STORE/.tmp-<key hex>-<host>-<pid>/ and renamed into place as a whole, so
 // an entry exists completely or not at all, whenever the process is killed.
 #pragma once
@@ -14,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -93,6 +96,11 @@ struct PipelineStage {
     std::vector<StageInput> inputs; // in the spec's port order, wired ports only
     int shards = 1;
     int line = 0;
+    // Filled by `prt run` before any key is computed (null until then, and then left out of keys): what
+    // `prt --resolved-options STAGE ...` prints for this stage's command line (every option, defaults included),
+    // and what `prt --build-info` prints (prt's version, build, executable hash and library versions).
+    nlohmann::json resolved = nullptr;
+    nlohmann::json build = nullptr;
 };
 
 struct PipelineOutput {
@@ -170,6 +178,9 @@ struct RunOptions {
     int slurmCpusPerTask = 1;
     double slurmPollSeconds = 0.5;
     std::vector<std::string> slurmArgs; // extra sbatch arguments, passed as given
+    // Answers `prt ARGS` for --build-info and --resolved-options in this process, when this process is the prt
+    // binary above (set by `prt run`); else they are asked of that binary.
+    std::function<nlohmann::json(const std::vector<std::string>& args)> askPrt = nullptr;
 };
 
 // Runs a pipeline and returns its report (also written to CACHE/runs/<name>-<time>-<pid>/report.json):
@@ -180,6 +191,10 @@ struct RunOptions {
 // Times are seconds from the run's start. Declared outputs are copied atomically once every stage succeeded.
 // Throws prt::Error for a stage that fails (naming it and quoting its log), after writing the report.
 nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options);
+
+// Fills every stage's `resolved` and `build` (above) by running options.prt with --resolved-options and
+// --build-info (each distinct command once per process). Throws prt::Error when the binary cannot say.
+void resolveStageOptions(Pipeline& pipeline, const RunOptions& options);
 
 // One stage job, the unit both executors run: resolves the stage's inputs from the store (its upstream stages
 // must be complete), and unless `force` is set and if the entry is missing, runs the stage (or one shard of it,

@@ -27,6 +27,11 @@ void syncFolder(const std::string& path);
 double epochSeconds(); // wall-clock seconds since 1970: comparable between processes and hosts
 std::string storeDir(const RunOptions& options);
 std::string absolutePath(const std::string& path);
+std::string shellQuote(const std::string& text); // for /bin/sh, whatever the text holds
+
+// `stage`'s command line after `prt` (subcommand, parameters, inputs as "input-PORT", outputs), as stageCommand
+// builds it, without --log-json, --threads or --shard: what --resolved-options is asked about.
+std::vector<std::string> stageArguments(const PipelineStage& stage);
 
 // The last `lines` lines of a log a person wants to read: messages of JSON log lines, no progress records;
 // each on its own line, indented.

@@ -353,14 +353,27 @@ nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string,
         std::error_code error;
         fs::path parent = fs::path(output.path).parent_path();
         if (!parent.empty()) fs::create_directories(parent, error);
-        copyIfChanged(copy.file, output.path, copy.hash);
-        copied[output.name] = {{"path", output.path}, {"hash", copy.hash}, {"kind", fileKindName(copy.kind)},
-                               {"from", output.stage + "." + output.port}};
-        if (copy.companions.empty()) continue;
+        // Textures first, the bundle last: a kill in between leaves the old bundle, whose textures (named by
+        // content) are still there, never a bundle naming a texture that is not.
+        nlohmann::json files = nlohmann::json::array();
+        std::vector<std::string> previous; // the textures of the bundle about to be replaced
+        if (copy.kind == FileKind::Bundle && fs::is_regular_file(output.path, error)) {
+            try {
+                for (const auto& [old, target] : companionFiles(output.path, output.path)) previous.push_back(target);
+            } catch (const Error&) {
+                // not a bundle we wrote: leave what lies next to it alone
+            }
+        }
         for (const auto& [source, target] : copy.companions) {
             copyIfChanged(source, target, hashFile(source));
-            copied[output.name]["files"].push_back(target);
+            files.push_back(target);
         }
+        copyIfChanged(copy.file, output.path, copy.hash);
+        for (const std::string& old : previous)
+            if (std::find(files.begin(), files.end(), old) == files.end()) fs::remove(old, error);
+        copied[output.name] = {{"path", output.path}, {"hash", copy.hash}, {"kind", fileKindName(copy.kind)},
+                               {"from", output.stage + "." + output.port}};
+        if (!files.empty()) copied[output.name]["files"] = files;
     }
     return copied;
 }
@@ -373,7 +386,9 @@ void writeJson(const std::string& path, const nlohmann::json& value) {
 
 } // namespace
 
-nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options) {
+nlohmann::json runPipeline(const Pipeline& given, const RunOptions& options) {
+    Pipeline pipeline = given;
+    resolveStageOptions(pipeline, options); // before any key: they are part of every key
     sweepStore(storeDir(options));
     double runStart = epochSeconds();
     std::string lastPath = options.cacheDir + "/runs/" + pipeline.name + ".last.json";

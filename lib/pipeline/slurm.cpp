@@ -24,12 +24,6 @@ namespace {
 volatile std::sig_atomic_t gInterrupted = 0;
 void onInterrupt(int) { gInterrupted = 1; }
 
-std::string shellQuote(const std::string& text) {
-    std::string quoted = "'";
-    for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
-
 // Runs a command and returns its stdout and stderr; `status` gets its exit status.
 std::string capture(const std::vector<std::string>& args, int& status) {
     std::string command;

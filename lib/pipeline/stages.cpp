@@ -57,7 +57,7 @@ std::vector<StageSpec> makeCatalogue() {
     envsh.params = {{"order", ParamType::Integer, 1.0, kMaxOrder}, kRotateY, kWindow};
     stages.push_back(envsh);
 
-    StageSpec transfer{"transfer", 2, "per-vertex SH transfer by ray casting"}; // 2: transfer_bounce layer
+    StageSpec transfer{"transfer", 3, "per-vertex SH transfer by ray casting"}; // 2: transfer_bounce layer; 3: one spawn rule (lib/raycast)
     transfer.inputs = {{"mesh", FileKind::Mesh, "", ""}};
     transfer.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
     transfer.params = {{"mode", ParamType::String, 0.0, 0.0, {"unshadowed", "shadowed", "interreflected"}},
@@ -74,7 +74,7 @@ std::vector<StageSpec> makeCatalogue() {
 
     // Shards are ranges of covered texels ("texel_range" layers). Gutter fill and seam stitching couple the whole
     // atlas, so the merge is `prt bake ... --merge SHARD...`, which joins the rows and finishes as one bake does.
-    StageSpec bake{"bake", 2, "per-texel SH transfer into atlas textures"};
+    StageSpec bake{"bake", 3, "per-texel SH transfer into atlas textures"}; // 3: spawn rule, content-addressed textures
     bake.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"high", FileKind::Mesh, "--high", "", true}};
     // The textures land next to the bundle (bundle.transfer.exr, ...), listed in its layers' params.files; `prt run`
     // copies them along with the bundle.

@@ -8,6 +8,9 @@
 #include <csignal>
 #include <cstring>
 #include <filesystem>
+#include <map>
+#include <mutex>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -21,7 +24,57 @@ nlohmann::json keyIngredients(const PipelineStage& stage, const std::map<std::st
                                   {"params", stage.params},
                                   {"inputs", inputHashes}};
     if (shardCount > 0) ingredients["shard"] = {shardIndex, shardCount};
+    if (!stage.resolved.is_null()) ingredients["resolved"] = stage.resolved;
+    if (!stage.build.is_null()) ingredients["build"] = stage.build;
     return ingredients;
+}
+
+namespace {
+
+// stdout of `args` (stderr dropped) and its exit status.
+std::string captureStdout(const std::vector<std::string>& args, int& status) {
+    std::string command;
+    for (const std::string& arg : args) command += shellQuote(arg) + " ";
+    command += "2>/dev/null";
+    std::FILE* pipe = popen(command.c_str(), "r");
+    if (!pipe) throw Error("", args[0], "cannot run", kExitFailure);
+    std::string output;
+    char buffer[4096];
+    size_t got;
+    while ((got = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output.append(buffer, got);
+    int wait = pclose(pipe);
+    status = WIFEXITED(wait) ? WEXITSTATUS(wait) : 128;
+    return output;
+}
+
+nlohmann::json askPrt(const std::vector<std::string>& args, const RunOptions& options) {
+    static std::mutex mutex;
+    static std::map<std::vector<std::string>, nlohmann::json> answers;
+    std::lock_guard<std::mutex> lock(mutex);
+    auto known = answers.find(args);
+    if (known != answers.end()) return known->second;
+    if (options.askPrt) return answers[args] = options.askPrt(args);
+    int status = 0;
+    std::string output = captureStdout(args, status);
+    nlohmann::json answer = nlohmann::json::parse(output, nullptr, false);
+    if (status != 0 || !answer.is_object()) {
+        std::string command;
+        for (const std::string& arg : args) command += (command.empty() ? "" : " ") + arg;
+        throw Error("", "cache key", "`" + command + "` did not print its JSON (exit " + std::to_string(status) + ")", kExitFailure);
+    }
+    return answers[args] = answer;
+}
+
+} // namespace
+
+void resolveStageOptions(Pipeline& pipeline, const RunOptions& options) {
+    nlohmann::json build = askPrt({options.prt, "--build-info"}, options);
+    for (PipelineStage& stage : pipeline.stages) {
+        std::vector<std::string> args = stageArguments(stage);
+        args.insert(args.begin(), {options.prt, "--resolved-options"});
+        stage.resolved = askPrt(args, options);
+        stage.build = build;
+    }
 }
 
 // nlohmann::json keeps object keys sorted, so dump() is canonical.
@@ -67,8 +120,10 @@ std::optional<StoreEntry> findStoreEntry(const std::string& store, const std::st
 void commitStoreEntry(const std::string& store, const std::string& key, const std::string& tmpDir, bool replace) {
     std::string final = store + "/" + keyHex(key);
     syncFolder(tmpDir);
+    checkpoint("before store commit");
     if (std::rename(tmpDir.c_str(), final.c_str()) == 0) {
         syncFolder(store);
+        checkpoint("after store commit");
         return;
     }
     if (errno != EEXIST && errno != ENOTEMPTY)

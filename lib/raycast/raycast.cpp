@@ -1,9 +1,11 @@
-// The Embree scene and the ray offset every ray-casting stage shares.
+// The Embree scene, the ray offset and the spawn rule every ray-casting stage shares.
 #include "raycast.h"
 
 #include "core.h"
 
 #include <algorithm>
+#include <array>
+#include <cstring>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -17,14 +19,14 @@ void throwIfEmbreeFailed(RTCDevice device, const char* step) {
                     kExitFailure);
 }
 
-EmbreeScene::EmbreeScene(const TriMesh& mesh, bool robust) {
+EmbreeScene::EmbreeScene(const TriMesh& mesh) {
     device = rtcNewDevice(nullptr);
     if (!device)
         throw Error("", "embree device",
                     "cannot create (error code " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")", kExitFailure);
     try {
         scene = rtcNewScene(device);
-        if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
         rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
         if (mesh.triangleCount() > 0) {
             RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -111,6 +113,60 @@ void pinholeRayDirection(const PinholeRays& rays, size_t pixel, float d[3]) {
     float sy = (1.0f - 2.0f * (float(pixel / rays.width) + 0.5f) / float(rays.height)) * rays.halfHeight;
     for (int c = 0; c < 3; ++c) d[c] = rays.forward[c] + sx * rays.right[c] + sy * rays.up[c];
     normalize(d);
+}
+
+std::vector<float> spawnNormals(const TriMesh& mesh) {
+    const size_t count = mesh.vertexCount();
+    // Vertices at the same position form one group: sort vertex indices by their position's bits.
+    auto bits = [&](size_t v) {
+        std::array<uint32_t, 3> key;
+        std::memcpy(key.data(), &mesh.positions[3 * v], sizeof key);
+        for (uint32_t& k : key) k = k == 0x80000000u ? 0u : k; // -0 and +0 are one position
+        return key;
+    };
+    std::vector<uint32_t> order(count);
+    for (size_t v = 0; v < count; ++v) order[v] = uint32_t(v);
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return bits(a) < bits(b); });
+    std::vector<uint32_t> group(count);
+    size_t groups = 0;
+    for (size_t i = 0; i < count; ++i) {
+        if (i > 0 && bits(order[i]) != bits(order[i - 1])) ++groups;
+        group[order[i]] = uint32_t(groups);
+    }
+    std::vector<double> sum(3 * (count ? groups + 1 : 0), 0.0);
+    for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+        const uint32_t* corner = &mesh.indices[3 * t];
+        const float* p0 = &mesh.positions[3 * corner[0]];
+        const float* p1 = &mesh.positions[3 * corner[1]];
+        const float* p2 = &mesh.positions[3 * corner[2]];
+        double e1[3], e2[3];
+        for (int c = 0; c < 3; ++c) e1[c] = double(p1[c]) - p0[c], e2[c] = double(p2[c]) - p0[c];
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c) sum[3 * group[corner[k]] + c] += n[c];
+    }
+    std::vector<float> normals(3 * count);
+    for (size_t v = 0; v < count; ++v) {
+        const double* s = &sum[3 * group[v]];
+        double length = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+        double fallback[3] = {0.0, 0.0, 1.0};
+        if (mesh.normals.size() == mesh.positions.size()) {
+            const float* n = &mesh.normals[3 * v];
+            double nl = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+            if (nl > 0) fallback[0] = n[0] / nl, fallback[1] = n[1] / nl, fallback[2] = n[2] / nl;
+        }
+        // Summed normals that (nearly) cancel say nothing about the side; nor does a vertex on no triangle.
+        double scale = 0.0;
+        for (int c = 0; c < 3; ++c) scale += std::fabs(s[c]);
+        bool usable = length > 1e-6 * scale && length > 0.0;
+        // On the side the rays leave: the shading normal's (an inside-out mesh keeps its rays inside).
+        bool haveNormal = mesh.normals.size() == mesh.positions.size();
+        double side = usable && haveNormal ? (s[0] * fallback[0] + s[1] * fallback[1] + s[2] * fallback[2]) / length : 1.0;
+        if (std::fabs(side) < 1e-3) usable = false;
+        double sign = side < 0.0 ? -1.0 : 1.0;
+        for (int c = 0; c < 3; ++c) normals[3 * v + c] = float(usable ? sign * s[c] / length : fallback[c]);
+    }
+    return normals;
 }
 
 } // namespace prt

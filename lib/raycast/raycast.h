@@ -8,19 +8,20 @@
 
 #include <array>
 #include <cstddef>
+#include <vector>
 
 namespace prt {
 
 // An Embree device and committed scene over a mesh's triangles (geometry 0, primitive i = triangle i), build
-// quality high; both released on destruction.
-// Needs indices in range (lib/mesh validation guarantees them). `robust` sets RTC_SCENE_FLAG_ROBUST, so no ray
-// slips between adjacent triangles (closed cavities never leak), at some cost in speed.
+// quality high, RTC_SCENE_FLAG_ROBUST (so no ray slips between adjacent triangles: closed rooms never leak);
+// both released on destruction. Part of the spawn rule below, so there is no non-robust variant.
+// Needs indices in range (lib/mesh validation guarantees them).
 // Throws prt::Error(kExitFailure) when Embree fails, naming the step.
 struct EmbreeScene {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
 
-    explicit EmbreeScene(const TriMesh& mesh, bool robust = false);
+    explicit EmbreeScene(const TriMesh& mesh);
     ~EmbreeScene();
     EmbreeScene(const EmbreeScene&) = delete;
     EmbreeScene& operator=(const EmbreeScene&) = delete;
@@ -29,8 +30,8 @@ struct EmbreeScene {
 // Throws prt::Error(kExitFailure) naming `step` when `device` holds an error.
 void throwIfEmbreeFailed(RTCDevice device, const char* step);
 
-// Where rays leave a surface point: this far along its normal, with tnear the same, so that they clear float
-// error at any model scale. It is 1e-4 times the bounding-box diagonal (0 for an empty mesh).
+// How far rays leave a surface point along its normal, so that they clear float error at any model scale:
+// 1e-4 times the bounding-box diagonal (0 for an empty mesh).
 float rayOffset(const TriMesh& mesh);
 
 // ---- the pinhole camera ------------------------------------------------------------------------------------
@@ -58,5 +59,38 @@ struct PinholeRays {
 PinholeRays pinholeRays(const PinholeCamera& camera);
 // The unit direction d of the ray through the centre of pixel index `pixel` (y * width + x), from camera.eye.
 void pinholeRayDirection(const PinholeRays& rays, size_t pixel, float d[3]);
+// ---- the one ray-spawn rule (transfer, bake and reference all use it) ----------------------------------------
+// A ray leaving a surface point starts at position + offset * spawnNormal with tnear 0 and tfar infinity, in a
+// robust EmbreeScene; offset = rayOffset(mesh). The offset is applied once: a tnear of `offset` as well (the old
+// transfer rule) skips whatever is nearer than the offset, which at a crease is the neighbouring face, and rays
+// leak out of closed rooms through their edges. spawnNormal is the geometric normal of the surface at the point:
+// for a point inside a triangle, the triangle's; for a mesh vertex, spawnNormals() below, the mean over every
+// triangle that touches its position, so that at a crease or corner (where the vertex lies in the other faces'
+// planes) the origin leaves all of them, and a ray into a neighbouring face hits it at t > 0.
+inline void spawnOrigin(const float position[3], const float spawnNormal[3], float offset, float origin[3]) {
+    for (int c = 0; c < 3; ++c) origin[c] = float(double(position[c]) + double(offset) * double(spawnNormal[c]));
+}
+
+// Fills `ray` for direction (dx, dy, dz) from an origin spawnOrigin gave: tnear 0, tfar infinity, mask all, time 0.
+inline void spawnRay(RTCRay& ray, const float origin[3], float dx, float dy, float dz) {
+    ray.org_x = origin[0];
+    ray.org_y = origin[1];
+    ray.org_z = origin[2];
+    ray.dir_x = dx;
+    ray.dir_y = dy;
+    ray.dir_z = dz;
+    ray.tnear = 0.0f;
+    ray.tfar = __builtin_inff();
+    ray.time = 0.0f;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+}
+
+// Per vertex [vertexCount][3]: the unit mean of the area-weighted geometric normals of every triangle that touches
+// a vertex at exactly the same position, split vertices included, turned to the vertex normal's side (where the
+// rays leave). Where they cancel (two-sided sheets), are perpendicular to the vertex normal, or the vertex is on no
+// triangle: the vertex normal (normalised), else +z.
+std::vector<float> spawnNormals(const TriMesh& mesh);
 
 } // namespace prt

@@ -100,7 +100,7 @@ ReferenceRadiance referenceDirectRadiance(const TriMesh& receiver, const std::ve
     tbb::task_arena arena(options.threads > 0 ? options.threads : int(tbb::task_arena::automatic));
     arena.execute([&] {
         bool trace = options.shadows && scene.triangleCount() > 0;
-        std::unique_ptr<EmbreeScene> embree = trace ? std::make_unique<EmbreeScene>(scene, true) : nullptr;
+        std::unique_ptr<EmbreeScene> embree = trace ? std::make_unique<EmbreeScene>(scene) : nullptr;
         Progress progress("reference direct", vertices);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, vertices, 4), [&](const tbb::blocked_range<size_t>& range) {
             uint64_t blockRays = 0;

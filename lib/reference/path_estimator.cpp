@@ -66,7 +66,7 @@ void estimateRadiance(const SceneTracer& scene, const EnvironmentSampler& enviro
 
     for (int depth = 0;; ++depth) {
         float origin[3];
-        for (int c = 0; c < 3; ++c) origin[c] = point.position[c] + scene.rayOffset() * point.offsetNormal[c];
+        spawnOrigin(point.position, point.offsetNormal, scene.rayOffset(), origin);
 
         // Next-event estimation: f cos L / pdf with f = albedo / pi.
         if (!environment.rowCdf.empty()) {

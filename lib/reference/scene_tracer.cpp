@@ -19,19 +19,15 @@ void normalize(float v[3]) {
 
 RTCRay makeRay(const float origin[3], const float d[3]) {
     RTCRay ray{};
-    ray.org_x = origin[0], ray.org_y = origin[1], ray.org_z = origin[2];
-    ray.dir_x = d[0], ray.dir_y = d[1], ray.dir_z = d[2];
-    ray.tnear = 0.0f;
-    ray.tfar = std::numeric_limits<float>::infinity();
-    ray.mask = ~0u;
+    spawnRay(ray, origin, d[0], d[1], d[2]); // the shared spawn rule (lib/raycast)
     return ray;
 }
 
 } // namespace
 
 SceneTracer::SceneTracer(const TriMesh& mesh, const std::optional<std::array<float, 3>>& constantAlbedo)
-    // Robust traversal: no rays slip between adjacent triangles, so closed cavities never leak light.
-    : mesh_(mesh), constantAlbedo_(constantAlbedo), embree_(mesh, /*robust=*/true),
+    // EmbreeScene is robust: no rays slip between adjacent triangles, so closed cavities never leak light.
+    : mesh_(mesh), constantAlbedo_(constantAlbedo), embree_(mesh),
       rayOffset_(prt::rayOffset(mesh)) {}
 
 void SceneTracer::albedoAt(const uint32_t* triangle, float u, float v, float out[3]) const {

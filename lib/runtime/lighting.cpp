@@ -23,7 +23,8 @@ std::vector<float> readLightingJson(const std::string& path, int* order) {
     } catch (const nlohmann::json::exception& e) {
         throw Error(path, "", std::string("not JSON: ") + e.what());
     }
-    if (!document.is_object() || document.value("format", "") != "prt-sh")
+    // value() would throw a type error for a non-string "format": compare as JSON instead.
+    if (!document.is_object() || !document.contains("format") || document["format"] != "prt-sh")
         throw Error(path, "format", "not prt-sh JSON (expected \"format\": \"prt-sh\", as `prt envsh` writes)");
     const nlohmann::json& orderValue = document.contains("order") ? document["order"] : nlohmann::json();
     if (!orderValue.is_number_integer() || orderValue.get<int64_t>() < 1 ||

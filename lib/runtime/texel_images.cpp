@@ -30,8 +30,9 @@ std::string stringParam(const Layer& layer, const char* key, const std::string& 
 // A file referenced from `owner` by a relative uri: checked against its recorded hash.
 std::string referencedFile(const std::string& owner, const std::string& uri, const nlohmann::json& hash,
                            const std::string& place) {
-    if (uri.empty() || fs::path(uri).is_absolute())
-        throw Error(owner, place, "uri '" + uri + "' is not a path relative to the bundle");
+    fs::path relative = fs::path(uri).lexically_normal();
+    if (uri.empty() || relative.is_absolute() || relative.empty() || *relative.begin() == "..")
+        throw Error(owner, place, "uri '" + uri + "' is not a path inside the bundle's folder");
     std::error_code error;
     fs::path resolved = fs::canonical(owner, error); // a linked bundle's textures lie next to its target
     fs::path path = (error ? fs::path(owner) : resolved).parent_path() / uri;
@@ -67,14 +68,15 @@ std::vector<float> readExrRows(const std::string& path, int width, int height, i
 std::vector<float> readU8Rows(const std::string& sidecarPath, int width, int height, int coefficients) {
     std::ifstream in(sidecarPath);
     nlohmann::json sidecar = nlohmann::json::parse(in, nullptr, false);
-    if (!sidecar.is_object() || sidecar.value("format", "") != "prt-texel-u8" || !sidecar["layers"].is_array())
+    if (!sidecar.is_object() || !sidecar.contains("format") || sidecar["format"] != "prt-texel-u8" ||
+        !sidecar.contains("layers") || !sidecar["layers"].is_array())
         throw Error(sidecarPath, "", "not a prt-texel-u8 sidecar (JSON with format \"prt-texel-u8\" and layers)");
     const nlohmann::json& layers = sidecar["layers"];
     if (int(layers.size()) != coefficients)
         throw Error(sidecarPath, "layers", std::to_string(layers.size()) + " layers for " +
                                                std::to_string(coefficients) + " coefficients");
     const size_t texels = size_t(width) * height, values = 3 * size_t(coefficients);
-    std::vector<float> rows(texels * values);
+    std::vector<float> rows; // allocated once the first image has shown the size is real
     for (int j = 0; j < coefficients; ++j) {
         const nlohmann::json& layer = layers[j];
         std::string place = "layers[" + std::to_string(j) + "]";
@@ -85,6 +87,7 @@ std::vector<float> readU8Rows(const std::string& sidecarPath, int width, int hei
                                           layer.value("hash", nlohmann::json()), place);
         ImageChannels image = readImageChannels(path, {"R", "G", "B"});
         checkSize(image, width, height, path);
+        if (rows.empty()) rows.resize(texels * values);
         float lo = layer["min"].get<float>(), span = layer["max"].get<float>() - lo;
         // The file holds q / 255 as read; value = min + q * (max - min) / 255.
         for (size_t t = 0; t < texels; ++t)
@@ -101,6 +104,9 @@ TexelRelightModel loadTexelRelightModel(const std::string& bundlePath) {
     if (!layer->params.contains("uri")) return texelRelightModel(std::move(bundle), bundlePath); // texels inline
     const std::string place = "layer \"texel_transfer\"";
     TexelLayerShape shape = texelLayerShape(*layer, bundlePath);
+    // The size comes from the bundle's JSON: bounded before anything is allocated for it.
+    checkedProduct({uint64_t(shape.width) * uint64_t(shape.height), 3 * uint64_t(shape.order) * uint64_t(shape.order)},
+                   "texel transfer values", bundlePath, place);
     std::string format = stringParam(*layer, "format", bundlePath, place);
     std::string path = referencedFile(bundlePath, stringParam(*layer, "uri", bundlePath, place),
                                       layer->params.value("hash", nlohmann::json()), place + ", params.uri");

@@ -42,7 +42,8 @@ static uint64_t mix64(uint64_t key) {
     return key ^ (key >> 31);
 }
 
-Fan fan(const float position[3], const float normal[3], uint64_t key, uint64_t seed, float offset) {
+Fan fan(const float position[3], const float normal[3], const float* spawnNormal, uint64_t key, uint64_t seed,
+        float offset) {
     Fan f;
     const float* p = position;
     const float* m = normal;
@@ -62,7 +63,8 @@ Fan fan(const float position[3], const float normal[3], uint64_t key, uint64_t s
         f.tangent[i] = c * t0[i] + s * b0[i];
         f.bitangent[i] = -s * t0[i] + c * b0[i];
         f.normal[i] = n[i];
-        f.origin[i] = float(p[i] + offset * n[i]);
+        // spawnOrigin (lib/raycast), in double.
+        f.origin[i] = float(p[i] + double(offset) * (spawnNormal ? double(spawnNormal[i]) : n[i]));
         f.axes[i] = float(f.tangent[i]);
         f.axes[3 + i] = float(f.bitangent[i]);
         f.axes[6 + i] = float(n[i]);
@@ -93,10 +95,12 @@ void validateMesh(const TriMesh& mesh) {
                         "index " + std::to_string(mesh.indices[i]) + " >= vertex count " + std::to_string(count));
 }
 
-Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end) {
+Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end,
+                          const std::vector<float>& spawn) {
     Receivers receivers;
     receivers.positions = mesh.positions.data() + 3 * begin;
     receivers.normals = mesh.normals.data() + 3 * begin;
+    receivers.spawnNormals = spawn.data() + 3 * begin;
     if (!mesh.albedo.empty() && !options.albedoOverride) receivers.albedo = mesh.albedo.data() + 3 * begin;
     receivers.firstKey = begin;
     receivers.count = end - begin;
@@ -107,6 +111,7 @@ Receivers receiverSlice(const Receivers& receivers, size_t first, size_t count) 
     Receivers slice = receivers;
     slice.positions += 3 * first;
     slice.normals += 3 * first;
+    if (slice.spawnNormals) slice.spawnNormals += 3 * first;
     if (slice.albedo) slice.albedo += 3 * first;
     if (slice.keys) slice.keys += first;
     else slice.firstKey += first;

@@ -32,11 +32,15 @@ struct Fan {
     float axes[9]; // tangent, bitangent, normal as floats, for the ray directions
 };
 // Needs a nonzero normal (normalised here) and finite position.
-Fan fan(const float position[3], const float normal[3], uint64_t key, uint64_t seed, float offset);
+// Rays start at spawnOrigin(position, spawnNormal, offset) (lib/raycast); spawnNormal null: the normal.
+Fan fan(const float position[3], const float normal[3], const float* spawnNormal, uint64_t key, uint64_t seed,
+        float offset);
 
 // The receivers a per-vertex pass works on: vertices [begin, end) of the mesh, keys their indices, albedo the
 // mesh's per-vertex albedo unless it has none or options.albedoOverride (then null: options.albedo).
-Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end);
+// `spawn` is spawnNormals(mesh) (lib/raycast) and must outlive the receivers.
+Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end,
+                          const std::vector<float>& spawn);
 
 // Receiver i's rotation key.
 inline uint64_t receiverKey(const Receivers& receivers, size_t i) {
@@ -48,7 +52,8 @@ Receivers receiverSlice(const Receivers& receivers, size_t first, size_t count);
 
 // Receiver i's fan.
 inline Fan fan(const Receivers& receivers, size_t i, uint64_t seed, float offset) {
-    return fan(&receivers.positions[3 * i], &receivers.normals[3 * i], receiverKey(receivers, i), seed, offset);
+    return fan(&receivers.positions[3 * i], &receivers.normals[3 * i],
+               receivers.spawnNormals ? &receivers.spawnNormals[3 * i] : nullptr, receiverKey(receivers, i), seed, offset);
 }
 
 // Checks receivers as computeTransferAt needs them: positions finite, normals nonzero and finite, albedo in
@@ -57,20 +62,11 @@ void validateReceivers(const Receivers& receivers);
 
 // The ray of sample k of a fan, ready for rtcOccluded1 / rtcIntersect1.
 inline void setRay(const Fan& fan, const Hemisphere& set, int k, float offset, RTCRay& ray) {
+    // The fan's origin is spawnOrigin(position, normal, offset): the shared spawn rule (lib/raycast).
     float sx = set.x[k], sy = set.y[k], sz = set.z[k];
     const float* a = fan.axes;
-    ray.org_x = fan.origin[0];
-    ray.org_y = fan.origin[1];
-    ray.org_z = fan.origin[2];
-    ray.dir_x = a[0] * sx + a[3] * sy + a[6] * sz;
-    ray.dir_y = a[1] * sx + a[4] * sy + a[7] * sz;
-    ray.dir_z = a[2] * sx + a[5] * sy + a[8] * sz;
-    ray.tnear = offset;
-    ray.tfar = INFINITY;
-    ray.time = 0.0f;
-    ray.mask = 0xFFFFFFFFu;
-    ray.id = 0;
-    ray.flags = 0;
+    spawnRay(ray, fan.origin, a[0] * sx + a[3] * sy + a[6] * sz, a[1] * sx + a[4] * sy + a[7] * sz,
+             a[2] * sx + a[5] * sy + a[8] * sz);
 }
 
 // Checks what every pass relies on: normals present and nonzero, indices in range, finite positions.

@@ -13,7 +13,7 @@
 //   Shadowed transfer is the exact unshadowed integral (rho/pi) A_l Y_lm(n) minus the estimate of the occluded
 //   part: unoccluded vertices are exact (a white furnace returns L to float precision) and bounces on a convex
 //   mesh add exactly zero.
-//   Rays start at position + offset * normal with tnear = offset, offset = 1e-4 * bounding-box diagonal.
+//   Rays follow the shared spawn rule (lib/raycast: spawnOrigin, spawnRay), offset = 1e-4 * bounding-box diagonal.
 //   A ray whose nearest hit is a back face (geometric normal . direction > 0, with counter-clockwise front faces)
 //   is occluded but carries no bounce light; such hits are counted, as they signal open or inverted meshes.
 //
@@ -68,7 +68,7 @@ struct TransferStats {
     uint64_t rays = 0;          // rays cast (all in the direct pass; bounces cast none)
     uint64_t hits = 0;          // front-face hits recorded for bounces (interreflected)
     uint64_t backFaceHits = 0;  // nearest hits on back faces (interreflected; occlusion rays do not say)
-    float rayOffset = 0.0f;     // origin offset along the normal and tnear, in mesh units
+    float rayOffset = 0.0f;     // the spawn rule's offset (lib/raycast), in mesh units
     double buildSeconds = 0.0;  // Embree BVH build
     double directSeconds = 0.0; // direct pass: rays plus accumulation, wall clock
     double directCpuSeconds = 0.0; // the same in process CPU time, which other processes' load does not inflate
@@ -104,6 +104,9 @@ struct Receivers {
     const float* normals = nullptr;   // [count][3], nonzero and finite (normalised inside)
     const float* albedo = nullptr;    // [count][3] linear RGB in [0, 1], or null: options.albedo for every receiver
     const uint64_t* keys = nullptr;   // [count] rotation keys, or null: receiver i has key firstKey + i
+    // [count][3] unit geometric normals the ray origins step along (lib/raycast's spawn rule), or null: the
+    // normals. Per-vertex passes give spawnNormals(mesh); points inside triangles may leave it null.
+    const float* spawnNormals = nullptr;
     uint64_t firstKey = 0;
     size_t count = 0;
 };

@@ -66,7 +66,8 @@ RayThroughput castBareOcclusionRays(const TriMesh& mesh, const TransferOptions& 
     rays::validateMesh(mesh);
     size_t begin, end;
     rays::clipRange(mesh, options, begin, end);
-    return castBare(mesh, rays::vertexReceivers(mesh, options, begin, end), options);
+    const std::vector<float> spawn = spawnNormals(mesh);
+    return castBare(mesh, rays::vertexReceivers(mesh, options, begin, end, spawn), options);
 }
 
 RayThroughput castBareOcclusionRaysAt(const TriMesh& geometry, const Receivers& receivers,

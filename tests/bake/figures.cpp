@@ -254,7 +254,7 @@ int main(int argc, char** argv) {
                     if (name.rfind("bunny_" + std::string(texelFormatName(format)) + ".transfer", 0) == 0)
                         bytes += entry.file_size();
                 }
-                std::string normalMap = folder + "/bunny_" + texelFormatName(format) + ".normal.png";
+                std::string normalMap = folder + "/" + readBundle(o.output).layers[1].params["uri"].get<std::string>();
                 storage[texelFormatName(format)] = {{"coefficient_bytes", bytes},
                                                     {"bundle_bytes", std::filesystem::file_size(o.output)},
                                                     {"normal_map_bytes", std::filesystem::file_size(normalMap)}};

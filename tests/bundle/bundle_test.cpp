@@ -34,7 +34,7 @@ std::vector<float> arbitraryFloats(size_t count, uint32_t seed) {
 }
 
 bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 
 // A tetrahedron wound counter-clockwise from outside, with every per-vertex array and awkward exact values.

@@ -89,3 +89,60 @@ TEST(Core, FileExtension) {
     EXPECT_EQ(prt::fileExtension("a.b/mesh"), "");
     EXPECT_EQ(prt::fileExtension("x.tar.gz"), "gz");
 }
+
+namespace {
+// A float32 .npy whose header claims `shape` (Python tuple text) over `floats` floats of data.
+std::string npyWithShape(const std::string& shape, size_t floats) {
+    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape + ", }";
+    header.append((64 - (10 + header.size() + 1) % 64) % 64, ' ');
+    header += '\n';
+    std::string bytes("\x93NUMPY\x01\x00", 8);
+    bytes += char(header.size() & 0xff);
+    bytes += char(header.size() >> 8);
+    return bytes + header + std::string(floats * 4, '\0');
+}
+
+std::string npyRefusal(const std::string& bytes) {
+    fs::path file = scratch("hostile.npy");
+    prt::writeBytesAtomic(file.string(), bytes);
+    try {
+        std::vector<size_t> shape;
+        prt::readNpy(file.string(), &shape);
+    } catch (const prt::Error& e) {
+        EXPECT_EQ(e.exitCode(), prt::kExitInput) << e.what();
+        return e.what();
+    }
+    return "";
+}
+} // namespace
+
+// 2^62 + 1 times 4 wraps to 4 in 64 bits: before the fix, 16 bytes of data "matched" a shape of 2^64 floats.
+TEST(Core, NpyShapeProductOverflowIsRefused) {
+    std::string message = npyRefusal(npyWithShape("(4611686018427387905, 4)", 4));
+    EXPECT_NE(message.find("above the limit"), std::string::npos) << message;
+    message = npyRefusal(npyWithShape("(1000000000000, 3)", 3));
+    EXPECT_NE(message.find("PRT_MAX_ELEMENTS"), std::string::npos) << message;
+    // Text where numbers belong is a bad file (exit 3), not an internal error from std::stoull.
+    EXPECT_NE(npyRefusal(npyWithShape("(abc, 3)", 3)).find("non-negative integers"), std::string::npos);
+    EXPECT_NE(npyRefusal(npyWithShape("(-2, 3)", 3)).find("non-negative integers"), std::string::npos);
+    EXPECT_NE(npyRefusal(npyWithShape("(99999999999999999999999, 3)", 3)).find("too large"), std::string::npos);
+}
+
+TEST(Core, ElementCapNamesTheLimitAndHowToRaiseIt) {
+    EXPECT_NO_THROW(prt::checkElementCount(prt::kDefaultMaxElements, "vertices", "f", "p"));
+    try {
+        prt::checkElementCount(1000000000000ull, "vertices", "mesh.ply", "element vertex");
+        FAIL();
+    } catch (const prt::Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "mesh.ply: element vertex: claims 1000000000000 vertices, above the limit of 1073741824 "
+                  "(PRT_MAX_ELEMENTS; set PRT_MAX_ELEMENTS=N in the environment to raise it)");
+    }
+    setenv("PRT_MAX_ELEMENTS", "2000000000000", 1);
+    EXPECT_NO_THROW(prt::checkElementCount(1000000000000ull, "vertices", "f", "p"));
+    setenv("PRT_MAX_ELEMENTS", "many", 1);
+    EXPECT_THROW(prt::checkElementCount(1, "vertices", "f", "p"), prt::Error);
+    unsetenv("PRT_MAX_ELEMENTS");
+    EXPECT_EQ(prt::checkedProduct({0, UINT64_MAX, UINT64_MAX}, "values", "f", "p"), 0u);
+    EXPECT_THROW(prt::checkedProduct({UINT64_MAX, 2}, "values", "f", "p"), prt::Error);
+}

@@ -199,3 +199,80 @@ bundle = { from = "transfer", path = "@DIR@/out/broken.glb" }
 
 } // namespace
 } // namespace prt
+
+namespace prt {
+namespace {
+
+// ---- the key never goes stale: one test per ingredient the issue named ----
+// The transfer stage of kPipeline, with what `prt run` fills in from the real prt binary.
+struct ResolvedStage {
+    PipelineStage stage;
+    std::map<std::string, std::string> hashes = {{"mesh", "xxh128:0"}};
+    ResolvedStage() {
+        Pipeline p = parsePipeline(test::withDir(kPipeline, "/nowhere"), "p.toml");
+        resolveStageOptions(p, test::testOptions("/nowhere"));
+        stage = p.stages[findStage(p, "transfer")];
+    }
+    std::string key(const PipelineStage& s) const { return keyOf(keyIngredients(s, hashes)); }
+};
+
+TEST(KeyIngredients, ResolvedOptionsHoldTheDefaultsAndAChangedDefaultChangesTheKey) {
+    ResolvedStage r;
+    // `bounces` and `seed` are not in the TOML: their defaults are in the key all the same.
+    ASSERT_TRUE(r.stage.resolved.is_object());
+    EXPECT_EQ(r.stage.resolved["--samples"], nlohmann::json({"16"}));
+    EXPECT_EQ(r.stage.resolved["--seed"], "0");
+    PipelineStage changedDefault = r.stage;
+    changedDefault.resolved["--seed"] = "1"; // what a new default would print
+    EXPECT_NE(r.key(r.stage), r.key(changedDefault));
+    EXPECT_EQ(r.key(r.stage), r.key(ResolvedStage().stage)); // and the same prt says the same
+}
+
+TEST(KeyIngredients, PrtVersionIsInTheKey) {
+    ResolvedStage r;
+    EXPECT_FALSE(r.stage.build.value("prt", "").empty());
+    PipelineStage other = r.stage;
+    other.build["prt"] = "99.0.0";
+    EXPECT_NE(r.key(r.stage), r.key(other));
+}
+
+TEST(KeyIngredients, BuildIdentityIsTheExecutableContentAndIsInTheKey) {
+    ResolvedStage r;
+    EXPECT_EQ(r.stage.build["executable"], hashFile(test::kPrt));
+    EXPECT_FALSE(r.stage.build.value("compiler", "").empty());
+    PipelineStage rebuilt = r.stage;
+    rebuilt.build["executable"] = "xxh128:00000000000000000000000000000000";
+    EXPECT_NE(r.key(r.stage), r.key(rebuilt));
+    PipelineStage otherType = r.stage;
+    otherType.build["build_type"] = "Debug";
+    EXPECT_NE(r.key(r.stage), r.key(otherType));
+}
+
+TEST(KeyIngredients, LibraryVersionsAreInTheKey) {
+    ResolvedStage r;
+    const nlohmann::json& libraries = r.stage.build["libraries"];
+    EXPECT_EQ(libraries["compiled"]["embree"], "3.13.5");
+    bool embreeLoaded = false;
+    for (const nlohmann::json& name : libraries["loaded"]) embreeLoaded = embreeLoaded || name.get<std::string>().find("libembree3.so") == 0;
+    EXPECT_TRUE(embreeLoaded) << libraries.dump();
+    PipelineStage upgraded = r.stage;
+    upgraded.build["libraries"]["compiled"]["openimageio"] = "9.9.9";
+    EXPECT_NE(r.key(r.stage), r.key(upgraded));
+    PipelineStage relinked = r.stage;
+    relinked.build["libraries"]["loaded"].push_back("libm.so.7 1 bytes");
+    EXPECT_NE(r.key(r.stage), r.key(relinked));
+}
+
+// The store's manifests record the new ingredients, so a person can see why a key changed.
+TEST_F(Cache, ManifestsRecordResolvedOptionsAndBuild) {
+    nlohmann::json report = test::runQuietly(pipeline(), options);
+    for (const nlohmann::json& stage : report["stages"]) {
+        std::string key = stage["key"];
+        nlohmann::json manifest = nlohmann::json::parse(readFileBytes(options.cacheDir + "/store/" + key.substr(7) + "/manifest.json"));
+        EXPECT_TRUE(manifest["ingredients"].contains("resolved")) << stage["id"];
+        EXPECT_TRUE(manifest["ingredients"].contains("build")) << stage["id"];
+    }
+}
+
+} // namespace
+} // namespace prt

@@ -1,0 +1,362 @@
+// The bad-input catalogue: crafted files for every reader and bad command lines for every CLI, each with the exit
+// code and message it must give, and the rule that nothing is left in the output folder afterwards.
+// One table; each row names the reader it aims at. docs/results.md counts the rows by reader.
+#include "bundle.h"
+#include "bundle_internal.h"
+#include "core.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct Result {
+    int exitCode;
+    std::string output;
+};
+
+Result runShell(const std::string& command) {
+    Result result{-1, {}};
+    FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+    if (!pipe) return result;
+    std::array<char, 4096> chunk;
+    size_t got;
+    while ((got = fread(chunk.data(), 1, chunk.size(), pipe)) > 0) result.output.append(chunk.data(), got);
+    int status = pclose(pipe);
+    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return result;
+}
+
+std::string bytesOf(std::initializer_list<uint32_t> words) {
+    std::string out;
+    for (uint32_t w : words) out.append(reinterpret_cast<const char*>(&w), 4);
+    return out;
+}
+
+std::string floats(std::initializer_list<float> values) {
+    std::string out;
+    for (float v : values) out.append(reinterpret_cast<const char*>(&v), 4);
+    return out;
+}
+
+// ---- glTF pieces ----
+std::string base64(const std::string& bytes) {
+    static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    size_t i = 0;
+    for (; i + 2 < bytes.size(); i += 3) {
+        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16 | uint32_t(uint8_t(bytes[i + 1])) << 8 | uint8_t(bytes[i + 2]);
+        for (int k = 3; k >= 0; --k) out += digits[(v >> (6 * k)) & 63];
+    }
+    if (i + 1 == bytes.size()) {
+        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
+        out += {digits[v >> 18], digits[(v >> 12) & 63], '=', '='};
+    } else if (i + 2 == bytes.size()) {
+        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16 | uint32_t(uint8_t(bytes[i + 1])) << 8;
+        out += {digits[v >> 18], digits[(v >> 12) & 63], digits[(v >> 6) & 63], '='};
+    }
+    return out;
+}
+
+std::string squareBuffer() {
+    std::string bytes = floats({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0});
+    const uint16_t indices[6] = {0, 1, 2, 0, 2, 3};
+    bytes.append(reinterpret_cast<const char*>(indices), sizeof indices);
+    return bytes;
+}
+
+json square(const std::function<void(json&)>& edit = nullptr) {
+    std::string bytes = squareBuffer();
+    json gltf = {{"asset", {{"version", "2.0"}}},
+                 {"buffers", {{{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes)}}}},
+                 {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
+                                  {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 12}}}},
+                 {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"},
+                                 {"min", {0, 0, 0}}, {"max", {1, 1, 0}}},
+                                {{"bufferView", 1}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}}},
+                 {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+                 {"nodes", {{{"mesh", 0}}}},
+                 {"scenes", {{{"nodes", {0}}}}}};
+    if (edit) edit(gltf);
+    return gltf;
+}
+
+std::string glb(const json& gltf, const std::string& bin) {
+    std::string text = gltf.dump();
+    text.append((4 - text.size() % 4) % 4, ' ');
+    std::string padded = bin;
+    padded.append((4 - padded.size() % 4) % 4, '\0');
+    std::string out = "glTF" + bytesOf({2, uint32_t(12 + 8 + text.size() + 8 + padded.size()), uint32_t(text.size())});
+    out += "JSON" + text + bytesOf({uint32_t(padded.size())}) + std::string("BIN\0", 4) + padded;
+    return out;
+}
+
+// A bundle written by prt (scene sphere), split into its JSON and BIN chunks, for edits of its extension.
+struct Glb {
+    json gltf;
+    std::string bin;
+};
+Glb split(const std::string& bytes) {
+    uint32_t jsonLength, binLength;
+    std::memcpy(&jsonLength, bytes.data() + 12, 4);
+    std::memcpy(&binLength, bytes.data() + 20 + jsonLength, 4);
+    return {json::parse(bytes.substr(20, jsonLength)), bytes.substr(28 + jsonLength, binLength)};
+}
+
+// The base bundle with its extension edited by `edit` and the checksum recomputed, so the edit is what is read.
+std::function<std::string()> editedBundle(const std::function<void(json&)>& edit, bool fixChecksum = true) {
+    return [=] {
+        Glb parts = split(prt::readFileBytes((fs::temp_directory_path() / ("prt_bad_inputs_base_" + std::to_string(getpid()) + ".glb")).string()));
+        json& extension = parts.gltf["extensions"][prt::kBundleExtension];
+        edit(extension);
+        if (fixChecksum && extension.is_object()) {
+            size_t length = parts.gltf["buffers"][0]["byteLength"].get<size_t>();
+            std::vector<unsigned char> buffer(parts.bin.begin(), parts.bin.begin() + length);
+            extension["checksum"] = prt::detail::extensionChecksum(buffer, extension);
+        }
+        return glb(parts.gltf, parts.bin);
+    };
+}
+
+std::string npy(const std::string& descr, const std::string& shape, size_t dataBytes, bool fortran = false) {
+    std::string header = "{'descr': '" + descr + "', 'fortran_order': " + (fortran ? "True" : "False") + ", 'shape': " + shape + ", }";
+    header.append((64 - (10 + header.size() + 1) % 64) % 64, ' ');
+    header += '\n';
+    std::string out("\x93NUMPY\x01\x00", 8);
+    out += char(header.size() & 0xff);
+    out += char(header.size() >> 8);
+    return out + header + std::string(dataBytes, '\0');
+}
+
+const std::string kPly = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                         "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+struct Case {
+    std::string reader;  // which reader or CLI the row aims at
+    std::string name;
+    std::map<std::string, std::function<std::string()>> files; // written into IN/ before the command
+    std::string command; // after `prt`; {in} and {out} are the input and (empty) output folders
+    int exitCode;
+    std::string message; // must appear in the output
+    std::map<std::string, std::string> environment = {};
+};
+
+std::function<std::string()> text(std::string content) {
+    return [content] { return content; };
+}
+std::function<std::string()> gltfText(const std::function<void(json&)>& edit) {
+    return [edit] { return square(edit).dump(); };
+}
+
+
+std::vector<Case> catalogue() {
+    auto mesh = [](std::string reader, std::string name, std::string extension, std::function<std::string()> content,
+                   std::string message, std::map<std::string, std::string> env = {}) {
+        return Case{reader, name, {{"m." + extension, content}},
+                    "meshprep {in}/m." + extension + " -o {out}/m.glb --report {out}/r.json", 3, message, env};
+    };
+    std::vector<Case> cases = {
+        // ---- OBJ ----
+        mesh("obj", "empty file", "obj", text(""), "empty"),
+        mesh("obj", "face index past the vertices", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "out of range"),
+        mesh("obj", "coordinate is not a number", "obj", text("v 0 zero 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "zero"),
+        mesh("obj", "vertices without faces", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\n"), "empty mesh"),
+        mesh("obj", "binary bytes", "obj", text(std::string("v 0 0 0\n\0\x01\x02\xff\n", 13)), "not a text file"),
+        mesh("obj", "negative index before the first vertex", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"), "-4"),
+        mesh("obj", "NaN coordinate", "obj", text("v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "non-finite coordinate"),
+        mesh("obj", "only degenerate faces", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 1 2\n"), "degenerate"),
+        // ---- PLY ----
+        mesh("ply", "no end_header", "ply", text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"), "end_header"),
+        mesh("ply", "10^12 vertices claimed", "ply",
+             text("ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\n"
+                  "property float z\nend_header\n"), "above the limit of 1073741824 (PRT_MAX_ELEMENTS"),
+        mesh("ply", "truncated binary data", "ply",
+             text("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                  "property float z\nend_header\n" + floats({0, 0, 0, 1})), "truncated"),
+        mesh("ply", "unknown format", "ply", text("ply\nformat binary_middle_endian 1.0\nend_header\n"), "unknown format"),
+        mesh("ply", "fewer ascii vertices than declared", "ply", text(kPly + "0 0 0\n1 0 0\n"), "truncated"),
+        mesh("ply", "face index past the vertices", "ply", text(kPly + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "7"),
+        mesh("ply", "not a PLY", "ply", text("plx\nformat ascii 1.0\n"), "ply"),
+        mesh("ply", "element count not a number", "ply", text("ply\nformat ascii 1.0\nelement vertex many\nend_header\n"), "element NAME COUNT"),
+        // ---- OFF ----
+        mesh("off", "counts missing", "off", text("OFF\n"), "counts"),
+        mesh("off", "10^12 vertices claimed", "off", text("OFF\n1000000000000 1 0\n"), "above the limit of 1073741824"),
+        mesh("off", "coordinate not a number", "off", text("OFF\n3 1 0\n0 0 x\n1 0 0\n0 1 0\n3 0 1 2\n"), "x"),
+        mesh("off", "fewer faces than declared", "off", text("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), "truncated"),
+        mesh("off", "corner count not a number", "off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\nthree 0 1 2\n"), "corner count"),
+        mesh("off", "face index past the vertices", "off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"), "5"),
+        // ---- STL ----
+        mesh("stl", "binary count past the data", "stl", text(std::string(80, ' ') + bytesOf({10}) + std::string(50, '\0')), "stl"),
+        mesh("stl", "ascii facet with two vertices", "stl",
+             text("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid t\n"), "stl"),
+        mesh("stl", "ascii vertex not a number", "stl",
+             text("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 a\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n"), "a"),
+        mesh("stl", "solid without facets", "stl", text("solid t\nendsolid t\n"), "empty mesh"),
+        mesh("stl", "binary claiming 2^32-1 triangles", "stl", text(std::string(80, ' ') + bytesOf({0xffffffffu}) + std::string(50, '\0')), "stl"),
+        // ---- glTF ----
+        mesh("gltf", "node DAG (2^40 paths)", "gltf", [] {
+            return square([](json& g) {
+                       g["nodes"] = json::array();
+                       for (int n = 0; n < 40; ++n) g["nodes"].push_back({{"children", {n + 1, n + 1}}});
+                       g["nodes"].push_back({{"mesh", 0}});
+                   }).dump();
+        }, "already has parent"),
+        mesh("gltf", "node with two parents", "gltf", gltfText([](json& g) {
+                 g["nodes"] = {{{"children", {2}}}, {{"children", {2}}}, {{"mesh", 0}}};
+                 g["scenes"] = {{{"nodes", {0, 1}}}};
+             }), "already has parent 0"),
+        mesh("gltf", "node cycle", "gltf", gltfText([](json& g) { g["nodes"] = {{{"children", {1}}, {"mesh", 0}}, {{"children", {0}}}}; }),
+             "has parent 1"),
+        mesh("gltf", "buffer URI leaving the folder", "gltf", gltfText([](json& g) { g["buffers"][0]["uri"] = "../outside.bin"; }),
+             "outside the file's folder"),
+        mesh("gltf", "absolute buffer URI", "gltf", gltfText([](json& g) { g["buffers"][0]["uri"] = "/etc/hostname"; }), "glTF"),
+        mesh("gltf", "glTF 1.0", "gltf", gltfText([](json& g) { g["asset"]["version"] = "1.0"; }), "glTF 1.0 is not supported"),
+        mesh("gltf", "accessor past its buffer", "gltf", gltfText([](json& g) { g["accessors"][0]["count"] = 5; }),
+             "past the end"),
+        mesh("gltf", "10^12 vertices claimed", "gltf", gltfText([](json& g) { g["accessors"][0]["count"] = 1000000000000ull; }),
+             "above the limit"),
+        mesh("gltf", "not JSON", "gltf", text("{\"asset\": "), "glTF"),
+        mesh("gltf", "only points", "gltf", gltfText([](json& g) { g["meshes"][0]["primitives"][0]["mode"] = 0; }), "no triangles"),
+        mesh("gltf", "primitive without POSITION", "gltf",
+             gltfText([](json& g) { g["meshes"][0]["primitives"][0]["attributes"] = {{"NORMAL", 0}}; }), "POSITION"),
+        mesh("gltf", "vertex cap lowered below the mesh", "gltf", gltfText(nullptr), "claims 4 vertices, above the limit of 3",
+             {{"PRT_MAX_ELEMENTS", "3"}}),
+        // ---- GLB ----
+        mesh("glb", "header only", "glb", text("glTF" + bytesOf({2, 12})), "glTF"),
+        mesh("glb", "declared length past the file", "glb", text("glTF" + bytesOf({2, 4096, 0})), "truncated"),
+        mesh("glb", "JSON chunk is not JSON", "glb", [] {
+            std::string bad = glb(json::object(), "");
+            return bad.replace(20, 2, "{{");
+        }, "glTF"),
+        mesh("glb", "glTF 1 binary container", "glb", text("glTF" + bytesOf({1, 20, 0, 0}) + "    "), "glTF"),
+        // ---- mesh format ----
+        mesh("mesh", "unknown extension", "xyz", text("v 0 0 0\n"), "unknown mesh format"),
+        Case{"mesh", "missing file", {}, "meshprep {in}/absent.obj -o {out}/m.glb", 3, "absent.obj"},
+        // ---- environment maps (OpenImageIO) ----
+        Case{"exr", "text named .exr", {{"e.exr", text("not an image")}}, "envsh {in}/e.exr --order 3 -o {out}/sh.json", 3, "e.exr"},
+        Case{"exr", "missing file", {}, "envsh {in}/absent.exr --order 3 -o {out}/sh.json", 3, "not found"},
+        Case{"exr", "folder named .exr", {{"d.exr/x", text("")}}, "envsh {in}/d.exr --order 3 -o {out}/sh.json", 3, "folder"},
+        Case{"exr", "truncated EXR", {{"t.exr", text(std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8) + "channels")}},
+             "envsh {in}/t.exr --order 3 -o {out}/sh.json", 3, "t.exr"},
+        // ---- npy ----
+        Case{"npy", "not npy", {{"a.npy", text("hello")}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "not a .npy file"},
+        Case{"npy", "shape product overflows", {{"a.npy", text(npy("<f4", "(4611686018427387905, 4)", 16))}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "above the limit"},
+        Case{"npy", "float64", {{"a.npy", text(npy("<f8", "(1, 3)", 24))}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "float32"},
+        Case{"npy", "Fortran order", {{"a.npy", text(npy("<f4", "(1, 3)", 12, true))}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "Fortran"},
+        Case{"npy", "data shorter than the shape", {{"a.npy", text(npy("<f4", "(2, 3)", 12))}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "expected 6 floats"},
+        Case{"npy", "shape holds text", {{"a.npy", text(npy("<f4", "(one, 3)", 12))}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "non-negative integers"},
+        // ---- pipeline TOML ----
+        Case{"pipeline", "TOML syntax error", {{"p.toml", text("[stages.a\nrun = \"scene\"\n")}}, "run {in}/p.toml --plan --cache-dir {out}/c", 3, "TOML syntax"},
+        Case{"pipeline", "unknown stage", {{"p.toml", text("[stages.a]\nrun = \"bake-everything\"\n")}}, "run {in}/p.toml --plan --cache-dir {out}/c", 3, "unknown stage"},
+        Case{"pipeline", "newline in the file stem", {{"p\nrm -rf x.toml", text("[stages.a]\nrun = \"scene\"\nname = \"sphere\"\n[outputs]\nm = { from = \"a.mesh\", path = \"m.glb\" }\n")}},
+             "run '{in}/p\nrm -rf x.toml' --plan --cache-dir {out}/c", 3, "is the default name but is not one"},
+        Case{"pipeline", "bad pipeline name", {{"p.toml", text("[pipeline]\nname = \"a b\"\n[stages.a]\nrun = \"scene\"\n")}}, "run {in}/p.toml --plan --cache-dir {out}/c", 3, "pipeline.name"},
+        Case{"pipeline", "no stages", {{"p.toml", text("[pipeline]\nname = \"x\"\n")}}, "run {in}/p.toml --plan --cache-dir {out}/c", 3, "no stages"},
+        Case{"pipeline", "missing file", {}, "run {in}/absent.toml --plan --cache-dir {out}/c", 3, "absent.toml"},
+        // ---- bundle and its extension JSON ----
+        Case{"bundle", "checksum mismatch", {{"b.glb", editedBundle([](json& e) { e["inputs"] = {{"mesh", "forged"}}; }, false)}},
+             "transfer {in}/b.glb -o {out}/t.glb --samples 4", 3, "checksum mismatch"},
+        Case{"bundle", "version 99", {{"b.glb", editedBundle([](json& e) { e["version"] = 99; })}},
+             "transfer {in}/b.glb -o {out}/t.glb --samples 4", 3, "version 99"},
+        Case{"bundle", "layer claims 10^12 rows", {{"b.glb", editedBundle([](json& e) {
+                 e["layers"] = {{{"name", "t"}, {"domain", "texel"}, {"semantic", "x"}, {"shape", {1000000000000ull, 3}}, {"params", {{"uri", "t.exr"}}}}};
+             })}}, "relight {in}/b.glb --sh {in}/b.glb -o {out}/r.npy", 3, "above the limit"},
+        Case{"bundle", "layer without data", {{"b.glb", editedBundle([](json& e) {
+                 e["layers"] = {{{"name", "u"}, {"domain", "texel"}, {"semantic", "x"}, {"shape", {4, 3}}}};
+             })}}, "transfer {in}/b.glb -o {out}/t.glb --samples 4", 3, "neither a bufferView nor params.uri"},
+        Case{"bundle", "extension is not an object", {{"b.glb", editedBundle([](json& e) { e = json::array({1, 2}); })}},
+             "transfer {in}/b.glb -o {out}/t.glb --samples 4", 3, "PRT_bundle"},
+        Case{"bundle", "layers is not an array", {{"b.glb", editedBundle([](json& e) { e["layers"] = "all of them"; })}},
+             "transfer {in}/b.glb -o {out}/t.glb --samples 4", 3, "not an array"},
+        Case{"bundle", "duplicate layer names", {{"b.glb", editedBundle([](json& e) {
+                 json layer = {{"name", "t"}, {"domain", "texel"}, {"semantic", "x"}, {"shape", {4, 3}}, {"params", {{"uri", "t.exr"}}}};
+                 e["layers"] = {layer, layer};
+             })}}, "transfer {in}/b.glb -o {out}/t.glb --samples 4", 3, "duplicate layer name"},
+        // ---- SH lighting JSON (prt envsh's output, read by relight) ----
+        Case{"sh-json", "format is a number", {{"sh.json", text("{\"format\": 5, \"order\": 1, \"coefficients\": [[1,1,1]]}")}},
+             "relight {in}/t.glb --sh {in}/sh.json -o {out}/r.npy", 3, "not prt-sh JSON"},
+        Case{"sh-json", "not JSON", {{"sh.json", text("{\"format\": ")}}, "relight {in}/t.glb --sh {in}/sh.json -o {out}/r.npy", 3, "not JSON"},
+        Case{"sh-json", "order out of range", {{"sh.json", text("{\"format\": \"prt-sh\", \"order\": 99, \"coefficients\": []}")}},
+             "relight {in}/t.glb --sh {in}/sh.json -o {out}/r.npy", 3, "order 99"},
+        // ---- command lines ----
+        Case{"cli", "unknown flag", {}, "meshprep {in}/m.obj -o {out}/m.glb --frobnicate", 2, "frobnicate"},
+        Case{"cli", "order 0", {}, "envsh {in}/e.exr --order 0 -o {out}/sh.json", 2, "--order"},
+        Case{"cli", "shard past its count", {}, "transfer {in}/b.glb -o {out}/t.glb --shard 3/2", 2, "--shard"},
+        Case{"cli", "element cap not a number", {{"m.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
+             "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}},
+    };
+    return cases;
+}
+
+std::string shellQuoted(const std::string& text) {
+    std::string quoted = "'";
+    for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
+} // namespace
+
+TEST(BadInputs, CatalogueGivesItsExitCodeAndMessageAndLeavesNoOutput) {
+    fs::path root = fs::temp_directory_path() / ("prt_bad_inputs_" + std::to_string(getpid()));
+    fs::remove_all(root);
+    fs::create_directories(root);
+    std::string base = (fs::temp_directory_path() / ("prt_bad_inputs_base_" + std::to_string(getpid()) + ".glb")).string();
+    ASSERT_EQ(runShell(std::string(PRT_BINARY_DIR) + "/prt --quiet scene sphere -o " + base).exitCode, 0);
+    std::string transferred = (root / "t.glb").string(); // a bundle relight accepts
+    ASSERT_EQ(runShell(std::string(PRT_BINARY_DIR) + "/prt --quiet transfer " + base + " --mode unshadowed --order 2 -o " +
+                       transferred).exitCode, 0);
+    std::map<std::string, int> byReader;
+    std::vector<Case> cases = catalogue();
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const Case& c = cases[i];
+        SCOPED_TRACE(c.reader + ": " + c.name);
+        fs::path in = root / ("case" + std::to_string(i)) / "in", out = root / ("case" + std::to_string(i)) / "out";
+        fs::create_directories(in);
+        fs::create_directories(out);
+        fs::copy_file(base, in / "b.glb");
+        fs::copy_file(transferred, in / "t.glb");
+        std::ofstream(root / ("case" + std::to_string(i)) / "outside.bin") << squareBuffer();
+        for (const auto& [name, content] : c.files) {
+            fs::path file = in / name;
+            fs::create_directories(file.parent_path());
+            std::ofstream(file, std::ios::binary) << content();
+        }
+        std::string command = c.command;
+        for (auto [key, value] : std::map<std::string, std::string>{{"{in}", in.string()}, {"{out}", out.string()}})
+            for (size_t at = command.find(key); at != std::string::npos; at = command.find(key, at + value.size()))
+                command.replace(at, key.size(), value);
+        std::string env;
+        for (const auto& [name, value] : c.environment) env += name + "=" + shellQuoted(value) + " ";
+        // The command's words are split by the shell; a quoted word stays one.
+        Result result = runShell(env + std::string(PRT_BINARY_DIR) + "/prt " + command);
+        EXPECT_EQ(result.exitCode, c.exitCode) << result.output;
+        EXPECT_NE(result.output.find(c.message), std::string::npos) << "expected '" << c.message << "' in: " << result.output;
+        EXPECT_EQ(result.output.find("internal error"), std::string::npos) << result.output;
+        EXPECT_TRUE(fs::is_empty(out)) << "output left behind";
+        ++byReader[c.reader];
+    }
+    std::string counts;
+    for (const auto& [reader, count] : byReader) counts += " " + reader + "=" + std::to_string(count);
+    std::printf("bad-input cases: %zu,%s\n", cases.size(), counts.c_str());
+    EXPECT_GE(cases.size(), 60u);
+    fs::remove_all(root);
+    fs::remove(base);
+}
