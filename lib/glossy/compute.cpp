@@ -237,7 +237,7 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
     tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
                                                             : int(tbb::task_arena::automatic));
     std::optional<EmbreeScene> scene;
-    arena.execute([&] { scene.emplace(mesh, /*robust=*/true); });
+    arena.execute([&] { scene.emplace(mesh); });
     const float offset = rayOffset(mesh);
     std::atomic<uint64_t> rays{0};
     double costSum = 0.0, errorSum = 0.0;
@@ -353,7 +353,7 @@ FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t
     tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
                                                             : int(tbb::task_arena::automatic));
     std::optional<EmbreeScene> scene;
-    arena.execute([&] { scene.emplace(mesh, /*robust=*/true); });
+    arena.execute([&] { scene.emplace(mesh); });
     std::atomic<uint64_t> rays{0};
     FitBatch all;
     all.lobes = options.lobes;
