@@ -7,8 +7,8 @@ cd "$(dirname "$0")/.."
 packages=(
   cmake ninja-build ccache g++ make pkg-config git ca-certificates xz-utils
   libembree-dev libopenmesh-dev libopenexr-dev libopenimageio-dev openimageio-tools libceres-dev libtinygltf-dev
-  pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
-  libtbb-dev libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev libspdlog-dev libtomlplusplus-dev
+  pocl-opencl-icd ocl-icd-opencl-dev opencl-headers
+  libtbb-dev libeigen3-dev libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   libxxhash-dev libgtest-dev libbenchmark-dev
   clang-14 libclang-rt-14-dev
   python3-numpy python3-matplotlib python3-openimageio
