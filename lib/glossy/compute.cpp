@@ -108,7 +108,7 @@ struct Chunk {
 };
 
 Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const GlossyOptions& options,
-                const EmbreeScene& embree, float offset, size_t chunkBegin, size_t chunkEnd,
+                const EmbreeScene& embree, float offset, const std::vector<float>& spawnNormal, size_t chunkBegin, size_t chunkEnd,
                 tbb::task_arena& arena, std::atomic<uint64_t>& rays) {
     const ViewSet& views = viewSet();
     const int lobes = options.lobes, width = lobes * kLobeParams;
@@ -141,13 +141,11 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
                 for (size_t t = 0; t < count; ++t) {
                     const float* d = &grid.directions[t * 3];
                     if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] <= 0.0f) { visible[t] = 0; continue; }
-                    RTCRay ray{};
-                    ray.org_x = p[0] + offset * n[0], ray.org_y = p[1] + offset * n[1];
-                    ray.org_z = p[2] + offset * n[2];
-                    ray.dir_x = d[0], ray.dir_y = d[1], ray.dir_z = d[2];
-                    ray.tnear = offset;
-                    ray.tfar = std::numeric_limits<float>::infinity();
-                    ray.mask = ~0u;
+                    // The shared spawn rule (lib/raycast), so glossy visibility leaks at creases no more than transfer's.
+                    float origin[3];
+                    spawnOrigin(p, &spawnNormal[(chunkBegin + i) * 3], offset, origin);
+                    RTCRay ray;
+                    spawnRay(ray, origin, d[0], d[1], d[2]);
                     rtcOccluded1(scene->scene, &context, &ray);
                     visible[t] = ray.tfar >= 0.0f;
                     ++cast;
@@ -239,6 +237,7 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
     std::optional<EmbreeScene> scene;
     arena.execute([&] { scene.emplace(mesh); });
     const float offset = rayOffset(mesh);
+    const std::vector<float> spawn = spawnNormals(mesh);
     std::atomic<uint64_t> rays{0};
     double costSum = 0.0, errorSum = 0.0;
     std::optional<Progress> progress;
@@ -248,7 +247,7 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
         const size_t chunkEnd = std::min(result.vertexEnd, chunkBegin + options.chunkVertices);
         const size_t chunk = chunkEnd - chunkBegin;
         double tabulateStart = nowSeconds();
-        Chunk tabulated = tabulateChunk(mesh, grid, options, *scene, offset, chunkBegin, chunkEnd, arena, rays);
+        Chunk tabulated = tabulateChunk(mesh, grid, options, *scene, offset, spawn, chunkBegin, chunkEnd, arena, rays);
         auto& slot = tabulated.slot;
         auto& normals = tabulated.normals;
         auto& first = tabulated.first;
@@ -354,12 +353,13 @@ FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t
                                                             : int(tbb::task_arena::automatic));
     std::optional<EmbreeScene> scene;
     arena.execute([&] { scene.emplace(mesh); });
+    const std::vector<float> spawn = spawnNormals(mesh);
     std::atomic<uint64_t> rays{0};
     FitBatch all;
     all.lobes = options.lobes;
     for (size_t begin = 0; begin < mesh.vertexCount() && all.problems < problems; begin += options.chunkVertices) {
         size_t end = std::min(mesh.vertexCount(), begin + options.chunkVertices);
-        Chunk chunk = tabulateChunk(mesh, grid, options, *scene, rayOffset(mesh), begin, end, arena, rays);
+        Chunk chunk = tabulateChunk(mesh, grid, options, *scene, rayOffset(mesh), spawn, begin, end, arena, rays);
         size_t take = std::min(chunk.batch.problems, problems - all.problems);
         all.kernel.insert(all.kernel.end(), chunk.batch.kernel.begin(), chunk.batch.kernel.begin() + take * grid.count());
         all.params.insert(all.params.end(), chunk.batch.params.begin(), chunk.batch.params.begin() + take * width);
