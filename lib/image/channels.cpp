@@ -12,6 +12,7 @@ namespace prt {
 static std::unique_ptr<OIIO::ImageInput> openImage(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw Error(path, "", "file not found");
+    checkExrHeaders(path);
     auto input = OIIO::ImageInput::open(path);
     if (!input) throw Error(path, "", "not a readable image (" + OIIO::geterror() + ")");
     if (input->spec().deep) throw Error(path, "", "deep image data is not a flat image");

@@ -23,6 +23,12 @@ struct EnvironmentMap {
     Image radiance;
 };
 
+// Before OpenImageIO opens an OpenEXR file: throws prt::Error(path, "OpenEXR header", ...) when an attribute
+// declares more bytes than the file holds after it, or a name or the header list runs past the end. OpenEXR
+// itself would allocate what the attribute declares. Files of other formats pass unchecked. Both readers below
+// and readImageChannels call it.
+void checkExrHeaders(const std::string& path);
+
 // Reads any image OpenImageIO reads, keeping the first three channels (grey is replicated).
 // Throws prt::Error naming the file for: missing, not an image, unreadable pixels.
 Image readImage(const std::string& path);

@@ -19,6 +19,7 @@ static Image readWithSpec(const std::string& path, OIIO::ImageSpec* specOut) {
     if (!std::filesystem::exists(path, ec)) throw Error(path, "", "file not found");
     if (std::filesystem::is_directory(path, ec)) throw Error(path, "", "is a folder, not an image");
 
+    checkExrHeaders(path);
     auto input = OIIO::ImageInput::open(path);
     if (!input) throw Error(path, "", "not a readable image (" + OIIO::geterror() + ")");
     const OIIO::ImageSpec& spec = input->spec();

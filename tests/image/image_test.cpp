@@ -209,3 +209,18 @@ TEST_F(ImageTest, CompressionNoiseBelowZeroIsClampedToZero) {
     EXPECT_EQ(env.radiance.rgb[7], 0.0f);
     EXPECT_EQ(env.radiance.rgb[8], image.rgb[8]);
 }
+
+// Found by fuzz_exr: a 291-byte EXR whose string attribute declares 1.9 GB made OpenEXR allocate it. The header
+// check refuses it first, naming the attribute.
+TEST(Image, ExrAttributeLargerThanTheFileIsRefusedBeforeOpenExrAllocates) {
+    std::string path = std::string(PRT_SOURCE_DIR) + "/tests/fuzz/corpus/exr/attribute-size-past-the-end.exr";
+    try {
+        prt::readEnvironmentMap(path);
+        FAIL() << "expected an error";
+    } catch (const prt::Error& e) {
+        EXPECT_EQ(e.exitCode(), prt::kExitInput);
+        EXPECT_NE(std::string(e.what()).find("attribute 'Exif:ImageHistory' (string) declares 1886220131 bytes"),
+                  std::string::npos)
+            << e.what();
+    }
+}
