@@ -58,8 +58,8 @@ function layerData(gltf, bin, layer) {
 }
 
 // The bundle's mesh (object 0) and its transfer: `kind` "vertex" (layer "transfer") or "texel" (layer
-// "texel_transfer" with its rows in the bundle's buffer). Returns {positions, normals, texcoords, indices,
-// transfer: {rows, order, data, width, height}, extension}.
+// "texel_transfer"). Returns {positions, normals, texcoords, indices, transfer: {rows, order, data, uri, width,
+// height}, extension}; data is null when the texels live in the OpenEXR file `uri` (loadBundle reads it).
 export function readBundle(arrayBuffer, kind = 'vertex') {
   const { json, bin } = parseGlb(arrayBuffer);
   const extension = json.extensions && json.extensions.PRT_bundle;
@@ -76,14 +76,40 @@ export function readBundle(arrayBuffer, kind = 'vertex') {
   const layer = (extension.layers || []).find((l) => l.name === name && (l.object || 0) === 0);
   if (!layer || layer.semantic !== 'sh_transfer_rgb') throw new Error(`no "${name}" layer of semantic sh_transfer_rgb`);
   const data = layerData(json, bin, layer);
-  if (!data)
-    throw new Error(`layer "${name}" keeps its texels in ${layer.params && layer.params.uri}: bake with ` +
-                    '--format bundle to store them in the bundle');
+  const params = layer.params || {};
+  if (!data && !(params.uri && (params.format === 'half' || params.format === 'float')))
+    throw new Error(`layer "${name}" keeps its texels in ${params.uri} as ${params.format}: the viewer reads ` +
+                    'OpenEXR texels (bake --format half or float) and texels in the bundle (--format bundle)');
   const order = Math.round(Math.sqrt(layer.shape[1]));
-  mesh.transfer = {
-    rows: layer.shape[0], order, data,
-    width: layer.params && layer.params.width, height: layer.params && layer.params.height,
+  mesh.transfer = { rows: layer.shape[0], order, data, uri: data ? null : params.uri, width: params.width,
+                    height: params.height };
+  return mesh;
+}
+
+// Fetches the bundle at `url` and, for texels kept in an OpenEXR file next to it, that file too. Returns what
+// readBundle returns, with transfer.data filled in ([rows][L^2][3] from channels T000.R .. as the bake names them).
+export async function loadBundle(url, kind = 'vertex') {
+  const fetchBytes = async (what) => {
+    const response = await fetch(what);
+    if (!response.ok) throw new Error(`${what}: HTTP ${response.status}`);
+    return response.arrayBuffer();
   };
+  const mesh = readBundle(await fetchBytes(url), kind);
+  const t = mesh.transfer;
+  if (t.data) return mesh;
+  const { readExr } = await import('./exr.js');
+  const imageUrl = new URL(t.uri, new URL(url, location.href)).href;
+  const image = await readExr(await fetchBytes(imageUrl), t.uri);
+  if (image.width !== t.width || image.height !== t.height || image.width * image.height !== t.rows)
+    throw new Error(`${t.uri}: ${image.width} x ${image.height} texels, but the bundle says ${t.width} x ${t.height}`);
+  const C = t.order * t.order;
+  t.data = new Float32Array(t.rows * C * 3);
+  for (let j = 0; j < C; ++j)
+    for (let c = 0; c < 3; ++c) {
+      const name = `T${String(j).padStart(3, '0')}.${'RGB'[c]}`, channel = image.channels[name];
+      if (!channel) throw new Error(`${t.uri}: no channel ${name}`);
+      for (let r = 0; r < t.rows; ++r) t.data[(r * C + j) * 3 + c] = channel[r];
+    }
   return mesh;
 }
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env node
-// Serves the viewer on a local port: `node viewer/serve.mjs OUT_DIR [PORT]` (port 0 or none: a free one), then
-// open the printed address. / is this folder, /three/ is three.js from npm, /data/ is OUT_DIR (bundles, prt-sh
+// Serves the viewer on a local port: `node viewer/serve.mjs OUT_DIR [PORT]` (`prt serve OUT_DIR [--port PORT]`;
+// default 8000, 0: a free one), then open the printed address. / is this folder, /three/ is three.js from npm, /data/ is OUT_DIR (bundles, prt-sh
 // lighting, reference radiance). Only reads files under those three folders.
 import http from 'node:http';
 import fs from 'node:fs';
@@ -9,7 +9,8 @@ import { fileURLToPath } from 'node:url';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const types = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.json': 'application/json',
-                '.glb': 'model/gltf-binary', '.png': 'image/png', '.npy': 'application/octet-stream' };
+                '.glb': 'model/gltf-binary', '.png': 'image/png', '.npy': 'application/octet-stream',
+                '.exr': 'image/x-exr' };
 
 export function serve(dataDir, port = 0) {
   const roots = { '/three/': path.join(here, 'node_modules/three/build'), '/data/': path.resolve(dataDir), '/': here };
@@ -29,7 +30,7 @@ export function serve(dataDir, port = 0) {
 
 if (process.argv[1] === fileURLToPath(import.meta.url)) {
   if (process.argv.length < 3) { console.error('usage: node viewer/serve.mjs OUT_DIR [PORT]'); process.exit(2); }
-  const server = await serve(process.argv[2], Number(process.argv[3] || 8000));
+  const server = await serve(process.argv[2], process.argv[3] === undefined ? 8000 : Number(process.argv[3]));
   const { port } = server.address();
   const glbs = fs.readdirSync(process.argv[2]).filter((f) => f.endsWith('.glb'));
   const maps = fs.readdirSync(process.argv[2]).filter((f) => f.endsWith('.sh.json')).map((f) => 'data/' + f);

@@ -2,7 +2,7 @@
 // lets the user turn the environment and change the order. Shading agrees with `prt relight` (the same sum) and
 // pictures with `prt render` (the same pinhole camera and tone map, compare.h toneMap).
 import * as THREE from 'three';
-import { readBundle, syntheticBundle } from './bundle.js';
+import { loadBundle, syntheticBundle } from './bundle.js';
 import { fitLighting, rotateLightingY } from './sh.js';
 
 const kMaxCoefficients = 64; // order 8
@@ -128,7 +128,7 @@ export async function startViewer(canvas, panel, params) {
   const bundleUrl = params.get('bundle'), synthetic = params.get('synthetic'); // synthetic=VERTICES,ORDER
   if (!bundleUrl && !synthetic) throw new Error('give ?bundle=URL of a .glb');
   const mesh = synthetic ? await syntheticBundle(...parseNumbers(synthetic, 2, 'synthetic'))
-                         : readBundle(await (await fetch(bundleUrl)).arrayBuffer(), kind);
+                         : await loadBundle(bundleUrl, kind);
   const maps = (params.get('maps') || '').split(',').filter(Boolean);
   if (!maps.length) throw new Error('give ?maps=URL,URL of prt-sh JSON lighting (prt envsh)');
   const lightings = await Promise.all(maps.map(async (url) => {

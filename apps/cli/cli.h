@@ -34,6 +34,7 @@ void addFivCommand(CLI::App& app);
 void addFivVisibilityCommand(CLI::App& app);
 void addFivshadeCommand(CLI::App& app);
 void addGlossyCommand(CLI::App& app);
+void addServeCommand(CLI::App& app);
 
 // What a pipeline cache key holds about this prt (`prt --build-info`): its version, build type, compiler, the
 // content hash of its executable, and the versions of the libraries it was compiled against and has loaded.

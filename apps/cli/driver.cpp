@@ -81,6 +81,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     addRenderCommand(app);
     addEnvlightCommand(app);
     addAdaptCommand(app);
+    addServeCommand(app);
 
     try {
         app.parse(int(args.size()), args.data());

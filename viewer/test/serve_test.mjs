@@ -1,0 +1,62 @@
+#!/usr/bin/env node
+// `prt serve`: serves the viewer at / and the given folder at /data/ on 127.0.0.1, refuses paths that climb out of
+// the folder, and refuses a missing folder (exit 3) or a bad port (exit 2) without starting.
+// usage: node viewer/test/serve_test.mjs PRT WORK_DIR
+import { spawn, spawnSync } from 'node:child_process';
+import fs from 'node:fs';
+import http from 'node:http';
+import path from 'node:path';
+
+const [prt, work] = process.argv.slice(2);
+if (!prt || !work) { console.error('usage: serve_test.mjs PRT WORK_DIR'); process.exit(2); }
+fs.rmSync(work, { recursive: true, force: true });
+fs.mkdirSync(path.join(work, 'out'), { recursive: true });
+fs.writeFileSync(path.join(work, 'out/hello.json'), '{"hello": 1}\n');
+fs.writeFileSync(path.join(work, 'secret.txt'), 'secret\n');
+
+let failed = false;
+const check = (ok, what) => { console.log(`${ok ? 'ok' : 'FAILED'}: ${what}`); failed ||= !ok; };
+
+for (const [args, code, what] of [[['serve', path.join(work, 'missing')], 3, 'a missing folder'],
+                                  [['serve', path.join(work, 'out'), '--port', '70000'], 2, 'port 70000']]) {
+  const result = spawnSync(prt, args, { encoding: 'utf8', timeout: 20000 });
+  check(result.status === code && result.stderr.length > 0, `${what} exits ${code} with a message (got ${result.status})`);
+}
+
+// Raw requests: fetch() would normalise the dot segments away before they reach the server.
+const get = (port, target) => new Promise((resolve, reject) => {
+  http.get({ host: '127.0.0.1', port, path: target }, (response) => {
+    let body = '';
+    response.on('data', (chunk) => { body += chunk; });
+    response.on('end', () => resolve({ status: response.statusCode, body }));
+  }).on('error', reject);
+});
+
+const server = spawn(prt, ['serve', path.join(work, 'out'), '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
+try {
+  const port = await new Promise((resolve, reject) => {
+    let text = '';
+    server.stdout.on('data', (chunk) => {
+      text += chunk;
+      const match = text.match(/http:\/\/127\.0\.0\.1:(\d+)\//);
+      if (match) resolve(Number(match[1]));
+    });
+    server.on('exit', (code) => reject(new Error(`prt serve exited ${code}`)));
+    setTimeout(() => reject(new Error('prt serve printed no address in 20 s')), 20000);
+  });
+  const page = await get(port, '/');
+  check(page.status === 200 && page.body.includes('prt viewer'), `/ is the viewer page (${page.status})`);
+  const three = await get(port, '/three/three.module.js');
+  check(three.status === 200, `/three/ serves three.js (${three.status})`);
+  const data = await get(port, '/data/hello.json');
+  check(data.status === 200 && data.body.includes('hello'), `/data/ serves the folder (${data.status})`);
+  for (const target of ['/data/../secret.txt', '/data/%2E%2E/secret.txt', '/data/..%2Fsecret.txt']) {
+    const escape = await get(port, target);
+    check(escape.status >= 400 && !escape.body.includes('secret'), `${target} is refused (${escape.status})`);
+  }
+} catch (error) {
+  check(false, error.message);
+} finally {
+  server.kill();
+}
+process.exit(failed ? 1 : 0);
