@@ -243,6 +243,7 @@ CheckedFile checkOff(std::string_view text, const std::string& path) {
     counts.vertices = size_t(declared[0]);
     counts.faces = size_t(declared[1]);
     size_t numbers = hasNormals ? 6 : 3;
+    std::vector<std::pair<size_t, size_t>> trailing; // [begin, end) of each face line after its indices
     for (size_t v = 0; v < counts.vertices; ++v) {
         std::string what = "vertex " + std::to_string(v);
         if (!nextDataLine())
@@ -269,8 +270,14 @@ CheckedFile checkOff(std::string_view text, const std::string& path) {
             if (!parseInteger(tokens[k], index))
                 throw Error(path, lineName(lines.number), what + ": '" + std::string(tokens[k]) + "' is not an index");
         }
+        // OpenMesh reads faces token by token, not line by line, so what follows the indices (face colours, or
+        // junk) would become the next face's corner count: a fuzzed "1 0 066666666" made it read 66 M corners.
+        // Only the checked tokens reach it.
+        size_t end = size_t(tokens[size_t(corners)].data() + tokens[size_t(corners)].size() - text.data());
+        trailing.push_back({end, size_t(line.data() + line.size() - text.data())});
     }
     counts.readerInput = stripOffComments(text);
+    for (auto [begin, end] : trailing) std::fill(counts.readerInput.begin() + long(begin), counts.readerInput.begin() + long(end), ' ');
     return counts;
 }
 

@@ -134,6 +134,17 @@ TEST_F(LoadMesh, OffWithCommentsAndFacesOfFewerThanThreeCorners) {
     EXPECT_EQ(info.polygonsTriangulated, 1u);
 }
 
+// Found by fuzz_mesh_off: OpenMesh reads faces token by token, so a face line's trailing tokens (face colours, or
+// junk) became the next face's corner count, and "066666666" made it read 66 M corners (2.4 GB). Only the checked
+// tokens reach OpenMesh now: the trailing ones are ignored, as face colours are.
+TEST_F(LoadMesh, OffFaceLineTrailingTokensAreNotReadAsTheNextFace) {
+    std::string file = write("trailing.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n"
+                                             "3 0 1 3 066666666 0\n3 0 3 2 0.5 0.5 0.5\n");
+    TriMesh mesh = loadMesh(file);
+    EXPECT_EQ(mesh.vertexCount(), 4u);
+    EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 3, 0, 3, 2}));
+}
+
 TEST_F(LoadMesh, GlbThroughReadBundle) {
     Bundle bundle;
     bundle.mesh = makeCube();
