@@ -33,6 +33,7 @@ void addAdaptCommand(CLI::App& app);
 void addFivCommand(CLI::App& app);
 void addFivVisibilityCommand(CLI::App& app);
 void addFivshadeCommand(CLI::App& app);
+void addFivsceneCommand(CLI::App& app);
 void addGlossyCommand(CLI::App& app);
 void addServeCommand(CLI::App& app);
 

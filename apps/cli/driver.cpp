@@ -71,6 +71,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     addFivCommand(app);
     addFivVisibilityCommand(app);
     addFivshadeCommand(app);
+    addFivsceneCommand(app);
     addGlossyCommand(app);
     addReferenceCommand(app);
     addRelightCommand(app);

@@ -1,12 +1,16 @@
-// prt fivshade: per-vertex radiance of a receiver under translated occluders from their FIV bundles (docs/fiv.md).
+// prt fivshade: per-vertex radiance of a receiver under translated occluders from their FIV bundles, or from one
+// FIV scene bundle; prt fivscene: that scene bundle (docs/fiv.md).
 #include "cli.h"
 
 #include "bundle.h"
 #include "compare.h"
 #include "core.h"
+#include "fiv.h"
 #include "runtime.h"
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <numbers>
 
@@ -34,18 +38,23 @@ FivOverlap parseOverlap(const std::string& text) {
     throw Error("", "--overlap", "'" + text + "' is not none, paper, shared or cap", kExitUsage);
 }
 
+// One --at per --occluder, each three finite numbers.
+std::vector<std::array<float, 3>> parsePlacements(const std::vector<std::string>& occluders,
+                                                  const std::vector<std::string>& at) {
+    if (occluders.size() != at.size())
+        throw Error("", "--at", "give one --at X,Y,Z per --occluder (" + std::to_string(occluders.size()) +
+                                    " occluders, " + std::to_string(at.size()) + " placements)", kExitUsage);
+    std::vector<std::array<float, 3>> placements;
+    for (const std::string& text : at) placements.push_back(parsePoint(text, "--at"));
+    return placements;
+}
+
 void runFivshade(const FivshadeArgs& args) {
     double start = nowSeconds();
     FivShadeOptions options;
     options.partial = parsePartial(args.partial);
     options.overlap = parseOverlap(args.overlap);
-    if (args.occluders.size() != args.at.size())
-        throw Error("", "--at", "give one --at X,Y,Z per --occluder (" + std::to_string(args.occluders.size()) +
-                                    " occluders, " + std::to_string(args.at.size()) + " placements)", kExitUsage);
-    std::vector<std::array<float, 3>> placements;
-    for (const std::string& at : args.at) placements.push_back(parsePoint(at, "--at"));
-    if (args.occluders.empty() && args.self.empty())
-        throw Error("", "--occluder", "needs at least one --occluder or --self", kExitUsage);
+    std::vector<std::array<float, 3>> placements = parsePlacements(args.occluders, args.at);
     std::string extension = fileExtension(args.output);
     if (extension != "npy" && extension != "csv") throw Error(args.output, "-o", "needs a .npy or .csv file", kExitUsage);
     std::array<double, 3> albedo{1, 1, 1};
@@ -53,6 +62,12 @@ void runFivshade(const FivshadeArgs& args) {
 
     Bundle receiverBundle = readBundle(args.receiver);
     const TriMesh& receiver = receiverBundle.mesh;
+    bool fromScene = isFivScene(receiverBundle);
+    if (fromScene && (!args.occluders.empty() || !args.self.empty()))
+        throw Error("", "--occluder", args.receiver + " is a FIV scene bundle, which places its own occluders: give "
+                                      "no --occluder or --self with it", kExitUsage);
+    if (!fromScene && args.occluders.empty() && args.self.empty())
+        throw Error("", "--occluder", "needs at least one --occluder or --self, or a FIV scene bundle", kExitUsage);
     if (receiver.normals.size() != receiver.positions.size() || receiver.positions.empty())
         throw Error(args.receiver, "mesh", "has no vertex normals (prt meshprep adds them)");
     std::string envHash = hashFile(args.env);
@@ -85,6 +100,18 @@ void runFivshade(const FivshadeArgs& args) {
     }
     FivInstance self;
     if (!args.self.empty()) self.occluder = load(args.self);
+    FivScene scene;
+    bool selfShadowing = !args.self.empty();
+    if (fromScene) {
+        scene = fivScene(receiverBundle, args.receiver);
+        if (scene.lighting.envHash != envHash)
+            throw Error(args.receiver, "difmap", "was reduced under another environment than " + args.env +
+                                                     " (run `prt fiv` with this --env, then `prt fivscene`)");
+        lighting = scene.lighting;
+        instances = scene.instances;
+        self = scene.self;
+        selfShadowing = scene.selfShadowing;
+    }
 
     size_t count = receiver.vertexCount();
     std::vector<float> normals(receiver.normals);
@@ -96,7 +123,7 @@ void runFivshade(const FivshadeArgs& args) {
     }
     std::vector<float> radiance(3 * count);
     double shadeStart = nowSeconds();
-    fivIrradiance(lighting, instances.data(), instances.size(), args.self.empty() ? nullptr : &self,
+    fivIrradiance(lighting, instances.data(), instances.size(), selfShadowing ? &self : nullptr,
                   receiver.positions.data(), normals.data(), count, options, radiance.data());
     double shadeSeconds = nowSeconds() - shadeStart;
     for (size_t v = 0; v < count; ++v)
@@ -106,7 +133,7 @@ void runFivshade(const FivshadeArgs& args) {
         }
     writeVertexRadiance(args.output, radiance);
     logInfo("fivshade: " + std::to_string(count) + " points, " + std::to_string(instances.size()) + " occluders" +
-            (args.self.empty() ? "" : " and self-shadowing") + ", " +
+            (selfShadowing ? " and self-shadowing" : "") + ", " +
             std::to_string(shadeSeconds > 0 ? int(double(count) / shadeSeconds) : 0) + " points/s");
     StageCost cost;
     cost.stage = "fivshade";
@@ -115,14 +142,70 @@ void runFivshade(const FivshadeArgs& args) {
     reportCost(cost);
 }
 
+struct FivsceneArgs {
+    std::string receiver, output, self;
+    std::vector<std::string> occluders, at;
+};
+
+void runFivscene(const FivsceneArgs& args) {
+    double start = nowSeconds();
+    std::vector<std::array<float, 3>> at = parsePlacements(args.occluders, args.at);
+    if (fileExtension(args.output) != "glb") throw Error(args.output, "-o", "needs a .glb file", kExitUsage);
+    Bundle receiver = readBundle(args.receiver);
+    // Each distinct file is one occluder type; its placements are instances of it.
+    std::vector<std::string> files;
+    std::vector<Bundle> bundles;
+    std::vector<fiv::ScenePlacement> placements;
+    for (size_t j = 0; j < args.occluders.size(); ++j) {
+        size_t type = std::find(files.begin(), files.end(), args.occluders[j]) - files.begin();
+        if (type == files.size()) {
+            files.push_back(args.occluders[j]);
+            bundles.push_back(readBundle(args.occluders[j]));
+        }
+        placements.push_back({type, at[j]});
+    }
+    std::vector<fiv::SceneType> types;
+    for (size_t t = 0; t < files.size(); ++t) {
+        std::string stem = std::filesystem::path(files[t]).filename().string();
+        types.push_back({&bundles[t], files[t], stem.substr(0, stem.find('.'))});
+    }
+    Bundle self;
+    if (!args.self.empty()) self = readBundle(args.self);
+    Bundle scene = fiv::fivSceneBundle(receiver, args.receiver, types, placements, args.self.empty() ? nullptr : &self,
+                                       args.self);
+    writeBundle(args.output, scene);
+    logInfo("fivscene: " + args.output + ": " + std::to_string(types.size()) + " occluder types, " +
+            std::to_string(placements.size()) + " instances" + (args.self.empty() ? "" : ", self-shadowing"));
+    StageCost cost;
+    cost.stage = "fivscene";
+    cost.seconds = nowSeconds() - start;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
 } // namespace
+
+void addFivsceneCommand(CLI::App& app) {
+    auto args = std::make_shared<FivsceneArgs>();
+    CLI::App* command = app.add_subcommand(
+        "fivscene", "One bundle (version 2) with a receiver, occluder types with their FIV grids and their instances, "
+                    "for `prt fivshade SCENE.glb` and engines");
+    command->add_option("receiver", args->receiver, "Receiver mesh (.glb) with vertex normals")->required();
+    command->add_option("--occluder", args->occluders, "FIV bundle of an occluder type (repeatable, one per --at)");
+    command->add_option("--at", args->at,
+                        "X,Y,Z: the occluder's translation; its vertex p sits at p + (X,Y,Z) (repeatable)");
+    command->add_option("--self", args->self, "FIV bundle of the receiver itself, for self-shadowing");
+    command->add_option("-o,--output", args->output, "Scene bundle (.glb)")->required();
+    command->callback([args] { runFivscene(*args); });
+}
 
 void addFivshadeCommand(CLI::App& app) {
     auto args = std::make_shared<FivshadeArgs>();
     CLI::App* command = app.add_subcommand(
         "fivshade", "Direct-light radiance per receiver vertex under translated occluders, from their FIV grids "
                     "(diffuse, distant environment, no interreflection)");
-    command->add_option("receiver", args->receiver, "Receiver mesh (.glb) with vertex normals")->required();
+    command->add_option("receiver", args->receiver,
+                        "Receiver mesh (.glb) with vertex normals, or a FIV scene bundle (`prt fivscene`)")->required();
     command->add_option("--env", args->env, "The environment map the FIV bundles were reduced with")->required();
     command->add_option("--occluder", args->occluders, "FIV bundle of an occluder type (repeatable, one per --at)");
     command->add_option("--at", args->at,

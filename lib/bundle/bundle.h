@@ -122,6 +122,12 @@ float halfToFloat(uint16_t half);
 // Finds a layer by name; nullptr if absent.
 const Layer* findLayer(const Bundle& bundle, const std::string& name);
 
+// Layer names are unique within a bundle, so a bundle holding one kind of layer for several objects names object
+// k's copy BASE.k, and object 0's BASE (docs/bundle.md "Objects"). objectLayerName gives that name;
+// findObjectLayer finds the layer of `object` named BASE or BASE.k, or returns nullptr.
+std::string objectLayerName(const std::string& base, uint32_t object);
+const Layer* findObjectLayer(const Bundle& bundle, const std::string& base, uint32_t object);
+
 // The order of shard bundles of one `--shard I/N` run, given their sharded layers (null where a bundle has none):
 // result[I] is the position of shard I. Needs every layer's params.shard = [I, N] with N the number of layers and
 // each I once. Throws prt::Error(files[s], "", problem, kExitInput) naming the first bundle that is no shard, of

@@ -316,4 +316,15 @@ const Layer* findLayer(const Bundle& bundle, const std::string& name) {
     return nullptr;
 }
 
+std::string objectLayerName(const std::string& base, uint32_t object) {
+    return object == 0 ? base : base + "." + std::to_string(object);
+}
+
+const Layer* findObjectLayer(const Bundle& bundle, const std::string& base, uint32_t object) {
+    std::string scoped = objectLayerName(base, object);
+    for (const Layer& layer : bundle.layers)
+        if (layer.object == object && (layer.name == base || layer.name == scoped)) return &layer;
+    return nullptr;
+}
+
 } // namespace prt

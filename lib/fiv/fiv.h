@@ -166,6 +166,25 @@ struct FivBundleOptions {
 Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector<float>& difmap,
                  const std::array<double, 9>& fivEnv, const FivBundleOptions& options, const nlohmann::json& inputs);
 
+// A FIV scene bundle (version 2, docs/fiv.md "Scene bundles"): object 0 the receiver (role receiver), object t + 1
+// occluder type t (role occluder, the type's mesh) with its grid layers renamed fiv.k, fiv_power.k, fiv_valid.k
+// (bundle.h objectLayerName), difmap and fiv_env once, from the first grid, and instances: the receiver, then one
+// per placement. With `self` (the receiver's own FIV bundle), object 0 carries its grid too (self-shadowing).
+// Needs FIV bundles from `prt fiv` reduced under one environment, a receiver with normals, a self grid of the
+// receiver's own mesh, placements of existing types, files at the sources (their hashes become the inputs).
+// Throws prt::Error naming the source and the problem otherwise. The runtime reads the result with fivScene.
+struct SceneType {
+    const Bundle* bundle = nullptr; // a FIV bundle
+    std::string source;             // its path
+    std::string name;               // the object's name (made unique with -2, -3, ...), "" for "occluder"
+};
+struct ScenePlacement {
+    size_t type = 0;                        // index into the types
+    std::array<float, 3> translation{0, 0, 0}; // the type's vertex p sits at p + translation
+};
+Bundle fivSceneBundle(const Bundle& receiver, const std::string& receiverSource, const std::vector<SceneType>& types,
+                      const std::vector<ScenePlacement>& placements, const Bundle* self, const std::string& selfSource);
+
 // Params every grid layer carries (dimensions, axes, shell radii, sphere).
 nlohmann::json gridParams(const GridSpec& grid, const BoundingSphere& sphere);
 

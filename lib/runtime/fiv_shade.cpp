@@ -29,9 +29,11 @@ double angleBetween(const float* a, const float* b) {
     return 2.0 * std::asin(std::min(1.0, 0.5 * chord));
 }
 
-const Layer& requireLayer(const Bundle& bundle, const char* name, const char* semantic, const std::string& source) {
-    const Layer* layer = findLayer(bundle, name);
-    if (!layer) throw Error(source, name, "layer is missing (not a FIV bundle from `prt fiv`)");
+const Layer& requireLayer(const Bundle& bundle, const char* name, const char* semantic, const std::string& source,
+                          uint32_t object) {
+    const Layer* layer = findObjectLayer(bundle, name, object);
+    if (!layer)
+        throw Error(source, objectLayerName(name, object), "layer is missing (not a FIV bundle from `prt fiv`)");
     if (layer->semantic != semantic) throw Error(source, name, "semantic is \"" + layer->semantic + "\", not " + semantic);
     for (float v : layer->data)
         if (!std::isfinite(v)) throw Error(source, name, "holds a non-finite value");
@@ -136,18 +138,18 @@ double discOverlap(double r1, double r2, double s) {
     return r1 * r1 * std::acos(a) + r2 * r2 * std::acos(b) - 0.5 * std::sqrt(std::max(0.0, k));
 }
 
-FivOccluder fivOccluder(const Bundle& bundle, const std::string& source) {
-    const Layer& fiv = requireLayer(bundle, "fiv", "fiv_occluded_rgb", source);
+FivOccluder fivOccluder(const Bundle& bundle, const std::string& source, uint32_t object) {
+    const Layer& fiv = requireLayer(bundle, "fiv", "fiv_occluded_rgb", source, object);
     FivOccluder o;
     o.azimuth = intParam(fiv, "azimuth", source, 3, 4096);
     o.polar = intParam(fiv, "polar", source, 2, 2049);
     o.shells = intParam(fiv, "shells", source, 1, 1024);
     uint64_t rows = uint64_t(o.azimuth) * o.polar * o.shells;
     requireShape(fiv, {rows, 3, 3}, source);
-    const Layer& power = requireLayer(bundle, "fiv_power", "occluded_power_rgb", source);
+    const Layer& power = requireLayer(bundle, "fiv_power", "occluded_power_rgb", source, object);
     requireShape(power, {rows, 3}, source);
-    const Layer* valid = findLayer(bundle, "fiv_valid");
-    if (!valid) throw Error(source, "fiv_valid", "layer is missing");
+    const Layer* valid = findObjectLayer(bundle, "fiv_valid", object);
+    if (!valid) throw Error(source, objectLayerName("fiv_valid", object), "layer is missing");
     requireShape(*valid, {rows}, source);
     const nlohmann::json& p = fiv.params;
     if (!p.contains("radius") || !p.at("radius").is_number() || !(p.at("radius").get<double>() > 0.0))
@@ -171,12 +173,12 @@ FivOccluder fivOccluder(const Bundle& bundle, const std::string& source) {
     return o;
 }
 
-FivLighting fivLighting(const Bundle& bundle, const std::string& source) {
-    const Layer& difmap = requireLayer(bundle, "difmap", "irradiance_cube_rgb", source);
+FivLighting fivLighting(const Bundle& bundle, const std::string& source, uint32_t object) {
+    const Layer& difmap = requireLayer(bundle, "difmap", "irradiance_cube_rgb", source, object);
     FivLighting l;
     l.difmapSize = intParam(difmap, "size", source, 1, 1024);
     requireShape(difmap, {6 * uint64_t(l.difmapSize) * l.difmapSize, 3}, source);
-    const Layer& env = requireLayer(bundle, "fiv_env", "fiv_environment_rgb", source);
+    const Layer& env = requireLayer(bundle, "fiv_env", "fiv_environment_rgb", source, object);
     requireShape(env, {1, 3, 3}, source);
     l.difmap = difmap.data;
     std::copy(env.data.begin(), env.data.end(), l.fivEnv);

@@ -130,11 +130,13 @@ struct FivLighting {
     std::string envHash;
 };
 
-// Take the layers out of a FIV bundle. Need: layer shapes that agree with the grid header in params (rows =
-// azimuth * polar * shells, shell_radii of `shells` ascending positive values, radius > 0), finite values.
-// Throw prt::Error(source, layer, problem) otherwise.
-FivOccluder fivOccluder(const Bundle& bundle, const std::string& source);
-FivLighting fivLighting(const Bundle& bundle, const std::string& source);
+// Take the layers of object `object` out of a FIV bundle (`prt fiv`: object 0) or a FIV scene bundle (`prt
+// fivscene`). Need: layer shapes that agree with the grid header in params (rows = azimuth * polar * shells,
+// shell_radii of `shells` ascending positive values, radius > 0), finite values. Throw prt::Error(source, layer,
+// problem) otherwise.
+FivOccluder fivOccluder(const Bundle& bundle, const std::string& source, uint32_t object = 0);
+FivLighting fivLighting(const Bundle& bundle, const std::string& source, uint32_t object = 0);
+
 
 enum class FivPartial {
     None,    // case B like case A: max(0, N . FIV)
@@ -167,6 +169,30 @@ struct FivInstance {
 void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, size_t instanceCount,
                    const FivInstance* self, const float* positions, const float* normals, size_t count,
                    const FivShadeOptions& options, float* irradiance);
+
+// A FIV scene (docs/fiv.md "Scene bundles"): the receiver (object 0), the occluder types (objects with a grid)
+// and their instances, ready for fivIrradiance. `instances` and `self` point into `grids`, which holds one entry
+// per bundle object (empty where an object has no grid), so a FivScene may be moved but not copied.
+struct FivScene {
+    std::vector<FivOccluder> grids;     // [object]
+    FivLighting lighting;
+    std::vector<FivInstance> instances; // every placed occluder (instances of objects >= 1 with a grid)
+    bool selfShadowing = false;         // object 0 carries its own grid
+    FivInstance self;                   // then: object 0's grid, untranslated
+    FivScene() = default;
+    FivScene(FivScene&&) = default;
+    FivScene& operator=(FivScene&&) = default;
+    FivScene(const FivScene&) = delete;
+};
+
+// Reads a scene bundle. Needs: the lighting layers (difmap, fiv_env) on some object, every object other than 0
+// that an instance places with its grid, every grid reduced under the lighting's environment, at least one
+// instance or object 0's own grid. Throws prt::Error(source, place, problem) otherwise.
+FivScene fivScene(const Bundle& bundle, const std::string& source);
+
+// True when the bundle is a FIV scene: some object other than 0 carries a grid (layer fiv.k, bundle.h
+// objectLayerName), or object 0 is a receiver (role) with its own grid.
+bool isFivScene(const Bundle& bundle);
 
 // Building blocks, exposed for tests and tools.
 // DifMap(n), bilinear within a face, for a unit n.

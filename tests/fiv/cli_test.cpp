@@ -126,6 +126,66 @@ TEST(FivCli, ShadingMatchesTheBruteForceReference) {
     EXPECT_LT(nrmse, 0.08);  // a coarse 16x9x6 grid on an 8^2 cube
 }
 
+// A scene bundle (prt fivscene) holds the receiver, two occluder types and three instances; fivshade of it equals
+// fivshade of the separate files byte for byte, and so does self-shadowing. The Khronos validator accepts it.
+TEST(FivCli, SceneBundleShadesLikeSeparateFiles) {
+    const Files& f = files();
+    TempDir out;
+    Bundle small;
+    small.mesh = makeSphere(0.3f, 10, 20);
+    writeBundle(out / "small.glb", small);
+    ASSERT_EQ(run("fiv " + out / "small.glb --env " + f / "env.exr --grid 16,9,6 --cube 8 -o " + out / "small.fiv.glb"), 0);
+    std::string placed = " --occluder " + f / "sphere.fiv.glb --at 0.3,1,0 --occluder " + out / "small.fiv.glb" +
+                         " --at -0.5,0.8,0.2 --occluder " + f / "sphere.fiv.glb --at -0.2,1.4,-0.6";
+    ASSERT_EQ(run("fivscene " + f / "plane.glb" + placed + " -o " + out / "scene.glb"), 0);
+    ASSERT_EQ(run("fivshade " + f / "plane.glb --env " + f / "env.exr" + placed + " --albedo 0.8 -o " + out / "files.npy"), 0);
+    ASSERT_EQ(run("fivshade " + out / "scene.glb --env " + f / "env.exr --albedo 0.8 -o " + out / "scene.npy"), 0);
+    EXPECT_EQ(readFileBytes(out / "scene.npy"), readFileBytes(out / "files.npy"));
+
+    Bundle scene = readBundle(out / "scene.glb");
+    ASSERT_EQ(scene.objects.size(), 2u); // two types, one object each
+    EXPECT_EQ(scene.objects[0].role, "occluder");
+    EXPECT_EQ(scene.instances.size(), 4u); // the receiver and three occluders
+    EXPECT_EQ(scene.instances[3].object, 1u);
+    EXPECT_FLOAT_EQ(scene.instances[3].translation[2], -0.6f);
+    EXPECT_NE(findObjectLayer(scene, "fiv", 2), nullptr);
+    EXPECT_EQ(findObjectLayer(scene, "fiv", 2)->name, "fiv.2");
+
+    ASSERT_EQ(run("fivscene " + f / "sphere.glb --self " + f / "sphere.fiv.glb -o " + out / "self.glb"), 0);
+    ASSERT_EQ(run("fivshade " + f / "sphere.glb --env " + f / "env.exr --self " + f / "sphere.fiv.glb -o " + out / "a.npy"), 0);
+    ASSERT_EQ(run("fivshade " + out / "self.glb --env " + f / "env.exr -o " + out / "b.npy"), 0);
+    EXPECT_EQ(readFileBytes(out / "a.npy"), readFileBytes(out / "b.npy"));
+
+    std::string message;
+    EXPECT_EQ(run("fivshade " + out / "scene.glb --env " + f / "env.exr --occluder " + f / "sphere.fiv.glb --at 0,1,0 -o " +
+                  out / "c.npy", &message), 2);
+    EXPECT_NE(message.find("places its own occluders"), std::string::npos) << message;
+    EXPECT_EQ(run("fivscene " + f / "plane.glb --self " + f / "sphere.fiv.glb -o " + out / "d.glb", &message), 3);
+    EXPECT_NE(message.find("not the receiver's mesh"), std::string::npos) << message;
+    Image other;
+    other.width = 32, other.height = 16;
+    other.rgb.assign(32 * 16 * 3, 0.5f);
+    writeImage(out / "other.exr", other);
+    ASSERT_EQ(run("fiv " + out / "small.glb --env " + out / "other.exr --grid 16,9,6 --cube 8 -o " + out / "other.fiv.glb"), 0);
+    EXPECT_EQ(run("fivscene " + f / "plane.glb --occluder " + f / "sphere.fiv.glb --at 0,1,0 --occluder " +
+                  out / "other.fiv.glb --at 1,1,0 -o " + out / "e.glb", &message), 3);
+    EXPECT_NE(message.find("another environment"), std::string::npos) << message;
+    EXPECT_EQ(run("fivshade " + out / "scene.glb --env " + out / "other.exr -o " + out / "f.npy", &message), 3);
+    EXPECT_NE(message.find("another environment"), std::string::npos) << message;
+    for (const char* name : {"c.npy", "d.glb", "e.glb", "f.npy"}) EXPECT_FALSE(std::filesystem::exists(out / name)) << name;
+
+    std::string validator = PRT_SOURCE_DIR "/tests/bundle/gltf_validator";
+    if (!std::filesystem::exists(validator + "/node_modules/gltf-validator"))
+        GTEST_SKIP() << "npm ci --prefix tests/bundle/gltf_validator (scripts/bootstrap.sh) installs the validator";
+    std::string output;
+    std::FILE* pipe = popen(("node " + validator + "/validate.mjs " + out / "scene.glb " + out / "self.glb 2>&1").c_str(), "r");
+    char buffer[4096];
+    size_t got;
+    while ((got = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) output.append(buffer, got);
+    EXPECT_EQ(WEXITSTATUS(pclose(pipe)), 0) << output;
+    EXPECT_NE(output.find("\"errors\":0"), std::string::npos) << output;
+}
+
 TEST(FivCli, BadInputsFailCleanlyWithoutOutput) {
     const Files& f = files();
     TempDir out;
