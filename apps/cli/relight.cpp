@@ -5,6 +5,7 @@
 #include "compare.h"
 #include "core.h"
 #include "envlight.h"
+#include "raycast.h"
 #include "runtime.h"
 
 #include <nlohmann/json.hpp>
@@ -75,8 +76,8 @@ void runHybridRelight(const RelightOptions& options, double start) {
     std::vector<float> visibility =
         options.lightSamples == 0
             ? std::vector<float>(size_t(model.total.vertexCount) * cones.size(), 1.0f)
-            : envlight::coneVisibility(mesh, mesh.positions.data(), model.normals.data(), model.total.vertexCount,
-                                       cones, options.lightSamples, &rays);
+            : envlight::coneVisibility(mesh, mesh.positions.data(), model.normals.data(), spawnNormals(mesh).data(),
+                                       model.total.vertexCount, cones, options.lightSamples, &rays);
     double visibilitySeconds = nowSeconds() - visibilityStart;
 
     double relightStart = nowSeconds();

@@ -190,10 +190,13 @@ EnvironmentMap renderLighting(const std::vector<ConeLight>& lights, const std::v
 // For each point p_i with unit normal n_i and each light k: the cosine-weighted visible fraction of cone k,
 //   sum_s V(p_i, w_s) max(0, n_i . w_s) / sum_s max(0, n_i . w_s)
 // over `samples` directions w_s spread over the cone (a Hammersley set on the cap, uniform in solid angle, the same
-// for every point), each an occlusion ray against `mesh` from p + offset n with tnear offset (lib/raycast's
-// offset). 0 where the whole cone is below the horizon. Returns [points][lights]. Deterministic for any thread
-// count. Needs finite points and unit normals, samples >= 1, a mesh Embree accepts. *rays counts the rays cast.
-std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals, size_t count,
-                                  const std::vector<ConeLight>& lights, int samples, uint64_t* rays = nullptr);
+// for every point), each an occlusion ray against `mesh` by lib/raycast's spawn rule: from p + offset s_i, with s_i
+// the point's spawn normal (`spawnNormals` [count][3], or null: the normals; mesh vertices pass
+// prt::spawnNormals(mesh)), tnear 0. 0 where the whole cone is below the horizon. Returns [points][lights].
+// Deterministic for any thread count. Needs finite points and unit normals, samples >= 1, a mesh Embree accepts.
+// *rays counts the rays cast.
+std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
+                                  const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
+                                  int samples, uint64_t* rays = nullptr);
 
 } // namespace prt::envlight

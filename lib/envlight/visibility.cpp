@@ -9,7 +9,6 @@
 
 #include <atomic>
 #include <cmath>
-#include <limits>
 
 namespace prt::envlight {
 
@@ -47,8 +46,9 @@ std::vector<float> coneSamples(const ConeLight& light, int samples) {
 
 } // namespace
 
-std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals, size_t count,
-                                  const std::vector<ConeLight>& lights, int samples, uint64_t* rays) {
+std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
+                                  const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
+                                  int samples, uint64_t* rays) {
     std::vector<float> visibility(count * lights.size(), 0.0f);
     if (lights.empty() || count == 0) return visibility;
     std::vector<std::vector<float>> directions;
@@ -61,8 +61,9 @@ std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, cons
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         for (size_t i = range.begin(); i != range.end(); ++i) {
-            const float* p = points + i * 3;
             const float* n = normals + i * 3;
+            float origin[3];
+            spawnOrigin(points + i * 3, (spawnNormals ? spawnNormals : normals) + i * 3, offset, origin);
             for (size_t k = 0; k < lights.size(); ++k) {
                 double visible = 0.0, total = 0.0;
                 for (int s = 0; s < samples; ++s) {
@@ -70,16 +71,8 @@ std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, cons
                     float cosine = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
                     if (cosine <= 0.0f) continue;
                     total += cosine;
-                    RTCRay ray{};
-                    ray.org_x = p[0] + offset * n[0];
-                    ray.org_y = p[1] + offset * n[1];
-                    ray.org_z = p[2] + offset * n[2];
-                    ray.dir_x = w[0];
-                    ray.dir_y = w[1];
-                    ray.dir_z = w[2];
-                    ray.tnear = offset;
-                    ray.tfar = std::numeric_limits<float>::infinity();
-                    ray.mask = 0xFFFFFFFFu;
+                    RTCRay ray;
+                    spawnRay(ray, origin, w[0], w[1], w[2]);
                     rtcOccluded1(scene.scene, &context, &ray);
                     ++local;
                     if (ray.tfar >= 0.0f) visible += cosine; // occluded rays come back with tfar = -inf

@@ -6,6 +6,7 @@
 // against the light carried along by the turn), the number of light-count changes, and the largest frame-to-frame
 // change of relit radiance (RMS over vertices and max over vertices, over the mean radiance) for both methods.
 #include "envlight.h"
+#include "raycast.h"
 #include "runtime.h"
 
 #include "core.h"
@@ -85,7 +86,8 @@ int main(int argc, char** argv) {
                                            {float(l.radiance[0]), float(l.radiance[1]), float(l.radiance[2])},
                                            float(l.angularRadius)});
             std::vector<float> visibility =
-                prt::envlight::coneVisibility(mesh, mesh.positions.data(), model.normals.data(), rows, d.lights, samples);
+                prt::envlight::coneVisibility(mesh, mesh.positions.data(), model.normals.data(),
+                                              prt::spawnNormals(mesh).data(), rows, d.lights, samples);
             std::vector<float> hybrid(rows * 3), plain(rows * 3);
             prt::relightHybrid(model, lighting, visibility.data(), 0, rows, hybrid.data());
             std::vector<float> rotated = prt::rotateLighting(projection.data(), options.order, R);
