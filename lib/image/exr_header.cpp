@@ -1,6 +1,8 @@
 // A structural check of an OpenEXR file's headers before OpenImageIO opens it. OpenEXR 3.1 trusts each
 // attribute's declared size: a 291-byte file whose string attribute claims 2 GiB makes it allocate that much
-// (found by tests/fuzz/fuzz_exr). Here every declared size is bounded by the bytes the file really has.
+// (found by tests/fuzz/fuzz_exr). Here every declared size is bounded by the bytes the file really has, and so are
+// the sizes inside the two attribute types that carry their own: a preview image's width x height x 4 bytes, and
+// each string of a string vector.
 #include "image.h"
 
 #include "core.h"
@@ -59,6 +61,32 @@ void checkExrHeaders(const std::string& path) {
         if (size < 0 || uint64_t(size) > fileSize - offset)
             refuse("attribute '" + name + "' (" + type + ") declares " + std::to_string(size) + " bytes, but only " +
                    std::to_string(fileSize - offset) + " follow in the file");
+        if (type == "preview" || type == "stringvector") {
+            std::string value(size_t(size), '\0');
+            if (!in.read(value.data(), size)) refuse("truncated: attribute '" + name + "' runs past the end of the file");
+            auto word = [&](size_t at) {
+                uint32_t v;
+                std::memcpy(&v, value.data() + at, 4);
+                return v;
+            };
+            if (type == "preview") {
+                if (size < 8) refuse("preview attribute '" + name + "' is shorter than its width and height");
+                uint64_t pixels = uint64_t(word(0)) * word(4);
+                if (pixels * 4 != uint64_t(size) - 8)
+                    refuse("preview attribute '" + name + "' declares " + std::to_string(word(0)) + " x " +
+                           std::to_string(word(4)) + " pixels, which its " + std::to_string(size) + " bytes do not hold");
+            } else {
+                for (size_t at = 0; at < size_t(size);) {
+                    if (size_t(size) - at < 4) refuse("string vector attribute '" + name + "' ends inside a length");
+                    uint32_t length = word(at);
+                    at += 4;
+                    if (length > size_t(size) - at)
+                        refuse("string vector attribute '" + name + "' holds a string of " + std::to_string(length) +
+                               " bytes, more than the attribute's remaining " + std::to_string(size_t(size) - at));
+                    at += length;
+                }
+            }
+        }
         offset += uint64_t(size);
         in.seekg(std::streamoff(offset));
     }

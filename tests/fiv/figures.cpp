@@ -42,28 +42,6 @@ struct SceneSpec {
     bool failureOnly = false;                     // measured under courtyard only (the failure map)
 };
 
-// The map averaged over 2 x 2 texels (equal solid angle per row pair, so power is kept up to the row weights):
-// the reference's rays fall 4-fold while it keeps 21 times the cube's texels.
-EnvironmentMap halve(const EnvironmentMap& env) {
-    EnvironmentMap out;
-    int w = env.radiance.width / 2, h = env.radiance.height / 2;
-    out.radiance.width = w, out.radiance.height = h;
-    out.radiance.rgb.assign(size_t(w) * h * 3, 0.0f);
-    for (int y = 0; y < h; ++y) {
-        // Rows 2y and 2y+1 weighted by their solid angles.
-        double t0 = std::numbers::pi * (2 * y) / env.radiance.height, t1 = std::numbers::pi * (2 * y + 1) / env.radiance.height,
-               t2 = std::numbers::pi * (2 * y + 2) / env.radiance.height;
-        double w0 = std::cos(t0) - std::cos(t1), w1 = std::cos(t1) - std::cos(t2);
-        for (int x = 0; x < w; ++x)
-            for (int c = 0; c < 3; ++c) {
-                auto at = [&](int yy, int xx) { return double(env.radiance.rgb[3 * (size_t(yy) * env.radiance.width + xx) + c]); };
-                double top = at(2 * y, 2 * x) + at(2 * y, 2 * x + 1), bottom = at(2 * y + 1, 2 * x) + at(2 * y + 1, 2 * x + 1);
-                out.radiance.rgb[3 * (size_t(y) * w + x) + c] = float(0.5 * (w0 * top + w1 * bottom) / (w0 + w1));
-            }
-    }
-    return out;
-}
-
 std::vector<double> luminance(const std::vector<float>& rgb) {
     std::vector<double> out(rgb.size() / 3);
     for (size_t v = 0; v < out.size(); ++v)
@@ -195,7 +173,7 @@ int main(int argc, char** argv) {
                 shadowed.albedo = unshadowed.albedo = std::array<float, 3>{1, 1, 1};
                 std::string key = s.name + "|" + m;
                 double t0 = nowSeconds();
-                EnvironmentMap referenceMap = envs[m].radiance.width > 512 ? halve(envs[m]) : envs[m];
+                const EnvironmentMap& referenceMap = envs[m]; // the full map, as prt reference uses it
                 // Cached next to the figures: the references cost minutes and do not depend on the grid.
                 std::string cache = outDir + "/reference-" + std::to_string(std::hash<std::string>()(key)) + ".npy";
                 ReferenceRadiance r;

@@ -224,3 +224,48 @@ TEST(Image, ExrAttributeLargerThanTheFileIsRefusedBeforeOpenExrAllocates) {
             << e.what();
     }
 }
+
+// OpenEXR also trusts the sizes inside two attribute types: a preview image's width x height, and each string of a
+// string vector. Each is refused before OpenImageIO opens the file, naming the attribute.
+TEST_F(ImageTest, ExrPreviewAndStringVectorSizesAreCheckedBeforeOpenExrAllocates) {
+    prt::Image image;
+    image.width = 4, image.height = 2;
+    image.rgb.assign(4 * 2 * 3, 1.0f);
+    std::string good = file("good.exr");
+    prt::writeImage(good, image);
+    std::string bytes = prt::readFileBytes(good);
+    auto withAttribute = [&](const std::string& name, const std::string& type, const std::string& value) {
+        std::string attribute = name + '\0' + type + '\0';
+        uint32_t size = uint32_t(value.size());
+        attribute.append(reinterpret_cast<const char*>(&size), 4);
+        attribute += value;
+        std::string out = bytes;
+        out.insert(8, attribute); // attributes may come in any order; the header check runs before any pixel
+        std::string path = file(name + ".exr");
+        prt::writeBytesAtomic(path, out);
+        return path;
+    };
+    auto words = [](std::initializer_list<uint32_t> values) {
+        std::string out;
+        for (uint32_t v : values) out.append(reinterpret_cast<const char*>(&v), 4);
+        return out;
+    };
+    struct Case {
+        std::string path, says;
+    };
+    for (const Case& c : {Case{withAttribute("thumb", "preview", words({65536, 65536})), "65536 x 65536 pixels"},
+                          Case{withAttribute("notes", "stringvector", words({1000000000, 0})), "1000000000 bytes"},
+                          Case{withAttribute("cut", "stringvector", std::string("\x02\x00", 2)), "ends inside a length"}}) {
+        try {
+            prt::readEnvironmentMap(c.path);
+            ADD_FAILURE() << c.path << ": expected an error";
+        } catch (const prt::Error& e) {
+            EXPECT_EQ(e.exitCode(), prt::kExitInput);
+            EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
+        }
+    }
+    // A well-formed preview and string vector pass the check (the insertion shifts the pixel offsets, so the file
+    // itself no longer reads).
+    EXPECT_NO_THROW(prt::checkExrHeaders(withAttribute("fine", "preview", words({1, 1}) + std::string(4, '\x7f'))));
+    EXPECT_NO_THROW(prt::checkExrHeaders(withAttribute("list", "stringvector", words({2}) + "ab" + words({0}))));
+}
