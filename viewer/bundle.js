@@ -1,15 +1,10 @@
 // Reads a prt bundle (.glb with the PRT_bundle extension, docs/bundle.md) without any glTF library: the mesh
 // attributes and the layers are plain views into the one binary buffer.
 
+import { halfToFloat, readExr } from './exr.js';
+
 const kComponentSize = { 5126: 4, 5125: 4, 5123: 2, 5121: 1 };
 const kTypeSize = { SCALAR: 1, VEC2: 2, VEC3: 3, VEC4: 4 };
-
-function halfToFloat(h) {
-  const sign = h & 0x8000 ? -1 : 1, exponent = (h >> 10) & 0x1f, fraction = h & 0x3ff;
-  if (exponent === 0) return sign * fraction * 2 ** -24;
-  if (exponent === 31) return fraction ? NaN : sign * Infinity;
-  return sign * (1 + fraction / 1024) * 2 ** (exponent - 15);
-}
 
 // Splits a GLB into its JSON and BIN chunk. Throws Error for anything that is not a glTF 2 binary.
 export function parseGlb(arrayBuffer) {
@@ -97,7 +92,6 @@ export async function loadBundle(url, kind = 'vertex') {
   const mesh = readBundle(await fetchBytes(url), kind);
   const t = mesh.transfer;
   if (t.data) return mesh;
-  const { readExr } = await import('./exr.js');
   const imageUrl = new URL(t.uri, new URL(url, location.href)).href;
   const image = await readExr(await fetchBytes(imageUrl), t.uri);
   if (image.width !== t.width || image.height !== t.height || image.width * image.height !== t.rows)

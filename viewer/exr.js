@@ -6,7 +6,8 @@
 const kHalf = 1, kFloat = 2;
 const kLinesPerChunk = { 0: 1, 2: 1, 3: 16 }; // NONE, ZIPS, ZIP
 
-function halfToFloat(h) {
+// IEEE 754 binary16 to a number (bundles' float16 layers and half-float EXR channels).
+export function halfToFloat(h) {
   const sign = h & 0x8000 ? -1 : 1, exponent = (h >> 10) & 0x1f, fraction = h & 0x3ff;
   if (exponent === 0) return sign * fraction * 2 ** -24;
   if (exponent === 31) return fraction ? NaN : sign * Infinity;
