@@ -1,6 +1,7 @@
 // `prt adapt` end to end: an adaptive bundle that `prt relight` reads, and the refusals (exit code, message, no
 // output file).
 #include "bundle.h"
+#include "cli_util.h"
 #include "compare.h"
 #include "image.h"
 
@@ -20,18 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int exitCode;
-    std::string stderrText;
-};
-
-CliRun runPrt(const std::string& arguments, const fs::path& dir) {
-    fs::path log = dir / "stderr.txt";
-    int status = std::system((std::string(PRT_EXECUTABLE) + " " + arguments + " 2> " + log.string()).c_str());
-    std::stringstream text;
-    text << std::ifstream(log).rdbuf();
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
-}
+using prt::test::CliRun;
+using prt::test::runPrt;
 
 class AdaptCli : public ::testing::Test {
 protected:

@@ -1,4 +1,5 @@
 // `prt envlight` end to end: a disc map gives its light in prt-lights JSON; bad inputs exit non-zero with no output.
+#include "cli_util.h"
 #include "envlight_maps.h"
 
 #include "core.h"
@@ -20,10 +21,7 @@ using namespace envlight_test;
 
 namespace {
 
-struct CliRun {
-    int exitCode;
-    std::string stderrText;
-};
+using prt::test::CliRun;
 
 class EnvlightCli : public ::testing::Test {
 protected:
@@ -33,13 +31,7 @@ protected:
     }
     void TearDown() override { fs::remove_all(dir); }
 
-    CliRun run(const std::string& arguments) {
-        fs::path log = dir / "stderr.txt";
-        int status = std::system((std::string(PRT_EXECUTABLE) + " " + arguments + " 2> " + log.string()).c_str());
-        std::stringstream text;
-        text << std::ifstream(log).rdbuf();
-        return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
-    }
+    CliRun run(const std::string& arguments) { return prt::test::runPrt(arguments, dir); }
     std::string writeMap(const std::string& name, const prt::EnvironmentMap& env) {
         std::string path = (dir / name).string();
         prt::writeImage(path, env.radiance);

@@ -1,4 +1,5 @@
 // `prt relight` end to end: the binary reads a bundle and lighting, writes radiance, or fails with no output.
+#include "cli_util.h"
 #include "compare.h"
 #include "core.h"
 #include "image.h"
@@ -20,18 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int exitCode;
-    std::string stderrText;
-};
-
-CliRun runPrt(const std::string& arguments, const fs::path& dir) {
-    fs::path log = dir / "stderr.txt";
-    int status = std::system((std::string(PRT_EXECUTABLE) + " " + arguments + " 2> " + log.string()).c_str());
-    std::stringstream text;
-    text << std::ifstream(log).rdbuf();
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
-}
+using prt::test::CliRun;
+using prt::test::runPrt;
 
 class RelightCli : public ::testing::Test {
 protected:
