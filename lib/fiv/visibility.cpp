@@ -52,14 +52,6 @@ struct Tracer {
 
     explicit Tracer(const TriMesh& m) : mesh(m), embree(m) {} // EmbreeScene is always robust (lib/raycast)
 
-    bool occluded(const float origin[3], const float d[3]) const {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        RTCRay ray = makeRay(origin, d);
-        rtcOccluded1(embree.scene, &context, &ray);
-        return ray.tfar < 0.0f;
-    }
-
     // Most of the 26 vote rays first meet a back face: the point is inside. Exact for a closed, consistently wound
     // mesh (every ray then agrees), a majority vote for an open one.
     bool inside(const float origin[3], uint64_t& rays) const {
@@ -98,9 +90,19 @@ struct BitWriter {
     }
 };
 
-// One sample's mask bytes; returns false when the receiver is inside the occluder.
+// Per-thread buffers of sampleMask: the sample's candidates, and its rays with the candidate each belongs to.
+struct MaskScratch {
+    std::vector<uint32_t> candidates;
+    std::vector<RTCRay> rays;
+    std::vector<uint32_t> rayCandidate;
+    std::vector<uint32_t> hits;
+};
+
+// One sample's mask bytes; returns false when the receiver is inside the occluder. Every ray of a sample leaves
+// one point towards one sphere, so they go to Embree as one coherent stream (rtcOccluded1M), which traces them
+// in packets.
 bool sampleMask(const Tracer& tracer, const CubeTexels& cube, const Visibility& vis, const std::vector<double>& radii,
-                size_t row, std::vector<uint32_t>& candidates, std::vector<uint8_t>& bytes, uint64_t& rays) {
+                size_t row, MaskScratch& scratch, std::vector<uint8_t>& bytes, uint64_t& rays) {
     const GridSpec& grid = vis.grid;
     int i = int(row % size_t(grid.azimuth)), j = int(row / size_t(grid.azimuth) % size_t(grid.polar));
     int k = int(row / (size_t(grid.azimuth) * grid.polar));
@@ -114,27 +116,38 @@ bool sampleMask(const Tracer& tracer, const CubeTexels& cube, const Visibility& 
         origin[c] = float(vis.sphere.centre[size_t(c)] - toCentre[c]);
     }
     if (rho < 1.0 && tracer.inside(origin, rays)) return false;
+    std::vector<uint32_t>& candidates = scratch.candidates;
     candidates.clear();
     candidateTexels(cube, d, rho, candidates);
     double distance2 = rho * rho * radius * radius, slack = distance2 - radius * radius;
     int s = vis.supersample;
-    BitWriter writer{bytes};
-    for (uint32_t t : candidates) {
-        uint32_t hits = 0;
+    scratch.rays.clear();
+    scratch.rayCandidate.clear();
+    for (uint32_t c = 0; c < candidates.size(); ++c)
         for (int sy = 0; sy < s; ++sy)
             for (int sx = 0; sx < s; ++sx) {
                 double w[3];
-                subsampleDirection(cube, t, sx, sy, s, w);
+                subsampleDirection(cube, candidates[c], sx, sy, s, w);
                 if (rho >= 1.0) { // outside the sphere: the ray must point at it and pass within R of the centre
                     double along = toCentre[0] * w[0] + toCentre[1] * w[1] + toCentre[2] * w[2];
                     if (along <= 0.0 || along * along < slack) continue;
                 }
                 float wf[3] = {float(w[0]), float(w[1]), float(w[2])};
-                ++rays;
-                if (tracer.occluded(origin, wf)) ++hits;
+                scratch.rays.push_back(makeRay(origin, wf));
+                scratch.rayCandidate.push_back(c);
             }
-        writer.put(hits, vis.bitsPerTexel);
+    if (!scratch.rays.empty()) {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        rtcOccluded1M(tracer.embree.scene, &context, scratch.rays.data(), unsigned(scratch.rays.size()), sizeof(RTCRay));
     }
+    rays += scratch.rays.size();
+    scratch.hits.assign(candidates.size(), 0);
+    for (size_t r = 0; r < scratch.rays.size(); ++r)
+        if (scratch.rays[r].tfar < 0.0f) ++scratch.hits[scratch.rayCandidate[r]];
+    BitWriter writer{bytes};
+    for (uint32_t hits : scratch.hits) writer.put(hits, vis.bitsPerTexel);
     return true;
 }
 
@@ -212,7 +225,7 @@ Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& op
         Tracer tracer(occluder);
         Progress progress("fiv visibility", endLine - firstLine);
         tbb::parallel_for(tbb::blocked_range<size_t>(firstLine, endLine, 1), [&](const tbb::blocked_range<size_t>& r) {
-            std::vector<uint32_t> candidates;
+            MaskScratch scratch;
             uint64_t lineRays = 0;
             for (size_t line = r.begin(); line < r.end(); ++line) {
                 size_t j = line % size_t(options.grid.polar);
@@ -222,7 +235,7 @@ Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& op
                     // Its rays count where its first row lies, so shards sum to the unsharded count.
                     std::vector<uint8_t> poleBytes;
                     uint64_t poleRays = 0;
-                    bool valid = sampleMask(tracer, cube, vis, radii, line * azimuth, candidates, poleBytes, poleRays);
+                    bool valid = sampleMask(tracer, cube, vis, radii, line * azimuth, scratch, poleBytes, poleRays);
                     if (line * azimuth >= range.begin) lineRays += poleRays;
                     for (size_t row = lo; row < hi; ++row) {
                         bytes[row - range.begin] = valid ? poleBytes : std::vector<uint8_t>();
@@ -231,7 +244,7 @@ Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& op
                 } else {
                     for (size_t row = lo; row < hi; ++row) {
                         std::vector<uint8_t>& out = bytes[row - range.begin];
-                        bool valid = sampleMask(tracer, cube, vis, radii, row, candidates, out, lineRays);
+                        bool valid = sampleMask(tracer, cube, vis, radii, row, scratch, out, lineRays);
                         if (!valid) out.clear();
                         vis.valid[row - range.begin] = valid;
                     }
