@@ -23,6 +23,9 @@
 // covers the mesh, 12 * order^2 with per-vertex albedo. The Embree BVH is freed before the bounces. Measured:
 // 1.06 M vertices, order 5, 128 samples, 2 bounces: peak 1768 bytes per vertex, of which hits 1004, transfer 500.
 // Everything else is O(vertices * order^2) or O(samples * order^2).
+// Sharded (computeDirectShard, computeBounceShard below) a job holds its range's hits and rows plus the mesh and
+// either the BVH (direct pass) or the previous pass's exitant array (4 * order^2 * channels bytes per vertex);
+// measured on that mesh in 4 shards: at most 1.1 GiB per job against 3.8 GiB for the unsharded stage.
 #pragma once
 
 #include "bundle.h"
