@@ -240,8 +240,7 @@ void runTransfer(const TransferArgs& args) {
         if (bouncePass && (args.previous.empty() || args.exitant.empty() || args.hits.empty()))
             throw usage("--pass", "a bounce pass needs --previous (its shard's rows of the pass before), --exitant "
                                   "(that pass's gathered array) and --hits (its shard's hit records)");
-        if (args.gather.empty() && !bouncePass && passFlags && args.pass <= 0 &&
-            (!args.previous.empty() || !args.exitant.empty() || !args.hits.empty()))
+        if (args.gather.empty() && !bouncePass && (!args.previous.empty() || !args.exitant.empty() || !args.hits.empty()))
             throw usage("--pass", "the direct pass (0) reads no --previous, --exitant or --hits");
         runTransferPass(args, options, shardIndex, shardCount, start);
         return;
