@@ -39,27 +39,6 @@ bool isSceneName(const std::string& name) {
     return std::find(names.begin(), names.end(), name) != names.end();
 }
 
-// A procedural scene grown to at least `vertices` vertices by raising its ring and segment counts together.
-TriMesh sceneWithVertices(const std::string& name, uint64_t vertices) {
-    auto build = [&](int rings) {
-        int segments = 2 * rings;
-        if (name == "sphere") return makeSphere(1.0f, rings, segments);
-        if (name == "cavity") return makeOpenCavity(1.0f, kCavityOpeningHalfAngle, rings, segments);
-        if (name == "sphere-in-cavity") return makeSphereInCavity(rings, segments);
-        if (name == "two-spheres") return makeTwoSpheres(rings, segments);
-        throw Error("", "--vertices", "scene '" + name + "' cannot be grown; use sphere, cavity, sphere-in-cavity "
-                                      "or two-spheres", kExitUsage);
-    };
-    int rings = 8;
-    TriMesh mesh = build(rings);
-    while (mesh.vertexCount() < vertices) {
-        double grow = std::sqrt(double(vertices) / double(mesh.vertexCount()));
-        rings = std::max(rings + 1, int(std::ceil(rings * grow)));
-        mesh = build(rings);
-    }
-    return mesh;
-}
-
 TriMesh loadBenchMesh(const std::string& source) {
     if (isSceneName(source)) return makeScene(source);
     if (!std::filesystem::exists(source))
@@ -156,7 +135,7 @@ void runBenchTransfer(const BenchTransferArgs& args) {
     };
 
     if (args.vertices > 0) {
-        TriMesh big = sceneWithVertices(args.mesh, args.vertices);
+        TriMesh big = makeSceneWithVertices(args.mesh, args.vertices);
         mesh = TriMesh{}; // free the small scene before the peak
         TransferOptions memoryOptions = interreflectedOptions;
         memoryOptions.order = 5;

@@ -18,6 +18,7 @@ struct RunArgs {
     RunOptions options;
     std::string executor = "local";
     std::string job, jobPart, runDir; // a Slurm job's own invocation
+    int jobPass = 0;
 };
 
 // The `prt` next to this program: stages run as `prt STAGE`, also when this is the standalone prt-run.
@@ -28,7 +29,7 @@ std::string prtBinary() {
     return prt;
 }
 
-// "all", "I/N" or "merge/N", as the Slurm executor writes them into its job scripts.
+// "all", "I/N", "merge/N" or "gather/N", as the Slurm executor writes them into its job scripts.
 void parseJobPart(const std::string& text, int& shardIndex, int& shardCount) {
     shardIndex = 0;
     shardCount = 1;
@@ -36,10 +37,11 @@ void parseJobPart(const std::string& text, int& shardIndex, int& shardCount) {
     size_t slash = text.find('/');
     std::string index = text.substr(0, slash);
     std::istringstream count(slash == std::string::npos ? "" : text.substr(slash + 1));
-    if (!(count >> shardCount) || shardCount < 2) throw Error("", "--job-part", "'" + text + "' is not all, I/N or merge/N", kExitUsage);
-    shardIndex = index == "merge" ? -1 : std::atoi(index.c_str());
-    if (index != "merge" && (index.find_first_not_of("0123456789") != std::string::npos || shardIndex >= shardCount))
-        throw Error("", "--job-part", "'" + text + "' is not all, I/N or merge/N", kExitUsage);
+    if (!(count >> shardCount) || shardCount < 2) throw Error("", "--job-part", "'" + text + "' is not all, I/N, merge/N or gather/N", kExitUsage);
+    bool join = index == "merge" || index == "gather";
+    shardIndex = index == "merge" ? kMergeJob : index == "gather" ? kGatherJob : std::atoi(index.c_str());
+    if (!join && (index.empty() || index.find_first_not_of("0123456789") != std::string::npos || shardIndex >= shardCount))
+        throw Error("", "--job-part", "'" + text + "' is not all, I/N, merge/N or gather/N", kExitUsage);
 }
 
 void runRun(RunArgs& args) {
@@ -70,8 +72,9 @@ void runRun(RunArgs& args) {
     int shardIndex, shardCount;
     parseJobPart(args.jobPart, shardIndex, shardCount);
     const PipelineStage& stage = pipeline.stages[findStage(pipeline, args.job)];
-    nlohmann::json record = runStageJob(pipeline, stage, args.options, shardIndex, shardCount, args.options.force);
-    writeBytesAtomic(jobRecordPath(args.runDir, stage.id, shardIndex, shardCount), record.dump(2) + "\n");
+    nlohmann::json record =
+        runStageJob(pipeline, stage, args.options, shardIndex, shardCount, args.options.force, args.jobPass);
+    writeBytesAtomic(jobRecordPath(args.runDir, stage.id, shardIndex, shardCount, args.jobPass), record.dump(2) + "\n");
 }
 
 } // namespace
@@ -104,7 +107,9 @@ void addRunCommand(CLI::App& app) {
         ->allow_extra_args(false);
     const char* internal = "Internal (the Slurm executor's jobs)";
     command->add_option("--job", args->job, "Run one stage job of the pipeline and record it")->group(internal);
-    command->add_option("--job-part", args->jobPart, "all, I/N (shard) or merge/N")->default_val("all")->group(internal);
+    command->add_option("--job-part", args->jobPart, "all, I/N (shard), merge/N or gather/N")->default_val("all")->group(internal);
+    command->add_option("--job-pass", args->jobPass, "The pass of a multi-pass stage's job (default 0)")
+        ->check(CLI::NonNegativeNumber)->group(internal);
     command->add_option("--run-dir", args->runDir, "Run folder the job records go to")->group(internal);
     command->callback([args] { runRun(*args); });
 }

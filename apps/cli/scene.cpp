@@ -20,6 +20,7 @@ struct SceneOptions {
     std::string name;
     std::string output;
     bool list = false;
+    uint64_t vertices = 0; // 0: the scene's default resolution
 };
 
 void runScene(const SceneOptions& options) {
@@ -33,7 +34,7 @@ void runScene(const SceneOptions& options) {
     double start = nowSeconds();
 
     Bundle bundle;
-    bundle.mesh = makeScene(options.name);
+    bundle.mesh = options.vertices > 0 ? makeSceneWithVertices(options.name, options.vertices) : makeScene(options.name);
     bundle.producer = {{"tool", "prt"}, {"version", PRT_VERSION}, {"stage", "scene"}};
     bundle.inputs = {{"scene", options.name}};
     bundle.convention = conventionRecord();
@@ -56,6 +57,9 @@ void addSceneCommand(CLI::App& app) {
     command->add_option("name", options->name, "Scene name (see --list)");
     command->add_option("-o,--output", options->output, "Output bundle (.glb)");
     command->add_flag("--list", options->list, "Print the scene names and exit");
+    command->add_option("--vertices", options->vertices,
+                        "Grow sphere, cavity, sphere-in-cavity or two-spheres to at least N vertices (big-mesh runs)")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 30));
     command->callback([options] { runScene(*options); });
 }
 

@@ -1,4 +1,5 @@
-// prt transfer: per-vertex diffuse SH transfer of a mesh, written as the "transfer" layer of a bundle.
+// prt transfer: per-vertex diffuse SH transfer of a mesh, written as the "transfer" layer of a bundle; sharded
+// interreflected transfer runs as passes (--shard I/N --pass P, --gather), the work in lib/transfer.
 #include "cli.h"
 
 #include "bundle.h"
@@ -8,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <memory>
 
 #ifndef PRT_VERSION
@@ -29,6 +31,10 @@ struct TransferArgs {
     uint64_t seed = 0;
     int threads = 0;
     std::string shard;
+    // Sharded interreflected passes (transfer.h): -1 not given
+    int pass = -1;
+    std::string previous, exitant, hits;
+    std::vector<std::string> gather;
 };
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
@@ -59,51 +65,25 @@ TransferOptions resolveOptions(const TransferArgs& args) {
     return options;
 }
 
-void runTransfer(const TransferArgs& args) {
-    double start = nowSeconds();
-    TransferOptions options = resolveOptions(args);
-    int shardIndex = 0, shardCount = 1;
-    if (!args.shard.empty()) {
-        parseShard(args.shard, shardIndex, shardCount);
-        if (options.bounces > 0)
-            throw usage("--shard", "interreflected bounces gather from every vertex; run them unsharded");
-    }
+// The bundle `prt transfer` writes: the mesh, the "transfer" layer of rows [rowBegin, rowEnd) (a "vertex_range"
+// layer for a shard), and with `direct` (interreflected with bounces) the "transfer_bounce" layer, total minus direct.
+struct Rows {
+    std::vector<float> total;
+    const std::vector<float>* direct = nullptr;
+    size_t begin = 0, end = 0;
+    uint64_t rays = 0, backFaceHits = 0;
+    float rayOffset = 0.0f;
+};
 
-    Bundle input = readBundle(args.input);
-    TriMesh& mesh = input.mesh;
-    if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
-    size_t vertexCount = mesh.vertexCount();
-    RowRange range = shardRows(vertexCount, shardIndex, shardCount);
-    options.vertexBegin = range.begin;
-    options.vertexEnd = range.end;
+Bundle transferBundle(const TransferArgs& args, const TransferOptions& options, TriMesh mesh, Rows rows,
+                      int shardIndex, int shardCount, const std::string& meshHash) {
     bool perVertexAlbedo = !mesh.albedo.empty() && !options.albedoOverride;
-    logInfo("transfer: " + args.input + " (" + std::to_string(vertexCount) + " vertices) " + args.mode + ", order " +
-            std::to_string(options.order) + ", " + std::to_string(options.samples) + " samples" +
-            (options.bounces > 0 ? ", " + std::to_string(options.bounces) + " bounces" : "") +
-            (shardCount > 1 ? ", shard " + args.shard : ""));
-
-    // The bounce part travels as its own layer, so a hybrid relight can send cone lights through it.
-    options.keepDirect = options.mode == TransferMode::Interreflected && options.bounces > 0;
-    Transfer transfer;
-    try {
-        transfer = computeTransfer(mesh, options);
-    } catch (const Error& e) {
-        if (!e.file().empty() || e.exitCode() != kExitInput) throw;
-        throw Error(args.input, e.place(), e.problem(), e.exitCode());
-    }
-    const TransferStats& stats = transfer.stats;
-    // A closed mesh still sees the odd grazing back-face hit from float error: warn only above 1 in 100000 rays.
-    if (stats.backFaceHits > 0)
-        (stats.backFaceHits * 100000 > stats.rays ? logWarn : logInfo)("transfer: " + std::to_string(stats.backFaceHits) + " of " + std::to_string(stats.rays) +
-                " rays hit back faces (open or inside-out mesh?); they count as occluded and reflect nothing");
-
     Layer layer;
     layer.name = "transfer";
     layer.semantic = "sh_transfer_rgb";
-    uint64_t rows = transfer.vertexEnd - transfer.vertexBegin;
     uint64_t coefficients = uint64_t(options.order) * options.order;
-    layer.shape = {rows, coefficients, 3};
-    layer.data = std::move(transfer.coefficients);
+    layer.shape = {rows.end - rows.begin, coefficients, 3};
+    layer.data = std::move(rows.total);
     nlohmann::json albedo = "per-vertex";
     if (!perVertexAlbedo)
         albedo = args.albedo.empty() ? std::array<double, 3>{1.0, 1.0, 1.0} : parseAlbedo(args.albedo);
@@ -114,28 +94,29 @@ void runTransfer(const TransferArgs& args) {
                     {"albedo", albedo},
                     {"seed", options.seed},
                     {"direction_set", kTransferDirectionSet},
-                    {"ray_offset", stats.rayOffset},
-                    {"rays", stats.rays},
-                    {"back_face_hits", stats.backFaceHits}};
+                    {"ray_offset", rows.rayOffset},
+                    {"rays", rows.rays},
+                    {"back_face_hits", rows.backFaceHits}};
     if (shardCount > 1) {
         // A slice of the vertex rows; a merge step concatenates the shards into one "vertex" layer.
         layer.domain = "vertex_range";
         layer.params["shard"] = {shardIndex, shardCount};
-        layer.params["row_begin"] = transfer.vertexBegin;
-        layer.params["row_end"] = transfer.vertexEnd;
-        layer.params["vertex_count"] = vertexCount;
+        layer.params["row_begin"] = rows.begin;
+        layer.params["row_end"] = rows.end;
+        layer.params["vertex_count"] = mesh.vertexCount();
     } else {
         layer.domain = "vertex";
     }
 
+    // The bounce part travels as its own layer, so a hybrid relight can send cone lights through it.
     Layer bounceLayer;
-    if (!transfer.direct.empty()) {
+    if (rows.direct) {
         bounceLayer.name = "transfer_bounce";
-        bounceLayer.domain = "vertex";
+        bounceLayer.domain = layer.domain;
         bounceLayer.semantic = "sh_transfer_bounce_rgb";
         bounceLayer.shape = layer.shape;
         bounceLayer.data.resize(layer.data.size());
-        for (size_t i = 0; i < layer.data.size(); ++i) bounceLayer.data[i] = layer.data[i] - transfer.direct[i];
+        for (size_t i = 0; i < layer.data.size(); ++i) bounceLayer.data[i] = layer.data[i] - (*rows.direct)[i];
         bounceLayer.params = layer.params;
         bounceLayer.params["part"] = "bounces 1..B: transfer minus its direct (shadowed) pass";
     }
@@ -145,11 +126,12 @@ void runTransfer(const TransferArgs& args) {
     output.layers.push_back(std::move(layer));
     if (!bounceLayer.name.empty()) output.layers.push_back(std::move(bounceLayer));
     output.producer = {{"tool", "prt"}, {"version", PRT_VERSION}, {"stage", "transfer"}};
-    output.inputs = {{"mesh", hashFile(args.input)}};
+    output.inputs = {{"mesh", meshHash}};
     output.convention = conventionRecord();
-    writeBundle(args.output, output);
-    logInfo("transfer: wrote " + args.output);
+    return output;
+}
 
+void reportStats(const TransferStats& stats, double start) {
     nlohmann::json record = {{"rays", stats.rays},
                              {"hits", stats.hits},
                              {"back_face_hits", stats.backFaceHits},
@@ -160,13 +142,132 @@ void runTransfer(const TransferArgs& args) {
                              {"hit_record_bytes", stats.hitRecordBytes},
                              {"transfer_bytes", stats.transferBytes}};
     logEvent("transfer_stats", record.dump());
-
     StageCost cost;
     cost.stage = "transfer";
     cost.seconds = nowSeconds() - start;
     cost.rays = stats.rays;
     cost.peakMemoryBytes = peakMemoryBytes();
     reportCost(cost);
+}
+
+void warnBackFaces(const TransferStats& stats) {
+    // A closed mesh still sees the odd grazing back-face hit from float error: warn only above 1 in 100000 rays.
+    if (stats.backFaceHits > 0)
+        (stats.backFaceHits * 100000 > stats.rays ? logWarn : logInfo)(
+            "transfer: " + std::to_string(stats.backFaceHits) + " of " + std::to_string(stats.rays) +
+            " rays hit back faces (open or inside-out mesh?); they count as occluded and reflect nothing");
+}
+
+// A mesh error without a file is the input mesh's.
+template <class F>
+auto namingInput(const std::string& input, F&& work) {
+    try {
+        return work();
+    } catch (const Error& e) {
+        if (!e.file().empty() || e.exitCode() != kExitInput) throw;
+        throw Error(input, e.place(), e.problem(), e.exitCode());
+    }
+}
+
+// One job of sharded interreflected transfer: pass 0 (direct, hit records to OUTPUT.hits), pass 1..B (a bounce;
+// the last writes the shard bundle `prt merge` joins), or --gather (a pass's exitant array).
+void runTransferPass(const TransferArgs& args, const TransferOptions& options, int shardIndex, int shardCount,
+                     double start) {
+    Bundle input = readBundle(args.input);
+    TriMesh& mesh = input.mesh;
+    if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
+    const std::string meshHash = hashFile(args.input);
+    if (!args.gather.empty()) {
+        ShardRun run = makeShardRun(mesh, options, meshHash, 0, int(args.gather.size()));
+        int pass = gatherExitant(args.gather, run, args.output);
+        logInfo("transfer: gathered pass " + std::to_string(pass) + " of " + std::to_string(args.gather.size()) +
+                " shards into " + args.output);
+        reportStats(TransferStats{}, start);
+        return;
+    }
+    const int pass = std::max(args.pass, 0);
+    ShardRun run = makeShardRun(mesh, options, meshHash, shardIndex, shardCount);
+    logInfo("transfer: " + args.input + " (" + std::to_string(run.vertexCount) + " vertices) interreflected, order " +
+            std::to_string(options.order) + ", " + std::to_string(options.samples) + " samples, shard " + args.shard +
+            (pass == 0 ? ", direct pass" : ", bounce " + std::to_string(pass) + " of " + std::to_string(options.bounces)));
+    TransferStats stats;
+    ShardRows rows;
+    const std::string hitsOut = args.output + ".hits";
+    if (pass == 0) {
+        rows = namingInput(args.input, [&] { return computeDirectShard(mesh, run, hitsOut, stats); });
+        warnBackFaces(stats);
+    } else {
+        rows = namingInput(args.input, [&] {
+            return computeBounceShard(mesh, run, pass, args.previous, args.hits, args.exitant, stats);
+        });
+    }
+    try {
+        if (pass < options.bounces) {
+            writeShardRows(args.output, run, rows);
+        } else {
+            Rows layerRows{std::move(rows.total), &rows.direct, rows.rowBegin, rows.rowEnd, rows.rays,
+                           rows.backFaceHits, rows.rayOffset};
+            writeBundle(args.output, transferBundle(args, options, std::move(mesh), std::move(layerRows), shardIndex,
+                                                    shardCount, meshHash));
+        }
+    } catch (...) {
+        // The hit records are half of pass 0's output: without the rows they go too.
+        std::error_code error;
+        if (pass == 0) std::filesystem::remove(hitsOut, error);
+        throw;
+    }
+    logInfo("transfer: wrote " + args.output + (pass == 0 ? " and " + hitsOut : ""));
+    reportStats(stats, start);
+}
+
+void runTransfer(const TransferArgs& args) {
+    double start = nowSeconds();
+    TransferOptions options = resolveOptions(args);
+    int shardIndex = 0, shardCount = 1;
+    if (!args.shard.empty()) parseShard(args.shard, shardIndex, shardCount);
+    bool passes = options.mode == TransferMode::Interreflected && options.bounces > 0 &&
+                  (shardCount > 1 || !args.gather.empty());
+    bool passFlags = args.pass >= 0 || !args.previous.empty() || !args.exitant.empty() || !args.hits.empty();
+    if (!passes && (passFlags || !args.gather.empty()))
+        throw usage(args.gather.empty() ? "--pass" : "--gather",
+                    "only for sharded interreflected transfer with bounces (--shard I/N, N > 1)");
+    if (passes) {
+        if (!args.gather.empty() && (!args.shard.empty() || !args.previous.empty() || !args.exitant.empty() || !args.hits.empty()))
+            throw usage("--gather", "joins one pass's shards: it takes no --shard, --previous, --exitant or --hits");
+        if (args.gather.empty() && args.pass > options.bounces)
+            throw usage("--pass", std::to_string(args.pass) + " outside 0.." + std::to_string(options.bounces));
+        bool bouncePass = args.gather.empty() && args.pass > 0;
+        if (bouncePass && (args.previous.empty() || args.exitant.empty() || args.hits.empty()))
+            throw usage("--pass", "a bounce pass needs --previous (its shard's rows of the pass before), --exitant "
+                                  "(that pass's gathered array) and --hits (its shard's hit records)");
+        if (args.gather.empty() && !bouncePass && (!args.previous.empty() || !args.exitant.empty() || !args.hits.empty()))
+            throw usage("--pass", "the direct pass (0) reads no --previous, --exitant or --hits");
+        runTransferPass(args, options, shardIndex, shardCount, start);
+        return;
+    }
+
+    Bundle input = readBundle(args.input);
+    TriMesh& mesh = input.mesh;
+    if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
+    size_t vertexCount = mesh.vertexCount();
+    RowRange range = shardRows(vertexCount, shardIndex, shardCount);
+    options.vertexBegin = range.begin;
+    options.vertexEnd = range.end;
+    logInfo("transfer: " + args.input + " (" + std::to_string(vertexCount) + " vertices) " + args.mode + ", order " +
+            std::to_string(options.order) + ", " + std::to_string(options.samples) + " samples" +
+            (options.bounces > 0 ? ", " + std::to_string(options.bounces) + " bounces" : "") +
+            (shardCount > 1 ? ", shard " + args.shard : ""));
+
+    options.keepDirect = options.mode == TransferMode::Interreflected && options.bounces > 0;
+    Transfer transfer = namingInput(args.input, [&] { return computeTransfer(mesh, options); });
+    const TransferStats& stats = transfer.stats;
+    warnBackFaces(stats);
+    Rows rows{std::move(transfer.coefficients), options.keepDirect ? &transfer.direct : nullptr, transfer.vertexBegin, transfer.vertexEnd,
+              stats.rays, stats.backFaceHits, stats.rayOffset};
+    writeBundle(args.output, transferBundle(args, options, std::move(mesh), std::move(rows), shardIndex, shardCount,
+                                            hashFile(args.input)));
+    logInfo("transfer: wrote " + args.output);
+    reportStats(stats, start);
 }
 
 } // namespace
@@ -191,7 +292,17 @@ void addTransferCommand(CLI::App& app) {
     command->add_option("--threads", args->threads, "Worker threads (default 0: all cores)");
     command->add_option("--shard", args->shard,
                         "I/N: compute only the I-th of N contiguous vertex ranges, written as a 'vertex_range' "
-                        "layer for a later merge");
+                        "layer for a later merge; interreflected with bounces runs as passes (--pass)");
+    command->add_option("--pass", args->pass,
+                        "Sharded interreflected only: 0 (default) the direct pass, writing -o OUT (the shard's rows) "
+                        "and OUT.hits (its hit records); P = 1..B bounce P, writing the rows (the shard bundle "
+                        "after the last bounce)");
+    command->add_option("--previous", args->previous, "Bounce pass P: this shard's rows of pass P-1");
+    command->add_option("--exitant", args->exitant, "Bounce pass P: the exitant array of pass P-1 (--gather)");
+    command->add_option("--hits", args->hits, "Bounce pass P: this shard's hit records (OUT.hits of pass 0)");
+    command->add_option("--gather", args->gather,
+                        "ROWS...: join one pass's shard rows (every shard, any order) into that pass's exitant "
+                        "array, -o OUT, for the next bounce");
     command->callback([args] { runTransfer(*args); });
 }
 

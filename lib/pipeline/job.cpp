@@ -50,11 +50,18 @@ std::map<std::string, std::string> inputHashes(const StageInputs& inputs) {
     return hashes;
 }
 
-std::string jobRecordPath(const std::string& runDir, const std::string& stageId, int shardIndex, int shardCount) {
-    std::string part = shardCount <= 1 ? "all"
-                       : shardIndex < 0 ? "merge"
-                                        : std::to_string(shardIndex) + "of" + std::to_string(shardCount);
+std::string jobRecordPath(const std::string& runDir, const std::string& stageId, int shardIndex, int shardCount,
+                          int pass) {
+    std::string part = shardCount <= 1             ? "all"
+                       : shardIndex == kMergeJob   ? "merge"
+                       : shardIndex == kGatherJob ? "gather"
+                                                   : std::to_string(shardIndex) + "of" + std::to_string(shardCount);
+    if (pass > 0 || (shardIndex == kGatherJob)) part = "p" + std::to_string(pass) + "." + part;
     return runDir + "/jobs/" + stageId + "." + part + ".json";
+}
+
+int stagePasses(const PipelineStage& stage, int shardCount) {
+    return shardCount > 1 && stage.spec->passes ? std::max(1, stage.spec->passes(stage.params)) : 1;
 }
 
 std::string readableLogTail(const std::string& logPath, size_t lines) {
@@ -181,11 +188,20 @@ std::string paramText(const nlohmann::json& value) {
     return value.get<std::string>();
 }
 
-// The command line of a stage run in its entry folder; inputs are symlinked there as "input-<port>.<ext>". A merge
-// (shardIndex -1) run by the stage itself gets its shards' files as "shard-<I>.<ext>" after spec.mergeFlag.
+// What a job of a sharded stage changes on the stage's command line (the pass protocol in pipeline.h).
+struct JobExtras {
+    std::vector<std::pair<std::string, std::string>> outputs; // (flag, file) in place of the spec's outputs, if any
+    std::vector<std::string> args;                            // appended as they are ("--pass", "1")
+    std::vector<std::pair<std::string, std::string>> files;   // (flag, stored file), linked as "in-<flag>.<ext>"
+    std::string listFlag;                                     // then "<listFlag> shard-<I>.<ext>..." (merge, gather)
+    std::vector<std::string> listFiles;
+};
+
+// The command line of a stage run in its entry folder; inputs are symlinked there as "input-<port>.<ext>", and
+// the files of `extras` as named there.
 std::vector<std::string> stageCommand(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options,
                                       const std::string& dir, int shardIndex, int shardCount,
-                                      const std::vector<std::string>& shardFiles) {
+                                      const JobExtras& extras) {
     const StageSpec& spec = *stage.spec;
     std::vector<std::string> args = {options.prt, "--log-json", spec.name};
     for (const ParamSpec& param : spec.params)
@@ -203,7 +219,9 @@ std::vector<std::string> stageCommand(const PipelineStage& stage, const StageInp
         else flagged.insert(flagged.end(), {port.flag, link});
     }
     args.insert(args.end(), flagged.begin(), flagged.end());
-    for (const PortSpec& port : spec.outputs) args.insert(args.end(), {port.flag, port.name + "." + port.extension});
+    if (extras.outputs.empty())
+        for (const PortSpec& port : spec.outputs) args.insert(args.end(), {port.flag, port.name + "." + port.extension});
+    for (const auto& [flag, file] : extras.outputs) args.insert(args.end(), {flag, file});
     for (const ParamSpec& param : spec.params) {
         if (param.positional || !stage.params.contains(param.name)) continue;
         const nlohmann::json& value = stage.params[param.name];
@@ -216,11 +234,17 @@ std::vector<std::string> stageCommand(const PipelineStage& stage, const StageInp
     if (spec.takesThreads && options.threads > 0) args.insert(args.end(), {"--threads", std::to_string(options.threads)});
     if (shardCount > 1 && shardIndex >= 0)
         args.insert(args.end(), {"--shard", std::to_string(shardIndex) + "/" + std::to_string(shardCount)});
-    if (shardIndex < 0 && !shardFiles.empty()) {
-        args.push_back(spec.mergeFlag);
-        for (size_t i = 0; i < shardFiles.size(); ++i) {
-            std::string link = "shard-" + std::to_string(i) + "." + fileExtension(shardFiles[i]);
-            fs::create_symlink(absolutePath(shardFiles[i]), dir + "/" + link);
+    args.insert(args.end(), extras.args.begin(), extras.args.end());
+    for (const auto& [flag, file] : extras.files) {
+        std::string link = "in-" + flag.substr(flag.find_first_not_of('-')) + "." + fileExtension(file);
+        fs::create_symlink(absolutePath(file), dir + "/" + link);
+        args.insert(args.end(), {flag, link});
+    }
+    if (!extras.listFiles.empty()) {
+        args.push_back(extras.listFlag);
+        for (size_t i = 0; i < extras.listFiles.size(); ++i) {
+            std::string link = "shard-" + std::to_string(i) + "." + fileExtension(extras.listFiles[i]);
+            fs::create_symlink(absolutePath(extras.listFiles[i]), dir + "/" + link);
             args.push_back(link);
         }
     }
@@ -233,21 +257,34 @@ std::vector<std::string> stageArguments(const PipelineStage& stage) {
     StageInputs placeholders;
     for (const StageInput& input : stage.inputs) placeholders[input.port] = {"", ""};
     RunOptions noThreads;
-    std::vector<std::string> args = stageCommand(stage, placeholders, noThreads, "", 0, 1, {});
+    std::vector<std::string> args = stageCommand(stage, placeholders, noThreads, "", 0, 1, JobExtras{});
     args.erase(args.begin(), args.begin() + 2); // prt --log-json
     return args;
 }
 
 namespace {
 
-nlohmann::json describeOutputs(const StageSpec& spec, const std::string& dir, const std::string& label) {
+// The files a job leaves, by port: the spec's outputs, or for a pass job or a gather what the pass protocol names.
+std::vector<std::pair<std::string, std::string>> jobOutputs(const StageSpec& spec, int shardIndex, int pass,
+                                                            int passes) {
+    if (shardIndex == kGatherJob) return {{"exitant", "exitant.bin"}};
+    if (shardIndex >= 0 && pass < passes - 1) {
+        if (pass == 0) return {{"rows", "rows.bin"}, {"hits", "rows.bin.hits"}};
+        return {{"rows", "rows.bin"}};
+    }
+    std::vector<std::pair<std::string, std::string>> outputs;
+    for (const PortSpec& port : spec.outputs) outputs.emplace_back(port.name, port.name + "." + port.extension);
+    return outputs;
+}
+
+nlohmann::json describeOutputs(const std::vector<std::pair<std::string, std::string>>& files, const std::string& dir,
+                               const std::string& label) {
     nlohmann::json outputs = nlohmann::json::object();
-    for (const PortSpec& port : spec.outputs) {
-        std::string file = port.name + "." + port.extension;
+    for (const auto& [name, file] : files) {
         std::error_code error;
         uintmax_t bytes = fs::file_size(dir + "/" + file, error);
-        if (error) throw Error(dir + "/" + file, label, "the stage succeeded but wrote no '" + port.name + "' output", kExitFailure);
-        outputs[port.name] = {{"file", file}, {"hash", hashFile(dir + "/" + file)}, {"bytes", bytes}};
+        if (error) throw Error(dir + "/" + file, label, "the stage succeeded but wrote no '" + name + "' output", kExitFailure);
+        outputs[name] = {{"file", file}, {"hash", hashFile(dir + "/" + file)}, {"bytes", bytes}};
     }
     return outputs;
 }
@@ -255,9 +292,9 @@ nlohmann::json describeOutputs(const StageSpec& spec, const std::string& dir, co
 // Runs `prt STAGE` with `dir` as its current directory; returns its cost and command line.
 nlohmann::json runStageIn(const std::string& dir, const PipelineStage& stage, const StageInputs& inputs,
                           const RunOptions& options, int shardIndex, int shardCount, const std::string& label,
-                          const std::vector<std::string>& shardFiles = {}) {
+                          const JobExtras& extras = {}) {
     double start = nowSeconds();
-    std::vector<std::string> args = stageCommand(stage, inputs, options, dir, shardIndex, shardCount, shardFiles);
+    std::vector<std::string> args = stageCommand(stage, inputs, options, dir, shardIndex, shardCount, extras);
     logInfo(label + ": running " + stage.spec->name);
     ChildResult child = runLogged(args, dir, dir + "/stage.log", label);
     if (!WIFEXITED(child.status) || WEXITSTATUS(child.status) != 0)
@@ -271,52 +308,104 @@ nlohmann::json runStageIn(const std::string& dir, const PipelineStage& stage, co
             {"command", args}};
 }
 
-// Joins the stored shards of `stage` into `dir`, by mergeShards or by the stage itself (spec.mergeFlag); returns
-// the merge's cost.
+// The key of one job of `stage` (the whole stage's key for its merge and for unsharded runs).
+nlohmann::json jobIngredients(const PipelineStage& stage, const std::map<std::string, std::string>& hashes,
+                              int shardIndex, int shardCount, int pass) {
+    if (shardCount <= 1 || shardIndex == kMergeJob) return keyIngredients(stage, hashes);
+    int passes = stagePasses(stage, shardCount);
+    if (shardIndex == kGatherJob) return keyIngredients(stage, hashes, -1, shardCount, pass);
+    return keyIngredients(stage, hashes, shardIndex, shardCount, passes > 1 ? pass : -1);
+}
+
+// The file `port` of an earlier job of the stage, from its store entry.
+std::string storedFile(const PipelineStage& stage, const std::map<std::string, std::string>& hashes,
+                       const RunOptions& options, int shardIndex, int shardCount, int pass, const std::string& port,
+                       const std::string& label) {
+    std::string store = storeDir(options);
+    std::string key = keyOf(jobIngredients(stage, hashes, shardIndex, shardCount, pass));
+    std::optional<StoreEntry> entry = findStoreEntry(store, key);
+    std::string what = shardIndex == kGatherJob ? "the gather" : "shard " + std::to_string(shardIndex + 1) + "/" + std::to_string(shardCount);
+    if (stagePasses(stage, shardCount) > 1) what += " of pass " + std::to_string(pass);
+    if (!entry || !entry->manifest["outputs"].contains(port))
+        throw Error(store, label, what + " (" + key + ") is not in the store", kExitFailure);
+    return entry->dir + "/" + entry->manifest["outputs"][port]["file"].get<std::string>();
+}
+
+// Joins the stored shards of `stage`'s last pass into `dir`, by mergeShards or by the stage itself
+// (spec.mergeFlag); returns the merge's cost.
 nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, const StageInputs& inputs,
                          const RunOptions& options, int shardCount, const std::string& label) {
     double start = nowSeconds();
-    std::string store = storeDir(options);
     std::map<std::string, std::string> hashes = inputHashes(inputs);
     const PortSpec& port = stage.spec->outputs.front(); // shardable stages write one bundle
+    int last = stagePasses(stage, shardCount) - 1;
     std::vector<Bundle> shards;
     std::vector<std::string> files;
-    for (int i = 0; i < shardCount; ++i) {
-        std::string shardKey = keyOf(keyIngredients(stage, hashes, i, shardCount));
-        std::optional<StoreEntry> entry = findStoreEntry(store, shardKey);
-        if (!entry)
-            throw Error(store, label, "shard " + std::to_string(i + 1) + "/" + std::to_string(shardCount) + " (" +
-                                          shardKey + ") is not in the store", kExitFailure);
-        files.push_back(entry->dir + "/" + entry->manifest["outputs"][port.name]["file"].get<std::string>());
+    for (int i = 0; i < shardCount; ++i)
+        files.push_back(storedFile(stage, hashes, options, i, shardCount, last, port.name, label));
+    if (!stage.spec->mergeFlag.empty()) {
+        JobExtras extras;
+        extras.listFlag = stage.spec->mergeFlag;
+        extras.listFiles = files;
+        return runStageIn(dir, stage, inputs, options, kMergeJob, shardCount, label, extras);
     }
-    if (!stage.spec->mergeFlag.empty()) return runStageIn(dir, stage, inputs, options, -1, shardCount, label, files);
     for (const std::string& file : files) shards.push_back(readBundle(file));
     writeBundle(dir + "/" + port.name + "." + port.extension, mergeShards(shards, files));
     writeBytesAtomic(dir + "/stage.log", "merged " + std::to_string(shardCount) + " shards\n");
     return {{"seconds", nowSeconds() - start}, {"rays", 0}, {"peak_memory_bytes", peakMemoryBytes()}};
 }
 
+// What a shard job of pass `pass`, or the gather of that pass, adds to the stage's command line.
+JobExtras passExtras(const PipelineStage& stage, const std::map<std::string, std::string>& hashes,
+                     const RunOptions& options, int shardIndex, int shardCount, int pass, const std::string& label) {
+    JobExtras extras;
+    int passes = stagePasses(stage, shardCount);
+    if (passes <= 1) return extras;
+    for (const auto& [port, file] : jobOutputs(*stage.spec, shardIndex, pass, passes))
+        if (port != "hits") extras.outputs.emplace_back("-o", file); // hits land next to the rows
+    extras.args = {"--pass", std::to_string(pass)};
+    if (shardIndex == kGatherJob) {
+        extras.listFlag = "--gather";
+        for (int i = 0; i < shardCount; ++i)
+            extras.listFiles.push_back(storedFile(stage, hashes, options, i, shardCount, pass, "rows", label));
+        extras.args.clear(); // the rows name their pass
+    } else if (pass > 0) {
+        extras.files = {{"--previous", storedFile(stage, hashes, options, shardIndex, shardCount, pass - 1, "rows", label)},
+                        {"--hits", storedFile(stage, hashes, options, shardIndex, shardCount, 0, "hits", label)},
+                        {"--exitant", storedFile(stage, hashes, options, kGatherJob, shardCount, pass - 1, "exitant", label)}};
+    }
+    if (shardIndex >= 0 && pass == passes - 1) extras.outputs.clear(); // the last pass writes the shard bundle
+    return extras;
+}
+
 } // namespace
 
 nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options, int shardIndex,
-                      int shardCount, bool force) {
+                      int shardCount, bool force, int pass) {
     bool sharded = shardCount > 1;
-    bool merge = sharded && shardIndex < 0;
+    bool merge = sharded && shardIndex == kMergeJob, gather = sharded && shardIndex == kGatherJob;
+    int passes = stagePasses(stage, shardCount);
+    if (!sharded) shardIndex = 0;
+    if (merge || !sharded) pass = passes - 1;
     std::string store = storeDir(options);
     std::map<std::string, std::string> hashes = inputHashes(inputs);
     std::string stageKey = keyOf(keyIngredients(stage, hashes));
-    nlohmann::json ingredients = sharded && !merge ? keyIngredients(stage, hashes, shardIndex, shardCount)
-                                                   : keyIngredients(stage, hashes);
+    nlohmann::json ingredients = jobIngredients(stage, hashes, shardIndex, shardCount, pass);
     std::string key = keyOf(ingredients);
-    std::string label = stage.id + (merge     ? " merge"
-                                    : sharded ? " shard " + std::to_string(shardIndex + 1) + "/" + std::to_string(shardCount)
-                                              : "");
+    std::string passLabel = passes > 1 && !merge ? " pass " + std::to_string(pass) : "";
+    std::string label = stage.id + passLabel +
+                        (merge ? " merge"
+                         : gather ? " gather"
+                         : sharded ? " shard " + std::to_string(shardIndex + 1) + "/" + std::to_string(shardCount)
+                                   : "");
 
     nlohmann::json record = {{"id", stage.id}, {"stage", stage.spec->name}, {"key", key}, {"host", hostName()},
                              {"start", epochSeconds()}, {"rays", 0}, {"peak_memory_bytes", 0}};
-    if (sharded) record["shard"] = merge ? nlohmann::json("merge") : nlohmann::json{shardIndex, shardCount};
+    if (sharded)
+        record["shard"] = merge ? nlohmann::json("merge") : gather ? nlohmann::json("gather") : nlohmann::json{shardIndex, shardCount};
+    if (passes > 1 && !merge) record["pass"] = pass;
     std::optional<StoreEntry> existing = findStoreEntry(store, key);
-    // A shard whose merged stage is already stored has nothing to add.
+    // A shard (or a pass's gather) whose merged stage is already stored has nothing to add.
     if (!existing && sharded && !merge && !force) existing = findStoreEntry(store, stageKey);
     if (existing && !force) {
         record.update({{"status", "cached"}, {"end", epochSeconds()}, {"seconds", 0.0},
@@ -329,9 +418,12 @@ nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, con
     fs::remove_all(dir);
     fs::create_directories(dir);
     try {
-        nlohmann::json cost = merge ? mergeInto(dir, stage, inputs, options, shardCount, label)
-                                    : runStageIn(dir, stage, inputs, options, shardIndex, shardCount, label);
-        nlohmann::json outputs = describeOutputs(*stage.spec, dir, label);
+        nlohmann::json cost =
+            merge ? mergeInto(dir, stage, inputs, options, shardCount, label)
+                  : runStageIn(dir, stage, inputs, options, shardIndex, shardCount, label,
+                               passExtras(stage, hashes, options, shardIndex, shardCount, pass, label));
+        nlohmann::json outputs = describeOutputs(jobOutputs(*stage.spec, merge ? kMergeJob : shardIndex, pass, passes),
+                                                 dir, label);
         if (existing && existing->manifest["outputs"] != outputs)
             logWarn(label + ": output differs from the stored result of the same key: the stage is not deterministic");
         nlohmann::json manifest = {{"key", key}, {"ingredients", ingredients}, {"outputs", outputs}, {"cost", cost}};
@@ -356,7 +448,7 @@ nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, con
 }
 
 nlohmann::json runStageJob(const Pipeline& given, const PipelineStage& givenStage, const RunOptions& options,
-                           int shardIndex, int shardCount, bool force) {
+                           int shardIndex, int shardCount, bool force, int pass) {
     Pipeline pipeline = given;
     resolveStageOptions(pipeline, options); // the keys must be the ones the planner computed
     auto same = std::find_if(pipeline.stages.begin(), pipeline.stages.end(),
@@ -379,7 +471,7 @@ nlohmann::json runStageJob(const Pipeline& given, const PipelineStage& givenStag
             if (!input.sourcePort.empty() && !entries.count(input.source)) missing += (missing.empty() ? "" : ", ") + input.source;
         throw Error(pipeline.file, "stage " + stage.id, "its upstream stages " + missing + " are not in the store", kExitFailure);
     }
-    return runJob(stage, *inputs, options, shardIndex, shardCount, force);
+    return runJob(stage, *inputs, options, shardIndex, shardCount, force, pass);
 }
 
 } // namespace prt

@@ -66,6 +66,14 @@ struct StageSpec {
     std::string mergeFlag = {};
     // Why these parameters cannot be sharded, or "" when they can (shardable stages only).
     std::string (*shardRefusal)(const nlohmann::json& params) = nullptr;
+    // Sharded, these parameters need this many passes (null: 1), each a job per shard whose rows feed the next
+    // pass through a gather job (interreflected transfer: the direct pass, then one pass per bounce). The pass
+    // protocol: shard job `--shard I/N --pass P`, writing "rows.bin" (pass 0 also "rows.bin.hits") before the last
+    // pass and the shard bundle in the last; passes P > 0 also get `--previous` (the shard's rows of pass P-1),
+    // `--hits` (its pass-0 hit records) and `--exitant` (pass P-1's gathered array); the gather job runs the stage
+    // with `--gather ROWS...` (every shard's rows of pass P) and writes "exitant.bin". The last pass's shards merge
+    // as single-pass shards do.
+    int (*passes)(const nlohmann::json& params) = nullptr;
 };
 
 // Every stage a pipeline may run, in the order they usually chain.
@@ -134,9 +142,17 @@ size_t findStage(const Pipeline& pipeline, const std::string& id);
 
 // The canonical JSON a stage key hashes. `inputHashes` maps each wired input port to its file's content hash;
 // shard is {index, count} for one shard, or {0, 0} for the whole stage (sharded or not: the merged product of
-// N shards is bit-identical to the unsharded one, so they share a key).
+// N shards is bit-identical to the unsharded one, so they share a key). `pass` >= 0 adds the pass of a
+// multi-pass stage's job (its shards' and gathers' keys; a gather's shard is {-1, count}).
 nlohmann::json keyIngredients(const PipelineStage& stage, const std::map<std::string, std::string>& inputHashes,
-                              int shardIndex = 0, int shardCount = 0);
+                              int shardIndex = 0, int shardCount = 0, int pass = -1);
+
+// How many passes the stage runs as with `shardCount` shards: StageSpec::passes, 1 unsharded or without it.
+int stagePasses(const PipelineStage& stage, int shardCount);
+
+// The jobs of a stage, in the order they may run: shard jobs (shardIndex >= 0), the gather of a pass
+// (kGatherJob; multi-pass stages, after every pass but the last) and the merge (kMergeJob).
+inline constexpr int kMergeJob = -1, kGatherJob = -2;
 std::string keyOf(const nlohmann::json& ingredients); // "xxh128:<32 hex>"
 
 // A complete store entry: manifest.json read back and each output's size checked against it.
@@ -197,15 +213,18 @@ nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options);
 void resolveStageOptions(Pipeline& pipeline, const RunOptions& options);
 
 // One stage job, the unit both executors run: resolves the stage's inputs from the store (its upstream stages
-// must be complete), and unless `force` is set and if the entry is missing, runs the stage (or one shard of it,
-// or the merge of its shards when shardIndex == -1 and the stage is sharded) and commits the entry.
-// Returns the job's record for the report: {"id","shard","key","status":"cached|ran","start","end","seconds",
-// "rays","peak_memory_bytes","outputs"} with epoch-second times. Throws prt::Error quoting the stage's log.
+// must be complete), and unless `force` is set and if the entry is missing, runs the stage (or one shard of it
+// in pass `pass`, the gather of pass `pass` when shardIndex == kGatherJob, or the merge of its shards when
+// shardIndex == kMergeJob and the stage is sharded) and commits the entry. A job of a later pass needs the
+// earlier passes' jobs stored. Returns the job's record for the report: {"id","shard","pass"?,"key",
+// "status":"cached|ran","start","end","seconds","rays","peak_memory_bytes","outputs"} with epoch-second times.
+// Throws prt::Error quoting the stage's log.
 nlohmann::json runStageJob(const Pipeline& pipeline, const PipelineStage& stage, const RunOptions& options,
-                           int shardIndex, int shardCount, bool force);
+                           int shardIndex, int shardCount, bool force, int pass = 0);
 
 // Where a Slurm job leaves its record for the waiting `prt run`: RUN_DIR/jobs/<stage id>.<part>.json, part being
-// "all", "<index>of<count>" or "merge" (shardIndex -1 with shardCount > 1).
-std::string jobRecordPath(const std::string& runDir, const std::string& stageId, int shardIndex, int shardCount);
+// "all", "<index>of<count>", "merge", or with a pass "p<pass>.<index>of<count>" and "p<pass>.gather".
+std::string jobRecordPath(const std::string& runDir, const std::string& stageId, int shardIndex, int shardCount,
+                          int pass = 0);
 
 } // namespace prt

@@ -45,7 +45,7 @@ std::map<std::string, std::string> inputHashes(const StageInputs& inputs);
 
 // runStageJob with the inputs already resolved.
 nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options, int shardIndex,
-                      int shardCount, bool force);
+                      int shardCount, bool force, int pass = 0);
 
 // One stage for the Slurm executor: index into pipeline.stages, its shard count, and whether it must rerun.
 struct SlurmStage {

@@ -201,10 +201,16 @@ void executeStages(const Pipeline& pipeline, const RunOptions& options, const st
         if (plan.action != Action::Run) continue;
         failed = stage.id;
         if (options.executor == Executor::Local) {
+            // Pass by pass (one for most stages): its shards, then its gather, or after the last the merge.
             std::vector<nlohmann::json>& records = jobs[stage.id];
-            for (int s = 0; s < std::max(plan.shards, 1); ++s)
-                records.push_back(runJob(stage, *inputs, options, s, plan.shards, plan.force));
-            if (plan.shards > 1) records.push_back(runJob(stage, *inputs, options, -1, plan.shards, plan.force));
+            int passes = stagePasses(stage, plan.shards);
+            for (int pass = 0; pass < passes; ++pass) {
+                for (int s = 0; s < std::max(plan.shards, 1); ++s)
+                    records.push_back(runJob(stage, *inputs, options, s, plan.shards, plan.force, pass));
+                if (plan.shards > 1)
+                    records.push_back(runJob(stage, *inputs, options, pass + 1 < passes ? kGatherJob : kMergeJob,
+                                             plan.shards, plan.force, pass));
+            }
         }
         plan.key = keyOf(keyIngredients(stage, inputHashes(*inputs)));
         std::optional<StoreEntry> entry = findStoreEntry(storeDir(options), plan.key);

@@ -45,6 +45,7 @@ struct Job {
     std::string baseId;  // "12"
     size_t stage;
     int shardIndex, shardCount; // as runStageJob takes them
+    int pass;
     std::string label, logPath;
     std::string state = "SUBMITTED";
     bool finished = false;
@@ -142,11 +143,12 @@ std::map<std::string, std::vector<nlohmann::json>> runOnSlurm(const Pipeline& pi
             if (finalJob.count(input.source)) after.insert(finalJob[input.source]);
 
         auto sbatch = [&](const std::string& name, const std::string& part, const std::string& logPattern,
-                          const std::set<std::string>& deps, int arraySize) {
+                          const std::set<std::string>& deps, int arraySize, int pass) {
             std::string script = run + "/slurm/" + stage.id + "." + name + ".sh";
             std::string body = "#!/bin/bash\n# prt pipeline " + pipeline.name + ", stage " + stage.id + "\nexec " +
                                shellQuote(absolutePath(options.prt)) + " --log-json run " + shellQuote(snapshot) +
-                               " --job " + shellQuote(stage.id) + " --job-part " + part + " --cache-dir " +
+                               " --job " + shellQuote(stage.id) + " --job-part " + part +
+                               (pass > 0 ? " --job-pass " + std::to_string(pass) : "") + " --cache-dir " +
                                shellQuote(absolutePath(options.cacheDir)) + " --run-dir " + shellQuote(run) +
                                " --threads " + std::to_string(options.slurmCpusPerTask) + (item.force ? " --force" : "") + "\n";
             writeBytesAtomic(script, body);
@@ -165,25 +167,41 @@ std::map<std::string, std::vector<nlohmann::json>> runOnSlurm(const Pipeline& pi
             return submit(args);
         };
 
+        int passes = stagePasses(stage, item.shards);
         if (item.shards > 1) {
+            // Pass by pass: an array of shards after the previous pass's gather, then this pass's gather (or, after
+            // the last pass, the merge) after the array.
             std::string n = std::to_string(item.shards);
-            std::string array = sbatch("shards", "\"$SLURM_ARRAY_TASK_ID/" + n + "\"", stage.id + "-%A_%a.log", after, item.shards);
-            for (int s = 0; s < item.shards; ++s)
-                jobs.push_back({array + "_" + std::to_string(s), array, item.stage, s, item.shards,
-                                stage.id + " shard " + std::to_string(s + 1) + "/" + n,
-                                run + "/slurm/" + stage.id + "-" + array + "_" + std::to_string(s) + ".log"});
-            std::string merge = sbatch("merge", "merge/" + n, stage.id + "-merge-%j.log", {array}, 0);
-            jobs.push_back({merge, merge, item.stage, -1, item.shards, stage.id + " merge",
-                            run + "/slurm/" + stage.id + "-merge-" + merge + ".log"});
-            finalJob[stage.id] = merge;
+            std::set<std::string> deps = after;
+            for (int pass = 0; pass < passes; ++pass) {
+                bool last = pass + 1 == passes;
+                std::string tag = passes > 1 ? "p" + std::to_string(pass) + "-" : "";
+                std::string passName = passes > 1 ? " pass " + std::to_string(pass) : "";
+                std::string array = sbatch(tag + "shards", "\"$SLURM_ARRAY_TASK_ID/" + n + "\"",
+                                           stage.id + "-" + tag + "%A_%a.log", deps, item.shards, pass);
+                for (int s = 0; s < item.shards; ++s)
+                    jobs.push_back({array + "_" + std::to_string(s), array, item.stage, s, item.shards, pass,
+                                    stage.id + passName + " shard " + std::to_string(s + 1) + "/" + n,
+                                    run + "/slurm/" + stage.id + "-" + tag + array + "_" + std::to_string(s) + ".log"});
+                std::string what = last ? "merge" : "gather";
+                std::string join = sbatch(tag + what, what + "/" + n, stage.id + "-" + tag + what + "-%j.log", {array},
+                                          0, pass);
+                jobs.push_back({join, join, item.stage, last ? kMergeJob : kGatherJob, item.shards, pass,
+                                stage.id + passName + " " + what,
+                                run + "/slurm/" + stage.id + "-" + tag + what + "-" + join + ".log"});
+                deps = {join};
+            }
+            finalJob[stage.id] = *deps.begin();
         } else {
-            std::string id = sbatch("all", "all", stage.id + "-%j.log", after, 0);
-            jobs.push_back({id, id, item.stage, 0, 1, stage.id, run + "/slurm/" + stage.id + "-" + id + ".log"});
+            std::string id = sbatch("all", "all", stage.id + "-%j.log", after, 0, 0);
+            jobs.push_back({id, id, item.stage, 0, 1, 0, stage.id, run + "/slurm/" + stage.id + "-" + id + ".log"});
             finalJob[stage.id] = id;
         }
         std::string waits;
         for (const std::string& dep : after) waits += (waits.empty() ? ", after job " : ",") + dep;
-        logInfo("slurm: submitted " + stage.id + (item.shards > 1 ? " as " + std::to_string(item.shards) + " shards and a merge" : "") +
+        logInfo("slurm: submitted " + stage.id +
+                (item.shards > 1 ? " as " + std::to_string(item.shards) + " shards and a merge" : "") +
+                (passes > 1 ? " in each of " + std::to_string(passes) + " passes (gathers between them)" : "") +
                 " (job " + finalJob[stage.id] + waits + ")");
     }
 
@@ -212,7 +230,7 @@ std::map<std::string, std::vector<nlohmann::json>> runOnSlurm(const Pipeline& pi
                 reason = found->second.second;
             } else if (gone.count(job.baseId)) {
                 // Slurm forgot the job: its record tells whether it succeeded.
-                bool recorded = fs::exists(jobRecordPath(run, pipeline.stages[job.stage].id, job.shardIndex, job.shardCount));
+                bool recorded = fs::exists(jobRecordPath(run, pipeline.stages[job.stage].id, job.shardIndex, job.shardCount, job.pass));
                 state = recorded ? "COMPLETED" : "FAILED";
                 reason = recorded ? "" : "gone from squeue without a record";
             }
@@ -244,7 +262,7 @@ std::map<std::string, std::vector<nlohmann::json>> runOnSlurm(const Pipeline& pi
     std::map<std::string, std::vector<nlohmann::json>> records;
     for (const Job& job : jobs) {
         const std::string& id = pipeline.stages[job.stage].id;
-        std::string path = jobRecordPath(run, id, job.shardIndex, job.shardCount);
+        std::string path = jobRecordPath(run, id, job.shardIndex, job.shardCount, job.pass);
         nlohmann::json record = nlohmann::json::parse(readFileBytes(path), nullptr, false);
         if (!record.is_object()) throw Error(path, job.label, "job completed but left no readable record", kExitFailure);
         record["slurm_job"] = job.slurmId;

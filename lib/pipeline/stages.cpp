@@ -24,12 +24,11 @@ std::string transferParamsRefusal(const nlohmann::json& params) {
     return "";
 }
 
-std::string transferShardRefusal(const nlohmann::json& params) {
+// Sharded interreflected transfer with bounces: the direct pass, then one pass per bounce (lib/transfer).
+int transferPasses(const nlohmann::json& params) {
     bool interreflected = params.value("mode", std::string("shadowed")) == "interreflected";
-    if (interreflected && params.value("bounces", int64_t(2)) > 0)
-        return "interreflected bounces gather from every vertex, so they cannot be sharded (set bounces = 0 or "
-               "shards = 1)";
-    return "";
+    int64_t bounces = interreflected ? params.value("bounces", int64_t(2)) : 0; // prt transfer's default: 2
+    return int(bounces) + 1;
 }
 
 std::vector<StageSpec> makeCatalogue() {
@@ -69,7 +68,7 @@ std::vector<StageSpec> makeCatalogue() {
     transfer.takesThreads = true;
     transfer.shardable = true;
     transfer.paramsRefusal = transferParamsRefusal;
-    transfer.shardRefusal = transferShardRefusal;
+    transfer.passes = transferPasses;
     stages.push_back(transfer);
 
     // Shards are ranges of covered texels ("texel_range" layers). Gutter fill and seam stitching couple the whole

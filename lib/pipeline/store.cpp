@@ -18,12 +18,13 @@ namespace fs = std::filesystem;
 namespace prt {
 
 nlohmann::json keyIngredients(const PipelineStage& stage, const std::map<std::string, std::string>& inputHashes,
-                              int shardIndex, int shardCount) {
+                              int shardIndex, int shardCount, int pass) {
     nlohmann::json ingredients = {{"stage", stage.spec->name},
                                   {"version", stage.version},
                                   {"params", stage.params},
                                   {"inputs", inputHashes}};
     if (shardCount > 0) ingredients["shard"] = {shardIndex, shardCount};
+    if (pass >= 0) ingredients["pass"] = pass;
     if (!stage.resolved.is_null()) ingredients["resolved"] = stage.resolved;
     if (!stage.build.is_null()) ingredients["build"] = stage.build;
     return ingredients;

@@ -6,6 +6,7 @@
 
 #include "bundle.h"
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,10 @@ std::vector<std::string> sceneNames();
 // Builds a named scene at its default resolution; throws prt::Error (kExitUsage) naming the known scenes for an
 // unknown name.
 TriMesh makeScene(const std::string& name);
+// A growable scene (sphere, cavity, sphere-in-cavity, two-spheres) with rings and segments raised together until
+// it has at least `vertices` vertices: how the benchmarks and big-mesh measurements get a mesh of a given size
+// (sphere-in-cavity at 1000000 gives 1,055,759). Throws prt::Error(kExitUsage) for other names.
+TriMesh makeSceneWithVertices(const std::string& name, uint64_t vertices);
 
 // Concatenates meshes, offsetting indices. A per-vertex attribute is kept only when every part has it.
 TriMesh mergeMeshes(const std::vector<TriMesh>& parts);

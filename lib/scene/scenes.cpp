@@ -2,6 +2,8 @@
 
 #include "core.h"
 
+#include <algorithm>
+#include <cmath>
 #include <numbers>
 
 namespace prt {
@@ -29,5 +31,26 @@ TriMesh makeScene(const std::string& name) {
     for (const std::string& candidate : sceneNames()) known += (known.empty() ? "" : ", ") + candidate;
     throw Error("", "scene", "unknown scene '" + name + "' (known: " + known + ")", kExitUsage);
 }
+
+TriMesh makeSceneWithVertices(const std::string& name, uint64_t vertices) {
+    auto build = [&](int rings) {
+        int segments = 2 * rings;
+        if (name == "sphere") return makeSphere(1.0f, rings, segments);
+        if (name == "cavity") return makeOpenCavity(1.0f, kCavityOpeningHalfAngle, rings, segments);
+        if (name == "sphere-in-cavity") return makeSphereInCavity(rings, segments);
+        if (name == "two-spheres") return makeTwoSpheres(rings, segments);
+        throw Error("", "--vertices", "scene '" + name + "' cannot be grown; use sphere, cavity, sphere-in-cavity "
+                                      "or two-spheres", kExitUsage);
+    };
+    int rings = 8;
+    TriMesh mesh = build(rings);
+    while (mesh.vertexCount() < vertices) {
+        double grow = std::sqrt(double(vertices) / double(mesh.vertexCount()));
+        rings = std::max(rings + 1, int(std::ceil(rings * grow)));
+        mesh = build(rings);
+    }
+    return mesh;
+}
+
 
 } // namespace prt

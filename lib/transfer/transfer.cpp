@@ -3,6 +3,7 @@
 #include "transfer.h"
 
 #include "core.h"
+#include "passes.h"
 #include "rays.h"
 #include "sh.h"
 
@@ -35,35 +36,7 @@ const char* transferModeName(TransferMode mode) {
     return "?";
 }
 
-namespace {
-
-// The direct pass's front-face hits for one block of vertices, in vertex then sample order: 10 bytes per hit.
-struct HitBlock {
-    std::vector<uint32_t> end;         // per vertex of the block: one past its last hit
-    std::vector<uint32_t> triangle;
-    std::vector<uint32_t> barycentric; // u | v << 16, each quantised to 1/65535
-    std::vector<uint16_t> sample;
-};
-
-// What every pass reads.
-struct Context {
-    const TriMesh& mesh;    // the geometry rays hit and bounces gather from
-    const TransferOptions& options;
-    Receivers receivers;    // the rows the direct pass writes, in order: mesh vertices or other points
-    int coefficients;       // order^2
-    int stride;             // floats per vertex row: order^2 * 3
-    float offset;
-    rays::Hemisphere directions;
-    std::vector<float> weightedBasis; // [sample][coefficient]: cos(theta_k) * Y_j(s_k) in the local frame
-    std::vector<float> cosines;       // [sample]
-    std::vector<double> lambert;      // [coefficient]: A_l / pi, the unshadowed transfer's band factor
-
-    std::array<float, 3> albedo(size_t receiver) const {
-        if (!receivers.albedo || options.albedoOverride) return options.albedo;
-        const float* a = &receivers.albedo[3 * receiver];
-        return {a[0], a[1], a[2]};
-    }
-};
+namespace passes {
 
 // Checks the options and the mesh's own albedo (the vertex range is the caller's business).
 void checkOptions(const TriMesh& mesh, const TransferOptions& options) {
@@ -111,6 +84,8 @@ Context makeContext(const TriMesh& mesh, const TransferOptions& options, const R
     return context;
 }
 
+namespace {
+
 // Per-unit-albedo direct transfer of one receiver in world coordinates, t_j = (1/pi) integral V cos Y_j:
 // the exact unshadowed part A_l/pi Y_j(n) minus (2/N) times the occluded samples' sum rotated out of the local
 // frame. `occluded` is that sum in the local frame; `anyOccluded` false skips the rotation (the sum is zero).
@@ -138,10 +113,6 @@ void directRow(const Context& context, const rays::Fan& fan, const std::vector<d
         if (unitRow) unitRow[j] = float(transfer);
     }
 }
-
-struct DirectCounts {
-    std::atomic<uint64_t> rays{0}, hits{0}, backFaceHits{0};
-};
 
 uint32_t quantiseBarycentric(float w) { return uint32_t(std::lround(std::clamp(w, 0.0f, 1.0f) * 65535.0f)); }
 
@@ -184,9 +155,8 @@ bool traceVertex(const Context& context, const EmbreeScene& scene, const rays::F
     return anyOccluded;
 }
 
-// Shadowed and interreflected direct pass over the context's receivers into `out` (row i for receiver i) and,
-// when not null, unit-albedo single-channel rows into `unitOut`. With `hitBlocks` (one per block of receivers)
-// rays find their nearest hits and front-face hits are recorded there; otherwise they are occlusion rays.
+} // namespace
+
 void directPass(const Context& context, const EmbreeScene& scene, float* out, float* unitOut,
                 std::vector<HitBlock>* hitBlocks, DirectCounts& counts, Progress* progress) {
     int n = context.coefficients;
@@ -223,81 +193,102 @@ void directPass(const Context& context, const EmbreeScene& scene, float* out, fl
     });
 }
 
-// One Jacobi bounce, number `number` (1-based). Every receiver gathers `previous` (rows of the mesh's vertices) at
-// its recorded hits, each hit weighted by its cosine and interpolated with its barycentrics, and scales the sum by
-// 2/N; the result goes to `next` (when not null) and is added to `total` ([order^2][3] rows, one per receiver).
-// With `channels` 3 the rows are RGB and the scale includes the vertex's albedo. With `channels` 1 (one albedo
-// for the whole mesh) the rows are unit-albedo G_b, a third of the bytes to gather, and `total` receives
-// albedo^(number+1) * G_b per channel, since bounce b of uniform albedo rho is rho^(b+1) G_b.
-// `previous` is only read, so each vertex's gather order (its hits in sample order) fixes every bit.
+namespace {
+
+// What bounce() fixes for all its vertices.
+struct BounceTerms {
+    int channels = 1;
+    size_t rowFloats = 0;            // floats per row of `previous` and `next`: order^2 * channels
+    float weight = 0.0f;             // 2 / N
+    float power[3] = {1.0f, 1.0f, 1.0f}; // albedo^(number + 1) per channel (channels 1)
+};
+
+// Rows of hit triangles are scattered over the mesh: bounceVertex fetches them a few hits ahead (and their corner
+// indices further ahead) so the memory latency overlaps the arithmetic.
+constexpr size_t kRowsAhead = 8, kCornersAhead = 16;
+void prefetchRows(const TriMesh& mesh, const float* previous, size_t rowFloats, uint32_t triangle) {
+    const size_t rowBytes = rowFloats * sizeof(float);
+    const uint32_t* corner = &mesh.indices[3 * size_t(triangle)];
+    for (int k = 0; k < 3; ++k) {
+        const char* row = reinterpret_cast<const char*>(previous + corner[k] * rowFloats);
+        for (size_t byte = 0; byte < rowBytes; byte += 64) __builtin_prefetch(row + byte);
+        __builtin_prefetch(row + rowBytes - 1);
+    }
+}
+
+// The per-vertex body of bounce(): vertex i of `hits` (row v of `next` and `total`), whose hits are [h, end).
+// Sums `previous` at each hit, in the order recorded, into `sum`, scales it by 2/N (and the albedo) into `light`,
+// adds that to the total row and stores it in the next row. Every path that bounces a vertex, the whole mesh or a
+// shard, goes through here, so the floats match bit for bit.
+void bounceVertex(const Context& context, const BounceTerms& terms, const HitBlock& hits, size_t h, size_t end,
+                  size_t v, const float* previous, float* next, float* total, float* __restrict sum,
+                  float* __restrict light) {
+    const TriMesh& mesh = context.mesh;
+    const size_t rowFloats = terms.rowFloats, hitCount = hits.triangle.size();
+    if (h == end) {
+        // Nothing to gather: leaves `total` untouched to the bit (adding +0 would flip -0).
+        if (next) std::fill(next + v * rowFloats, next + (v + 1) * rowFloats, 0.0f);
+        return;
+    }
+    std::fill(sum, sum + rowFloats, 0.0f);
+    for (; h < end; ++h) {
+        if (h + kCornersAhead < hitCount)
+            __builtin_prefetch(&mesh.indices[3 * size_t(hits.triangle[h + kCornersAhead])]);
+        if (h + kRowsAhead < hitCount) prefetchRows(mesh, previous, rowFloats, hits.triangle[h + kRowsAhead]);
+        const uint32_t* corner = &mesh.indices[3 * size_t(hits.triangle[h])];
+        const float* __restrict a = previous + corner[0] * rowFloats;
+        const float* __restrict b = previous + corner[1] * rowFloats;
+        const float* __restrict c = previous + corner[2] * rowFloats;
+        float cosine = context.cosines[hits.sample[h]];
+        float wb = cosine * float(hits.barycentric[h] & 0xFFFFu) * (1.0f / 65535.0f);
+        float wc = cosine * float(hits.barycentric[h] >> 16) * (1.0f / 65535.0f);
+        float wa = cosine - wb - wc;
+        for (size_t x = 0; x < rowFloats; ++x) sum[x] += wa * a[x] + wb * b[x] + wc * c[x];
+    }
+    float* totalRow = total + v * context.stride;
+    if (terms.channels == 3) {
+        std::array<float, 3> albedo = context.albedo(v);
+        for (size_t x = 0; x < rowFloats; ++x) light[x] = sum[x] * (albedo[x % 3] * terms.weight);
+        for (size_t x = 0; x < rowFloats; ++x) totalRow[x] += light[x];
+    } else {
+        for (size_t x = 0; x < rowFloats; ++x) light[x] = sum[x] * terms.weight;
+        for (size_t j = 0; j < rowFloats; ++j)
+            for (int c = 0; c < 3; ++c) totalRow[3 * j + c] += terms.power[c] * light[j];
+    }
+    if (next) std::copy(light, light + rowFloats, next + v * rowFloats);
+}
+
+} // namespace
+
 void bounce(const Context& context, const std::vector<HitBlock>& hitBlocks, int channels, const float* previous,
             float* next, float* total, int number, Progress* progress) {
-    const TriMesh& mesh = context.mesh;
-    const size_t rowFloats = size_t(context.coefficients) * channels, rowBytes = rowFloats * sizeof(float);
-    const float weight = 2.0f / float(context.options.samples);
-    float power[3] = {1.0f, 1.0f, 1.0f};
+    BounceTerms terms;
+    terms.channels = channels;
+    terms.rowFloats = size_t(context.coefficients) * channels;
+    terms.weight = 2.0f / float(context.options.samples);
     for (int c = 0; c < 3; ++c)
-        for (int b = 0; b <= number; ++b) power[c] *= context.options.albedo[c];
-
-    // Rows of hit triangles are scattered over the mesh: fetch them a few hits ahead (and their corner indices
-    // further ahead) so the memory latency overlaps the arithmetic.
-    constexpr size_t kRowsAhead = 8, kCornersAhead = 16;
-    auto prefetchRows = [&](uint32_t triangle) {
-        const uint32_t* corner = &mesh.indices[3 * size_t(triangle)];
-        for (int k = 0; k < 3; ++k) {
-            const char* row = reinterpret_cast<const char*>(previous + corner[k] * rowFloats);
-            for (size_t byte = 0; byte < rowBytes; byte += 64) __builtin_prefetch(row + byte);
-            __builtin_prefetch(row + rowBytes - 1);
-        }
-    };
+        for (int b = 0; b <= number; ++b) terms.power[c] *= context.options.albedo[c];
 
     tbb::blocked_range<size_t> allBlocks(0, hitBlocks.size(), 1);
     tbb::parallel_for(allBlocks, [&](const tbb::blocked_range<size_t>& blocks) {
-        std::vector<float> gathered(rowFloats), light(rowFloats);
+        std::vector<float> gathered(terms.rowFloats), light(terms.rowFloats);
         for (size_t block = blocks.begin(); block != blocks.end(); ++block) {
             const HitBlock& hits = hitBlocks[block];
             const size_t hitCount = hits.triangle.size(), first = block * rays::kBlockVertices;
-            for (size_t h = 0; h < std::min(kRowsAhead, hitCount); ++h) prefetchRows(hits.triangle[h]);
+            for (size_t h = 0; h < std::min(kRowsAhead, hitCount); ++h)
+                prefetchRows(context.mesh, previous, terms.rowFloats, hits.triangle[h]);
             size_t h = 0;
             for (size_t i = 0; i < hits.end.size(); ++i) {
-                size_t v = first + i;
-                if (h == hits.end[i]) {
-                    // Nothing to gather: leaves `total` untouched to the bit (adding +0 would flip -0).
-                    if (next) std::fill(next + v * rowFloats, next + (v + 1) * rowFloats, 0.0f);
-                    continue;
-                }
-                float* __restrict sum = gathered.data();
-                std::fill(sum, sum + rowFloats, 0.0f);
-                for (; h < hits.end[i]; ++h) {
-                    if (h + kCornersAhead < hitCount)
-                        __builtin_prefetch(&mesh.indices[3 * size_t(hits.triangle[h + kCornersAhead])]);
-                    if (h + kRowsAhead < hitCount) prefetchRows(hits.triangle[h + kRowsAhead]);
-                    const uint32_t* corner = &mesh.indices[3 * size_t(hits.triangle[h])];
-                    const float* __restrict a = previous + corner[0] * rowFloats;
-                    const float* __restrict b = previous + corner[1] * rowFloats;
-                    const float* __restrict c = previous + corner[2] * rowFloats;
-                    float cosine = context.cosines[hits.sample[h]];
-                    float wb = cosine * float(hits.barycentric[h] & 0xFFFFu) * (1.0f / 65535.0f);
-                    float wc = cosine * float(hits.barycentric[h] >> 16) * (1.0f / 65535.0f);
-                    float wa = cosine - wb - wc;
-                    for (size_t x = 0; x < rowFloats; ++x) sum[x] += wa * a[x] + wb * b[x] + wc * c[x];
-                }
-                float* totalRow = total + v * context.stride;
-                if (channels == 3) {
-                    std::array<float, 3> albedo = context.albedo(v);
-                    for (size_t x = 0; x < rowFloats; ++x) light[x] = sum[x] * (albedo[x % 3] * weight);
-                    for (size_t x = 0; x < rowFloats; ++x) totalRow[x] += light[x];
-                } else {
-                    for (size_t x = 0; x < rowFloats; ++x) light[x] = sum[x] * weight;
-                    for (size_t j = 0; j < rowFloats; ++j)
-                        for (int c = 0; c < 3; ++c) totalRow[3 * j + c] += power[c] * light[j];
-                }
-                if (next) std::copy(light.begin(), light.end(), next + v * rowFloats);
+                bounceVertex(context, terms, hits, h, hits.end[i], first + i, previous, next, total, gathered.data(),
+                             light.data());
+                h = hits.end[i];
             }
             if (progress) progress->add(hits.end.size());
         }
     });
 }
+
+namespace {
 
 // The closed form (albedo/pi) A_l Y_lm(n) for every receiver: directRow with nothing occluded. Returns its seconds.
 double unshadowedPass(const Context& context, float* out) {
@@ -313,13 +304,6 @@ double unshadowedPass(const Context& context, float* out) {
     return nowSeconds() - start;
 }
 
-// What hit records take (the layout in transfer.h): 4 bytes per receiver, 10 per hit.
-uint64_t hitRecordBytes(const std::vector<HitBlock>& blocks) {
-    uint64_t bytes = 0;
-    for (const HitBlock& block : blocks) bytes += block.end.size() * 4 + block.triangle.size() * 10;
-    return bytes;
-}
-
 std::optional<Progress> maybeProgress(const TransferOptions& options, const std::string& label, size_t total) {
     std::optional<Progress> progress;
     if (options.progress) progress.emplace(label, total);
@@ -331,6 +315,39 @@ void finish(std::optional<Progress>& progress) {
 }
 
 } // namespace
+
+uint64_t hitRecordBytes(const std::vector<HitBlock>& blocks) {
+    uint64_t bytes = 0;
+    for (const HitBlock& block : blocks) bytes += block.end.size() * 4 + block.triangle.size() * 10;
+    return bytes;
+}
+
+void runDirectPass(const Context& context, float* out, float* unitOut, std::vector<HitBlock>* hitBlocks,
+                   TransferStats& stats) {
+    DirectCounts counts;
+    double start = nowSeconds();
+    {
+        EmbreeScene scene(context.mesh);
+        stats.buildSeconds = nowSeconds() - start;
+        start = nowSeconds();
+        std::clock_t cpuStart = std::clock();
+        std::optional<Progress> progress =
+            maybeProgress(context.options, hitBlocks ? "transfer direct pass (hits recorded)" : "transfer direct pass",
+                          context.receivers.count);
+        directPass(context, scene, out, unitOut, hitBlocks, counts, progress ? &*progress : nullptr);
+        finish(progress);
+        stats.directCpuSeconds = double(std::clock() - cpuStart) / CLOCKS_PER_SEC;
+        stats.directSeconds = nowSeconds() - start;
+    }
+    stats.rays = counts.rays;
+    stats.hits = counts.hits;
+    stats.backFaceHits = counts.backFaceHits;
+    if (hitBlocks) stats.hitRecordBytes = hitRecordBytes(*hitBlocks);
+}
+
+} // namespace passes
+
+using namespace passes;
 
 Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
     rays::validateMesh(mesh);
@@ -360,32 +377,12 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
             return;
         }
         bool interreflected = options.mode == TransferMode::Interreflected;
-        // One albedo for the whole mesh lets bounces run on one channel (see bounce()).
-        int channels = mesh.albedo.empty() || options.albedoOverride ? 1 : 3;
+        int channels = bounceChannels(mesh, options); // one albedo: bounces run on one channel (see bounce())
         bool unitRows = interreflected && options.bounces > 0 && channels == 1;
         std::vector<float> previous(unitRows ? (end - begin) * context.coefficients : 0);
-        std::vector<HitBlock> hitBlocks;
-        if (interreflected)
-            hitBlocks.resize((end - begin + rays::kBlockVertices - 1) / rays::kBlockVertices);
-        DirectCounts counts;
-        double start = nowSeconds();
-        {
-            EmbreeScene scene(mesh); // released before the bounces, which need only the hits
-            stats.buildSeconds = nowSeconds() - start;
-            start = nowSeconds();
-            std::clock_t cpuStart = std::clock();
-            std::optional<Progress> progress = maybeProgress(
-                options, interreflected ? "transfer direct pass (hits recorded)" : "transfer direct pass", end - begin);
-            directPass(context, scene, total.data(), unitRows ? previous.data() : nullptr,
-                       interreflected ? &hitBlocks : nullptr, counts, progress ? &*progress : nullptr);
-            finish(progress);
-            stats.directCpuSeconds = double(std::clock() - cpuStart) / CLOCKS_PER_SEC;
-            stats.directSeconds = nowSeconds() - start;
-        }
-        stats.rays = counts.rays;
-        stats.hits = counts.hits;
-        stats.backFaceHits = counts.backFaceHits;
-        stats.hitRecordBytes = hitRecordBytes(hitBlocks);
+        std::vector<HitBlock> hitBlocks(interreflected ? hitBlockCount(end - begin) : 0);
+        runDirectPass(context, total.data(), unitRows ? previous.data() : nullptr, interreflected ? &hitBlocks : nullptr,
+                      stats);
         if (options.bounces == 0) return;
         if (options.keepDirect) result.direct = total;
 
@@ -394,7 +391,7 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
         std::vector<float> next(options.bounces > 1 ? previous.size() : 0);
         stats.transferBytes += (previous.size() + next.size()) * sizeof(float);
         for (int b = 1; b <= options.bounces; ++b) {
-            start = nowSeconds();
+            double start = nowSeconds();
             bool last = b == options.bounces;
             std::optional<Progress> progress =
                 maybeProgress(options, "transfer bounce " + std::to_string(b), mesh.vertexCount());

@@ -23,6 +23,9 @@
 // covers the mesh, 12 * order^2 with per-vertex albedo. The Embree BVH is freed before the bounces. Measured:
 // 1.06 M vertices, order 5, 128 samples, 2 bounces: peak 1768 bytes per vertex, of which hits 1004, transfer 500.
 // Everything else is O(vertices * order^2) or O(samples * order^2).
+// Sharded (computeDirectShard, computeBounceShard below) a job holds its range's hits and rows plus the mesh and
+// either the BVH (direct pass) or the previous pass's exitant array (4 * order^2 * channels bytes per vertex);
+// measured on that mesh in 4 shards: at most 1.1 GiB per job against 3.8 GiB for the unsharded stage.
 #pragma once
 
 #include "bundle.h"
@@ -91,10 +94,71 @@ struct Transfer {
 // Computes transfer for the vertices in the options' range.
 // Needs: a mesh with unit-length (or at least nonzero) normals per vertex and indices in range; options within
 // the ranges above; interreflected with bounces > 0 needs the whole vertex range, because every bounce gathers
-// from every vertex. Throws prt::Error (kExitInput for the mesh, kExitUsage for options) otherwise.
+// from every vertex (the sharded passes below split it). Throws prt::Error (kExitInput for the mesh, kExitUsage
+// for options) otherwise.
 // Guarantees: bit-identical coefficients for the same mesh and options whatever `threads`, and for any range the
 // rows equal the same rows of the whole-mesh result.
 Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options);
+
+// ---- sharded interreflected transfer ----------------------------------------------------------------------------
+// Interreflected transfer with B > 0 bounces split over N contiguous vertex ranges (shardRows), as B + 1 passes of
+// N jobs each (docs/pipelines.md "Shards"):
+//   pass 0, per shard: the direct pass of its rows (computeDirectShard), its hit records kept in a file;
+//   pass b = 1..B, per shard: bounce b of its rows (computeBounceShard), gathering at its own hits the exitant rows
+//   of pass b - 1 of every vertex, which gatherExitant joins from that pass's shards.
+// Pass B's rows are bit-identical to the same rows of computeTransfer (same direct pass per vertex, same hits,
+// same per-vertex bounce function), so concatenated they give the unsharded result.
+// Files between passes (shard_files.cpp) carry a header naming the run (ShardRun) and are refused, exit 3 with
+// the file and the mismatch named, when read by a job of another run; every size they claim is checked against
+// the file's length and the element cap before anything is allocated.
+
+// Which run a file belongs to: written in every header, compared on reading.
+struct ShardRun {
+    std::string meshHash;        // content hash of the mesh file (hashFile)
+    uint64_t vertexCount = 0, triangleCount = 0;
+    TransferOptions options;     // interreflected, bounces > 0; range and threads play no part in the identity
+    int channels = 1;            // rows of the exitant arrays: 1 (one albedo, unit-albedo rows) or 3 (RGB)
+    int shardIndex = 0, shardCount = 1;
+    size_t rowBegin = 0, rowEnd = 0; // shardRows(vertexCount, shardIndex, shardCount)
+};
+// Needs options with mode interreflected and bounces > 0 (else throws prt::Error(kExitUsage)).
+ShardRun makeShardRun(const TriMesh& mesh, const TransferOptions& options, const std::string& meshHash,
+                      int shardIndex, int shardCount);
+
+// One shard's rows after pass `pass`. Row r is vertex rowBegin + r.
+struct ShardRows {
+    int pass = 0;
+    size_t rowBegin = 0, rowEnd = 0;
+    std::vector<float> total;    // [rows][order^2][3]: direct plus bounces 1..pass, what computeTransfer returns
+    std::vector<float> direct;   // [rows][order^2][3]: the direct (shadowed) pass alone (computeTransfer's keepDirect)
+    std::vector<float> exitant;  // [rows][order^2 * channels]: what pass `pass` alone sends on (empty after pass B)
+    uint64_t rays = 0, hits = 0, backFaceHits = 0; // of the shard's direct pass, carried to the last pass's bundle
+    float rayOffset = 0.0f;
+};
+
+// Pass 0 of the run's shard: the direct pass of its rows, and its hit records written atomically to `hitsPath`.
+// Needs a mesh as computeTransfer needs it, equal to the one run was made from. Fills `stats` (rays, times, hit
+// bytes, peak memory). Rows are computeTransfer's direct rows, bit for bit.
+ShardRows computeDirectShard(const TriMesh& mesh, const ShardRun& run, const std::string& hitsPath,
+                             TransferStats& stats);
+
+// Pass `pass` (1..bounces) of the run's shard: bounce `pass` of its rows. Reads and checks `previousPath` (this
+// shard's rows of pass - 1, writeShardRows), `hitsPath` (this shard's hit records) and `exitantPath` (the exitant
+// array of pass - 1, gatherExitant); throws prt::Error(kExitInput) naming the file when one belongs to another run,
+// shard or pass, or is malformed. Peak memory: the mesh, that array (vertices * order^2 * channels floats) and
+// this shard's hits and rows. After the last pass the rows' totals equal computeTransfer's rows bit for bit.
+ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass, const std::string& previousPath,
+                             const std::string& hitsPath, const std::string& exitantPath, TransferStats& stats);
+
+// Writes a shard's rows (atomically: temporary name, then rename) for the next pass.
+void writeShardRows(const std::string& path, const ShardRun& run, const ShardRows& rows);
+// Reads them back, checked against the run, the shard and the pass; `exitantOnly` skips total and direct.
+ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, bool exitantOnly);
+
+// Joins the exitant rows of one pass's shards (files in any order, one per shard of run.shardCount, each checked
+// against the run) into the whole array, written atomically to `output` for the next pass. Returns the pass.
+// Holds one shard's exitant rows at a time besides the array.
+int gatherExitant(const std::vector<std::string>& parts, const ShardRun& run, const std::string& output);
 
 // Receivers of transfer that are not the mesh's own vertices (atlas texels, probe points): each a point with a
 // normal and a rotation key, the role the vertex index plays in the per-vertex direction-set rotation.

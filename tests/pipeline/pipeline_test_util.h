@@ -118,6 +118,14 @@ radiance = { from = "relight", path = "@OUT@/radiance.npy" }
     return withDir(replaceAll(text, "@OUT@", out), dir);
 }
 
+// The same with interreflected transfer (`bounces` bounces; -1 leaves the stage's default, 2).
+inline std::string interreflectedPipeline(const std::string& dir, int samples, int shards, const std::string& out,
+                                          int bounces) {
+    std::string mode = "mode = \"interreflected\"";
+    if (bounces >= 0) mode += "\nbounces = " + std::to_string(bounces);
+    return replaceAll(twoSpheresPipeline(dir, samples, shards, out), "mode = \"shadowed\"", mode);
+}
+
 inline RunOptions testOptions(const std::string& cacheDir) {
     RunOptions options;
     options.prt = kPrt;

@@ -35,6 +35,51 @@ TEST(Shards, PipelineMergeEqualsTheUnshardedRunBitForBit) {
     EXPECT_EQ(test::outputHashes(overridden), test::outputHashes(whole));
 }
 
+// Interreflected transfer with bounces runs sharded as passes: the direct pass and each bounce an array of shard
+// jobs, a gather between passes, the merge after the last; the product is the unsharded one, key included.
+TEST(Shards, InterreflectedPassesMergeIntoTheUnshardedRunBitForBit) {
+    test::TempDir dir;
+    test::writeSkyExr(dir / "sky.exr", 1.0f);
+    auto pipeline = [&](int shards, int bounces, const std::string& run) {
+        return parsePipeline(test::interreflectedPipeline(dir.path, 48, shards, dir / ("out-" + run), bounces),
+                             dir / (run + ".toml"));
+    };
+    nlohmann::json whole = test::runQuietly(pipeline(1, 2, "whole"), test::testOptions(dir / "cache-whole"));
+    nlohmann::json sharded = test::runQuietly(pipeline(3, 2, "sharded"), test::testOptions(dir / "cache-sharded"));
+    EXPECT_EQ(test::outputHashes(sharded), test::outputHashes(whole));
+    ASSERT_EQ(readFileBytes(dir / "out-sharded/bundle.glb"), readFileBytes(dir / "out-whole/bundle.glb"));
+
+    const nlohmann::json& transfer = sharded["stages"][1];
+    ASSERT_EQ(transfer["id"], "transfer");
+    EXPECT_EQ(transfer["key"], whole["stages"][1]["key"]);
+    const nlohmann::json& jobs = transfer["shard_jobs"];
+    ASSERT_EQ(jobs.size(), 12u); // 3 passes (direct, 2 bounces) of 3 shards, 2 gathers and the merge
+    EXPECT_EQ(jobs[0]["pass"], 0);
+    EXPECT_EQ(jobs[3]["shard"], "gather");
+    EXPECT_EQ(jobs[4]["pass"], 1);
+    EXPECT_EQ(jobs[7]["shard"], "gather");
+    EXPECT_EQ(jobs[7]["pass"], 1);
+    EXPECT_EQ(jobs[11]["shard"], "merge");
+    EXPECT_GT(jobs[0]["rays"].get<uint64_t>(), 0u); // the direct pass casts the rays, bounces none
+    EXPECT_EQ(jobs[4]["rays"].get<uint64_t>(), 0u);
+
+    // Cached on the second run, every job.
+    nlohmann::json again = test::runQuietly(pipeline(3, 2, "sharded"), test::testOptions(dir / "cache-sharded"));
+    EXPECT_EQ(test::ranStages(again), std::set<std::string>{});
+
+    // The run-wide override, the default bounce count (2) and another shard count: the same product.
+    RunOptions four = test::testOptions(dir / "cache-four");
+    four.shards = 4;
+    nlohmann::json overridden = test::runQuietly(pipeline(1, -1, "four"), four);
+    EXPECT_EQ(overridden["stages"][1]["shard_jobs"].size(), 15u);
+    EXPECT_EQ(test::outputHashes(overridden), test::outputHashes(whole));
+
+    // One bounce more is another product, under another key.
+    nlohmann::json three = test::runQuietly(pipeline(3, 3, "three"), test::testOptions(dir / "cache-sharded"));
+    EXPECT_NE(three["stages"][1]["key"], transfer["key"]);
+    EXPECT_NE(readFileBytes(dir / "out-three/bundle.glb"), readFileBytes(dir / "out-whole/bundle.glb"));
+}
+
 class Merge : public testing::Test {
 protected:
     test::TempDir dir;

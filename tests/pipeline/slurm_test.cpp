@@ -80,6 +80,26 @@ TEST_F(Slurm, ShardedPipelineMatchesTheLocalRunBitForBit) {
     EXPECT_EQ(again["cache_hits"], 3);
 }
 
+// Interreflected bounces: each pass a job array after the previous pass's gather job; the same bytes as locally.
+TEST_F(Slurm, InterreflectedPassesRunAsDependentJobArrays) {
+    std::string file = dir / "passes.toml";
+    test::writeText(file, test::interreflectedPipeline(dir.path, 48, 2, dir / "out-passes", 2));
+    Pipeline farm = loadPipeline(file);
+    nlohmann::json local = test::runQuietly(
+        parsePipeline(test::interreflectedPipeline(dir.path, 48, 1, dir / "out-whole", 2), dir / "whole.toml"),
+        test::testOptions(dir / "local-cache"));
+    nlohmann::json report = test::runQuietly(farm, slurm(dir / "farm-cache"));
+    EXPECT_EQ(test::outputHashes(report), test::outputHashes(local));
+    const nlohmann::json& jobs = report["stages"][1]["shard_jobs"];
+    ASSERT_EQ(jobs.size(), 9u); // 3 passes of 2 shards, 2 gathers, the merge
+    std::set<std::string> arrays;
+    for (const nlohmann::json& job : jobs)
+        if (job["shard"].is_array()) arrays.insert(job["slurm_job"].get<std::string>().substr(0, job["slurm_job"].get<std::string>().find('_')));
+    EXPECT_EQ(arrays.size(), 3u); // one array per pass
+    EXPECT_EQ(jobs[2]["shard"], "gather");
+    EXPECT_EQ(jobs[8]["shard"], "merge");
+}
+
 TEST_F(Slurm, FailingJobFailsTheRunWithItsLog) {
     // `prt transfer` cannot read an OBJ: its job fails, and the relight job that waits on it never runs.
     test::writeTwoSpheresObj(dir / "shape.obj");

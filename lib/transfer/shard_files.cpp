@@ -1,0 +1,348 @@
+// The files between the passes of a sharded interreflected transfer: hit records, a shard's rows, and a pass's
+// exitant array. One layout for the three (little-endian, as every machine prt builds on):
+//   8 bytes "PRTSHARD", uint32 format version (1), uint32 header length H (at most 64 KiB), H bytes of JSON, then
+//   the payload, whose every size follows from the header:
+//     hits:    uint32 count[rows], uint32 triangle[hit_count], uint32 barycentric[hit_count], uint16 sample[hit_count]
+//     rows:    float total[rows][n][3], float direct[rows][n][3], float exitant[rows][n * channels] (not after pass B)
+//     exitant: float exitant[vertex_count][n * channels]
+// The header names the run (mesh hash, counts, options), and hits and rows their shard, so a file of another run
+// is refused by name before its payload is touched; the payload's length must be what the header implies, and
+// that is bounded by the element cap, before anything is allocated.
+#include "passes.h"
+
+#include "core.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace prt {
+
+namespace {
+
+constexpr char kMagic[8] = {'P', 'R', 'T', 'S', 'H', 'A', 'R', 'D'};
+constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kMaxHeaderBytes = 64 * 1024;
+
+size_t rowCount(const ShardRun& run) { return run.rowEnd - run.rowBegin; }
+uint64_t coefficients(const ShardRun& run) { return uint64_t(run.options.order) * run.options.order; }
+
+// What identifies the run, in the order a mismatch is reported (the mesh first: the likeliest mix-up).
+nlohmann::json identity(const ShardRun& run) {
+    const TransferOptions& o = run.options;
+    return {{"mesh_hash", run.meshHash},
+            {"vertex_count", run.vertexCount},
+            {"triangle_count", run.triangleCount},
+            {"order", o.order},
+            {"samples", o.samples},
+            {"bounces", o.bounces},
+            {"seed", o.seed},
+            {"albedo", {double(o.albedo[0]), double(o.albedo[1]), double(o.albedo[2])}},
+            {"albedo_override", o.albedoOverride},
+            {"channels", run.channels}};
+}
+const char* const kIdentityOrder[] = {"mesh_hash", "vertex_count", "triangle_count", "order", "samples", "bounces",
+                                      "seed", "albedo", "albedo_override", "channels"};
+
+nlohmann::json header(const char* kind, const ShardRun& run, bool withShard) {
+    nlohmann::json h = identity(run);
+    h["format"] = "prt-transfer-shard";
+    h["kind"] = kind;
+    if (withShard) {
+        h["shard"] = {run.shardIndex, run.shardCount};
+        h["row_begin"] = run.rowBegin;
+        h["row_end"] = run.rowEnd;
+    }
+    return h;
+}
+
+void writeShardFile(const std::string& path, const nlohmann::json& head,
+                    const std::function<void(std::ofstream&)>& payload) {
+    std::string text = head.dump();
+    writeFileAtomic(path, [&](const std::string& tmp) {
+        std::ofstream out(tmp, std::ios::binary);
+        uint32_t prefix[2] = {kFormatVersion, uint32_t(text.size())};
+        out.write(kMagic, sizeof(kMagic));
+        out.write(reinterpret_cast<const char*>(prefix), sizeof(prefix));
+        out.write(text.data(), std::streamsize(text.size()));
+        payload(out);
+        out.flush();
+        if (!out) throw Error(path, "", "cannot write the shard file", kExitOutput);
+    });
+}
+
+template <class T>
+void writeArray(std::ofstream& out, const T* data, size_t count) {
+    out.write(reinterpret_cast<const char*>(data), std::streamsize(count * sizeof(T)));
+}
+
+// An opened shard file whose header matched: the stream stands at the payload.
+struct Reader {
+    std::string path;
+    std::ifstream in;
+    nlohmann::json head;
+    uint64_t payloadBytes = 0;
+
+    [[noreturn]] void fail(const std::string& place, const std::string& problem) const {
+        throw Error(path, place, problem, kExitInput);
+    }
+    uint64_t count(const char* key) const {
+        const nlohmann::json* value = head.contains(key) ? &head[key] : nullptr;
+        if (!value || !value->is_number_unsigned()) fail("header", std::string("has no valid '") + key + "'");
+        return value->get<uint64_t>();
+    }
+    template <class T>
+    void read(T* data, uint64_t count, const char* section) {
+        in.read(reinterpret_cast<char*>(data), std::streamsize(count * sizeof(T)));
+        if (!in) fail(section, "cannot be read (the file changed while it was read?)");
+    }
+    void readFinite(float* data, uint64_t count, const char* section) {
+        read(data, count, section);
+        for (uint64_t i = 0; i < count; ++i)
+            if (!std::isfinite(data[i])) fail(section, "value " + std::to_string(i) + " is not finite");
+    }
+    void skip(uint64_t bytes) { in.seekg(std::streamoff(bytes), std::ios::cur); }
+};
+
+std::string describe(const nlohmann::json& value) { return value.is_string() ? value.get<std::string>() : value.dump(); }
+
+// Opens `path`, checks the prefix, the kind and the run's identity (and the shard, when withShard).
+Reader openShardFile(const std::string& path, const char* kind, const char* what, const ShardRun& run,
+                     bool withShard) {
+    Reader reader;
+    reader.path = path;
+    std::error_code error;
+    uint64_t size = std::filesystem::file_size(path, error);
+    reader.in.open(path, std::ios::binary);
+    if (error || !reader.in) throw Error(path, "", std::string("cannot read ") + what + " (missing?)", kExitInput);
+    char magic[8];
+    uint32_t prefix[2] = {0, 0};
+    if (size < sizeof(magic) + sizeof(prefix)) reader.fail("", std::string("is too short to be ") + what);
+    reader.read(magic, sizeof(magic), "prefix");
+    reader.read(prefix, 2, "prefix");
+    if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
+        reader.fail("", std::string("is not a prt shard file (expected ") + what + ")");
+    if (prefix[0] != kFormatVersion)
+        reader.fail("", "has shard format version " + std::to_string(prefix[0]) + "; this prt reads version " +
+                            std::to_string(kFormatVersion));
+    uint64_t headerBytes = prefix[1];
+    if (headerBytes > kMaxHeaderBytes || headerBytes > size - 16)
+        reader.fail("header", "claims " + std::to_string(headerBytes) + " bytes, more than the file or 64 KiB");
+    std::string text(headerBytes, '\0');
+    reader.read(text.data(), headerBytes, "header");
+    reader.head = nlohmann::json::parse(text, nullptr, false);
+    nlohmann::json& head = reader.head;
+    if (!head.is_object() || head.value("format", "") != "prt-transfer-shard")
+        reader.fail("header", "is not a prt transfer shard header");
+    if (head.value("kind", "") != kind)
+        reader.fail("header", "holds '" + head.value("kind", std::string("?")) + "', not " + what);
+    nlohmann::json expected = identity(run);
+    for (const char* key : kIdentityOrder) {
+        if (!head.contains(key)) reader.fail("header", std::string("has no '") + key + "'");
+        if (head[key] == expected[key]) continue;
+        if (std::string(key) == "mesh_hash")
+            reader.fail("header", "was written for another mesh (" + describe(head[key]) + "; this run's mesh is " +
+                                      describe(expected[key]) + ")");
+        reader.fail("header", std::string("was written for ") + key + " " + describe(head[key]) + ", this run has " +
+                                  describe(expected[key]));
+    }
+    if (withShard) {
+        nlohmann::json shard = {run.shardIndex, run.shardCount};
+        if (head.value("shard", nlohmann::json()) != shard)
+            reader.fail("header", "belongs to shard " + describe(head.value("shard", nlohmann::json())) +
+                                      " [index, count], this job is shard " + shard.dump());
+        if (reader.count("row_begin") != run.rowBegin || reader.count("row_end") != run.rowEnd)
+            reader.fail("header", "rows do not match the shard's [" + std::to_string(run.rowBegin) + ", " +
+                                      std::to_string(run.rowEnd) + ")");
+    }
+    reader.payloadBytes = size - 16 - headerBytes;
+    return reader;
+}
+
+// Checks that the payload holds exactly `bytes` (the sum of sections the header implies).
+void expectPayload(const Reader& reader, uint64_t bytes) {
+    if (reader.payloadBytes != bytes)
+        reader.fail("payload", "holds " + std::to_string(reader.payloadBytes) + " bytes; its header implies " +
+                                   std::to_string(bytes) + " (truncated or padded)");
+}
+
+int readPass(const Reader& reader, int expected) {
+    uint64_t pass = reader.count("pass");
+    if (expected >= 0 && pass != uint64_t(expected))
+        reader.fail("header", "holds pass " + std::to_string(pass) + ", this job needs pass " + std::to_string(expected));
+    return int(pass);
+}
+
+} // namespace
+
+namespace passes {
+
+void writeHitRecords(const std::string& path, const ShardRun& run, const std::vector<HitBlock>& blocks) {
+    nlohmann::json head = header("hits", run, true);
+    uint64_t hits = 0;
+    for (const HitBlock& block : blocks) hits += block.triangle.size();
+    head["hit_count"] = hits;
+    writeShardFile(path, head, [&](std::ofstream& out) {
+        std::vector<uint32_t> counts;
+        for (const HitBlock& block : blocks) {
+            counts.resize(block.end.size());
+            for (size_t i = 0; i < block.end.size(); ++i) counts[i] = block.end[i] - (i ? block.end[i - 1] : 0);
+            writeArray(out, counts.data(), counts.size());
+        }
+        for (const HitBlock& block : blocks) writeArray(out, block.triangle.data(), block.triangle.size());
+        for (const HitBlock& block : blocks) writeArray(out, block.barycentric.data(), block.barycentric.size());
+        for (const HitBlock& block : blocks) writeArray(out, block.sample.data(), block.sample.size());
+    });
+}
+
+std::vector<HitBlock> readHitRecords(const std::string& path, const ShardRun& run) {
+    Reader reader = openShardFile(path, "hits", "hit records", run, true);
+    const size_t rows = rowCount(run);
+    uint64_t hits = reader.count("hit_count");
+    checkElementCount(hits, "hit records", path, "header");
+    checkElementCount(rows, "vertex rows", path, "header");
+    expectPayload(reader, uint64_t(rows) * 4 + hits * 10);
+
+    // Read section by section straight into the blocks, so the records are held once.
+    std::vector<HitBlock> blocks(hitBlockCount(rows));
+    std::vector<uint32_t> counts(rows);
+    reader.read(counts.data(), rows, "hit counts");
+    const uint64_t samples = uint64_t(run.options.samples);
+    uint64_t sum = 0;
+    for (size_t b = 0; b < blocks.size(); ++b) {
+        HitBlock& block = blocks[b];
+        uint32_t end = 0;
+        for (size_t v = b * rays::kBlockVertices; v < std::min(rows, (b + 1) * rays::kBlockVertices); ++v) {
+            if (counts[v] > samples)
+                reader.fail("hit counts", "vertex " + std::to_string(run.rowBegin + v) + " claims " +
+                                              std::to_string(counts[v]) + " hits of " + std::to_string(samples) + " rays");
+            end += counts[v];
+            block.end.push_back(end);
+        }
+        sum += end;
+    }
+    if (sum != hits)
+        reader.fail("hit counts", "add up to " + std::to_string(sum) + ", the header says " + std::to_string(hits));
+    counts = {};
+    for (HitBlock& block : blocks) {
+        block.triangle.resize(block.end.empty() ? 0 : block.end.back());
+        reader.read(block.triangle.data(), block.triangle.size(), "triangles");
+        for (uint32_t t : block.triangle)
+            if (t >= run.triangleCount) reader.fail("triangles", "triangle " + std::to_string(t) + " is not in the mesh");
+    }
+    for (HitBlock& block : blocks) {
+        block.barycentric.resize(block.triangle.size());
+        reader.read(block.barycentric.data(), block.barycentric.size(), "barycentrics");
+        for (uint32_t uv : block.barycentric) // each rounded on its own, so their sum may pass 65535 by one
+            if ((uv & 0xFFFFu) + (uv >> 16) > 65536u) reader.fail("barycentrics", "u + v exceeds 1");
+    }
+    for (HitBlock& block : blocks) {
+        block.sample.resize(block.triangle.size());
+        reader.read(block.sample.data(), block.sample.size(), "samples");
+        // The direct pass records a vertex's hits in ascending sample order.
+        for (size_t i = 0, h = 0; i < block.end.size(); ++i)
+            for (size_t first = h; h < block.end[i]; ++h)
+                if (block.sample[h] >= samples || (h > first && block.sample[h] <= block.sample[h - 1]))
+                    reader.fail("samples", "a vertex's sample indices are not ascending below " + std::to_string(samples));
+    }
+    return blocks;
+}
+
+std::vector<float> readExitant(const std::string& path, const ShardRun& run, int pass) {
+    Reader reader = openShardFile(path, "exitant", "an exitant array", run, false);
+    readPass(reader, pass);
+    uint64_t floats = checkedProduct({run.vertexCount, coefficients(run), uint64_t(run.channels)}, "exitant values",
+                                     path, "header");
+    expectPayload(reader, floats * 4);
+    std::vector<float> exitant(floats);
+    reader.readFinite(exitant.data(), floats, "exitant");
+    return exitant;
+}
+
+} // namespace passes
+
+void writeShardRows(const std::string& path, const ShardRun& run, const ShardRows& rows) {
+    nlohmann::json head = header("rows", run, true);
+    head.update({{"pass", rows.pass}, {"rays", rows.rays}, {"hits", rows.hits}, {"back_face_hits", rows.backFaceHits},
+                 {"ray_offset", double(rows.rayOffset)}, {"has_exitant", rows.pass < run.options.bounces}});
+    writeShardFile(path, head, [&](std::ofstream& out) {
+        writeArray(out, rows.total.data(), rows.total.size());
+        writeArray(out, rows.direct.data(), rows.direct.size());
+        writeArray(out, rows.exitant.data(), rows.exitant.size());
+    });
+}
+
+ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, bool exitantOnly) {
+    Reader reader = openShardFile(path, "rows", "shard rows", run, true);
+    ShardRows rows;
+    rows.pass = readPass(reader, pass);
+    rows.rowBegin = run.rowBegin;
+    rows.rowEnd = run.rowEnd;
+    rows.rays = reader.count("rays");
+    rows.hits = reader.count("hits");
+    rows.backFaceHits = reader.count("back_face_hits");
+    const nlohmann::json& offset = reader.head.value("ray_offset", nlohmann::json());
+    const nlohmann::json& hasExitant = reader.head.value("has_exitant", nlohmann::json());
+    if (!offset.is_number() || !hasExitant.is_boolean()) reader.fail("header", "has no valid 'ray_offset' or 'has_exitant'");
+    rows.rayOffset = offset.get<float>();
+    uint64_t n = coefficients(run);
+    uint64_t totalFloats = checkedProduct({rowCount(run), n, 3}, "row values", path, "header");
+    uint64_t exitantFloats = hasExitant.get<bool>() ? checkedProduct({rowCount(run), n, uint64_t(run.channels)},
+                                                                     "exitant values", path, "header") : 0;
+    expectPayload(reader, (2 * totalFloats + exitantFloats) * 4);
+    if (exitantOnly && !hasExitant.get<bool>()) reader.fail("header", "holds no exitant rows (the last pass writes none)");
+    if (exitantOnly) {
+        reader.skip(2 * totalFloats * 4);
+    } else {
+        rows.total.resize(totalFloats);
+        rows.direct.resize(totalFloats);
+        reader.readFinite(rows.total.data(), totalFloats, "total rows");
+        reader.readFinite(rows.direct.data(), totalFloats, "direct rows");
+    }
+    rows.exitant.resize(exitantFloats);
+    reader.readFinite(rows.exitant.data(), exitantFloats, "exitant rows");
+    return rows;
+}
+
+int gatherExitant(const std::vector<std::string>& parts, const ShardRun& run, const std::string& output) {
+    if (parts.size() != size_t(run.shardCount) || parts.empty())
+        throw Error("", "--gather", "needs the " + std::to_string(run.shardCount) + " shards of one pass, got " +
+                                        std::to_string(parts.size()), kExitUsage);
+    uint64_t rowFloats = coefficients(run) * uint64_t(run.channels);
+    std::vector<float> exitant(checkedProduct({run.vertexCount, rowFloats}, "exitant values", "", "gather"));
+    std::vector<int> seen(parts.size(), -1);
+    int pass = -1;
+    for (size_t s = 0; s < parts.size(); ++s) {
+        // The shard a file claims places its rows; readShardRows then checks every other field for that shard.
+        ShardRun shard = run;
+        {
+            Reader peek = openShardFile(parts[s], "rows", "shard rows", run, false);
+            const nlohmann::json claimed = peek.head.value("shard", nlohmann::json());
+            if (!claimed.is_array() || claimed.size() != 2 || claimed[1] != run.shardCount || !claimed[0].is_number_unsigned() ||
+                claimed[0].get<uint64_t>() >= uint64_t(run.shardCount))
+                peek.fail("header", "is not one of " + std::to_string(run.shardCount) + " shards (shard " +
+                                        describe(claimed) + ")");
+            shard.shardIndex = claimed[0].get<int>();
+            if (seen[shard.shardIndex] >= 0)
+                peek.fail("header", "is shard " + std::to_string(shard.shardIndex) + " again (also " +
+                                        parts[seen[shard.shardIndex]] + ")");
+            seen[shard.shardIndex] = int(s);
+            if (pass < 0) pass = readPass(peek, -1);
+        }
+        RowRange range = shardRows(run.vertexCount, shard.shardIndex, shard.shardCount);
+        shard.rowBegin = range.begin;
+        shard.rowEnd = range.end;
+        ShardRows rows = readShardRows(parts[s], shard, pass, true);
+        std::copy(rows.exitant.begin(), rows.exitant.end(), exitant.begin() + range.begin * rowFloats);
+    }
+    // Every index seen once among shardCount files: the ranges tile [0, vertexCount).
+    nlohmann::json head = header("exitant", run, false);
+    head["pass"] = pass;
+    writeShardFile(output, head, [&](std::ofstream& out) { writeArray(out, exitant.data(), exitant.size()); });
+    return pass;
+}
+
+} // namespace prt

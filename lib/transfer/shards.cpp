@@ -1,0 +1,123 @@
+// The passes of a sharded interreflected transfer (transfer.h): each job does for its vertex rows what
+// computeTransfer does for all of them, through the same functions (passes.h), so the rows agree bit for bit.
+#include "passes.h"
+
+#include <tbb/task_arena.h>
+
+#include <optional>
+
+namespace prt {
+
+using namespace passes;
+
+namespace {
+
+// The mesh must be the one the run was made from (its counts; the hash is the caller's, from the file).
+void checkMesh(const TriMesh& mesh, const ShardRun& run) {
+    rays::validateMesh(mesh);
+    checkOptions(mesh, run.options);
+    if (mesh.vertexCount() != run.vertexCount || mesh.triangleCount() != run.triangleCount ||
+        bounceChannels(mesh, run.options) != run.channels || run.rowEnd > run.vertexCount || run.rowBegin > run.rowEnd)
+        throw Error("", "shard", "the mesh is not the one this shard run was made for", kExitUsage);
+}
+
+// computeTransfer's options for the shard's rows.
+TransferOptions rangeOptions(const ShardRun& run) {
+    TransferOptions options = run.options;
+    options.vertexBegin = run.rowBegin;
+    options.vertexEnd = run.rowEnd;
+    return options;
+}
+
+} // namespace
+
+ShardRun makeShardRun(const TriMesh& mesh, const TransferOptions& options, const std::string& meshHash,
+                      int shardIndex, int shardCount) {
+    if (options.mode != TransferMode::Interreflected || options.bounces < 1)
+        throw Error("", "shard", "the sharded passes are for interreflected transfer with bounces", kExitUsage);
+    if (shardCount < 1 || shardIndex < 0 || shardIndex >= shardCount)
+        throw Error("", "--shard", std::to_string(shardIndex) + "/" + std::to_string(shardCount) + " is not a shard",
+                    kExitUsage);
+    ShardRun run;
+    run.meshHash = meshHash;
+    run.vertexCount = mesh.vertexCount();
+    run.triangleCount = mesh.triangleCount();
+    run.options = options;
+    run.channels = bounceChannels(mesh, options);
+    run.shardIndex = shardIndex;
+    run.shardCount = shardCount;
+    RowRange range = shardRows(run.vertexCount, shardIndex, shardCount);
+    run.rowBegin = range.begin;
+    run.rowEnd = range.end;
+    return run;
+}
+
+ShardRows computeDirectShard(const TriMesh& mesh, const ShardRun& run, const std::string& hitsPath,
+                             TransferStats& stats) {
+    checkMesh(mesh, run);
+    const TransferOptions options = rangeOptions(run);
+    const std::vector<float> spawn = spawnNormals(mesh);
+    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, run.rowBegin, run.rowEnd, spawn));
+    const size_t rows = run.rowEnd - run.rowBegin;
+
+    ShardRows result;
+    result.rowBegin = run.rowBegin;
+    result.rowEnd = run.rowEnd;
+    result.total.resize(rows * context.stride);
+    if (run.channels == 1) result.exitant.resize(rows * context.coefficients);
+    std::vector<HitBlock> hitBlocks(hitBlockCount(rows));
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+        runDirectPass(context, result.total.data(), run.channels == 1 ? result.exitant.data() : nullptr, &hitBlocks,
+                      stats);
+    });
+    // As computeTransfer: the direct rows are kept (keepDirect), and RGB bounces start from them.
+    result.direct = result.total;
+    if (run.channels == 3) result.exitant = result.total;
+    result.rays = stats.rays;
+    result.hits = stats.hits;
+    result.backFaceHits = stats.backFaceHits;
+    result.rayOffset = stats.rayOffset = context.offset;
+    stats.transferBytes = (result.total.size() + result.direct.size() + result.exitant.size()) * sizeof(float);
+    writeHitRecords(hitsPath, run, hitBlocks);
+    stats.peakMemoryBytes = peakMemoryBytes();
+    return result;
+}
+
+ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass, const std::string& previousPath,
+                             const std::string& hitsPath, const std::string& exitantPath, TransferStats& stats) {
+    checkMesh(mesh, run);
+    if (pass < 1 || pass > run.options.bounces)
+        throw Error("", "--pass", std::to_string(pass) + " outside 1.." + std::to_string(run.options.bounces),
+                    kExitUsage);
+    ShardRows rows = readShardRows(previousPath, run, pass - 1, false);
+    rows.exitant = std::vector<float>(); // this pass gathers the whole array instead
+    const std::vector<HitBlock> hitBlocks = readHitRecords(hitsPath, run);
+    const std::vector<float> previous = readExitant(exitantPath, run, pass - 1);
+
+    const TransferOptions options = rangeOptions(run);
+    const std::vector<float> spawn = spawnNormals(mesh);
+    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, run.rowBegin, run.rowEnd, spawn));
+    const bool last = pass == run.options.bounces;
+    std::vector<float> next(last ? 0 : (run.rowEnd - run.rowBegin) * context.coefficients * run.channels);
+    stats.rayOffset = context.offset;
+    stats.hits = rows.hits;
+    stats.hitRecordBytes = hitRecordBytes(hitBlocks);
+    stats.transferBytes = (rows.total.size() + rows.direct.size() + previous.size() + next.size()) * sizeof(float);
+    double start = nowSeconds();
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+        std::optional<Progress> progress;
+        if (options.progress) progress.emplace("transfer bounce " + std::to_string(pass), run.rowEnd - run.rowBegin);
+        bounce(context, hitBlocks, run.channels, previous.data(), last ? nullptr : next.data(), rows.total.data(), pass,
+               progress ? &*progress : nullptr);
+        if (progress) progress->finish();
+    });
+    stats.bounceSeconds.push_back(nowSeconds() - start);
+    rows.pass = pass;
+    rows.exitant = std::move(next);
+    stats.peakMemoryBytes = peakMemoryBytes();
+    return rows;
+}
+
+} // namespace prt
