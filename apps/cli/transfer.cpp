@@ -117,16 +117,7 @@ void runTransfer(const TransferArgs& args) {
                     {"ray_offset", stats.rayOffset},
                     {"rays", stats.rays},
                     {"back_face_hits", stats.backFaceHits}};
-    if (shardCount > 1) {
-        // A slice of the vertex rows; a merge step concatenates the shards into one "vertex" layer.
-        layer.domain = "vertex_range";
-        layer.params["shard"] = {shardIndex, shardCount};
-        layer.params["row_begin"] = transfer.vertexBegin;
-        layer.params["row_end"] = transfer.vertexEnd;
-        layer.params["vertex_count"] = vertexCount;
-    } else {
-        layer.domain = "vertex";
-    }
+    markVertexShard(layer, transfer.vertexBegin, transfer.vertexEnd, vertexCount, shardIndex, shardCount);
 
     Layer bounceLayer;
     if (!transfer.direct.empty()) {
