@@ -40,11 +40,15 @@ struct GlossyArgs {
     size_t compareSolvers = 0;
     std::string vertexStats;
     std::string lobeType = "float16";
+    std::string shard;
 };
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
 
-Layer diffuseLayer(const GlossyArgs& args, const TriMesh& mesh, const std::array<double, 3>& albedo, int threads) {
+// The diffuse part for the rows `range` (shard shardIndex of shardCount). A --diffuse layer is copied whole into
+// every shard (the merge keeps layers that every shard holds identically); a computed one covers the range.
+Layer diffuseLayer(const GlossyArgs& args, const TriMesh& mesh, const std::array<double, 3>& albedo, int threads,
+                   RowRange range, int shardIndex, int shardCount) {
     if (!args.diffuse.empty()) {
         Bundle diffuse = readBundle(args.diffuse);
         const Layer* layer = findLayer(diffuse, "transfer");
@@ -62,17 +66,19 @@ Layer diffuseLayer(const GlossyArgs& args, const TriMesh& mesh, const std::array
     options.albedo = {float(albedo[0]), float(albedo[1]), float(albedo[2])};
     options.albedoOverride = true;
     options.threads = threads;
+    options.vertexBegin = range.begin;
+    options.vertexEnd = range.end;
     Transfer transfer = computeTransfer(mesh, options);
     Layer layer;
     layer.name = "transfer";
-    layer.domain = "vertex";
     layer.semantic = "sh_transfer_rgb";
-    layer.shape = {mesh.vertexCount(), uint64_t(args.order) * args.order, 3};
+    layer.shape = {transfer.vertexEnd - transfer.vertexBegin, uint64_t(args.order) * args.order, 3};
     layer.data = std::move(transfer.coefficients);
     layer.params = {{"mode", transferModeName(options.mode)}, {"order", args.order}, {"samples", args.samples},
                     {"bounces", args.bounces}, {"albedo", albedo}, {"seed", 0},
                     {"direction_set", kTransferDirectionSet}, {"ray_offset", transfer.stats.rayOffset},
                     {"rays", transfer.stats.rays}, {"back_face_hits", transfer.stats.backFaceHits}};
+    markVertexShard(layer, transfer.vertexBegin, transfer.vertexEnd, mesh.vertexCount(), shardIndex, shardCount);
     return layer;
 }
 
@@ -104,6 +110,14 @@ void runGlossy(const GlossyArgs& args) {
         throw usage("--lobe-type", "must be float16 or float32");
     options.lobeType = args.lobeType;
     std::array<double, 3> albedo = parseAlbedo(args.albedo);
+    int shardIndex = 0, shardCount = 1;
+    if (!args.shard.empty()) {
+        parseShard(args.shard, shardIndex, shardCount);
+        if (args.bounces > 0 && args.diffuse.empty())
+            throw usage("--shard", "diffuse interreflection (--bounces) gathers from every vertex; run it unsharded, "
+                                   "or give its transfer as --diffuse BUNDLE.glb");
+        if (args.compareSolvers > 0) throw usage("--shard", "does not combine with --compare-solvers");
+    }
     if (options.solver == glossy::Solver::OpenCl) logInfo("glossy: OpenCL device " + glossy::openClDeviceName());
 
     Bundle input = readBundle(args.input);
@@ -127,11 +141,16 @@ void runGlossy(const GlossyArgs& args) {
         if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
         return;
     }
-    Layer diffuse = diffuseLayer(args, mesh, albedo, options.solverOptions.threads);
+    // Shards are vertex ranges: every row is computed as the whole run computes it (lib/glossy and lib/transfer
+    // guarantee rows independent of the range), so `prt merge` joins them bit for bit.
+    RowRange range = shardRows(mesh.vertexCount(), shardIndex, shardCount);
+    options.vertexBegin = range.begin;
+    options.vertexEnd = range.end;
+    Layer diffuse = diffuseLayer(args, mesh, albedo, options.solverOptions.threads, range, shardIndex, shardCount);
     glossy::GlossyLobes lobes = glossy::computeGlossyLobes(mesh, options);
 
     Bundle output;
-    output.layers.push_back(glossy::lobeLayer(lobes, options, mesh.vertexCount()));
+    output.layers.push_back(glossy::lobeLayer(lobes, options, mesh.vertexCount(), shardIndex, shardCount));
     output.layers.push_back(std::move(diffuse));
     output.mesh = std::move(mesh);
     output.producer = {{"tool", "prt"}, {"version", PRT_VERSION}, {"stage", "glossy"}};
@@ -208,6 +227,9 @@ void addGlossyCommand(CLI::App& app) {
                         "Also write per-vertex diagnostics [V,6] (.npy): normal, visible share, mean and worst "
                         "relative fit error");
     command->add_option("--lobe-type", args->lobeType, "Lobe layer storage: float16 (default) or float32");
+    command->add_option("--shard", args->shard,
+                        "Compute only vertex range I of N (0-based) into a shard bundle; `prt merge` joins the N "
+                        "shards into the unsharded bundle, bit for bit");
     command->callback([args] { runGlossy(*args); });
 }
 

@@ -370,11 +370,15 @@ FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t
     return all;
 }
 
-Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount) {
+Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount, int shardIndex,
+                int shardCount) {
     Layer layer;
     layer.name = "glossy_lobes";
     bool whole = lobes.vertexBegin == 0 && lobes.vertexEnd == vertexCount;
-    layer.domain = whole ? "vertex" : "vertex_range";
+    if (!whole && shardCount <= 1)
+        throw Error("", "glossy_lobes", "rows [" + std::to_string(lobes.vertexBegin) + ", " +
+                                            std::to_string(lobes.vertexEnd) + ") are not every vertex, but no shard",
+                    kExitFailure);
     layer.semantic = "sg_lobes";
     if (options.lobeType != "float16" && options.lobeType != "float32")
         throw Error("", "--lobe-type", "must be float16 or float32", kExitUsage);
@@ -397,7 +401,7 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
     layer.params["weights"] = {{"beta", options.weights.beta}, {"gamma", options.weights.gamma},
                                {"delta", options.weights.delta}};
     layer.params["lambda_bounds"] = {options.bounds.lambdaMin, options.bounds.lambdaMax};
-    if (!whole) layer.params["vertex_range"] = {lobes.vertexBegin, lobes.vertexEnd};
+    markVertexShard(layer, lobes.vertexBegin, lobes.vertexEnd, vertexCount, shardIndex, shardCount);
     return layer;
 }
 

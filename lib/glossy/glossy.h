@@ -184,8 +184,11 @@ struct GlossyLobes {
 GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options);
 
 // The bundle layer of the lobes ("glossy_lobes", semantic "sg_lobes", float16, shape [V, 92, N, 5]) and its
-// params: view set (directions), lobes, brdf, grid. `semantic` rows as GlossyLobes.values.
-Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount);
+// params: view set (directions), lobes, brdf, grid. `semantic` rows as GlossyLobes.values. Needs the lobes of
+// every vertex, or shardCount > 1: then the rows are shard shardIndex of a `--shard I/N` run (domain
+// "vertex_range", markVertexShard), which mergeShards joins bit for bit into the whole run's layer.
+Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount, int shardIndex = 0,
+                int shardCount = 1);
 
 // ---- solver comparison -------------------------------------------------------------------------------------
 struct SolverComparison {

@@ -93,4 +93,50 @@ TEST_F(GlossyCli, FitRelightsAndRefusesATamperedViewSet) {
     EXPECT_LT(metrics["relative_rmse"].get<double>(), 0.25) << metrics.dump();
 }
 
+std::string fileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Shards are vertex ranges; `prt merge` joins three of them, in any order, into the unsharded bundle byte for byte,
+// and neither the thread count nor the sharding changes a byte.
+TEST_F(GlossyCli, ThreeShardsMergeIntoTheUnshardedBundleByteForByte) {
+    const std::string base = "glossy " + path("sphere.glb") + " --brdf phong:16,0.5 --albedo 0.4 --lobes 2 "
+                             "--grid 4 --samples 32 --iterations 15 --quiet ";
+    ASSERT_EQ(prt(base + "-o " + path("whole.glb") + " --threads 2", dir).exitCode, 0);
+    ASSERT_EQ(prt(base + "-o " + path("one.glb") + " --threads 1", dir).exitCode, 0);
+    EXPECT_EQ(fileBytes(path("one.glb")), fileBytes(path("whole.glb")));
+    for (int i = 0; i < 3; ++i) {
+        PrtRun shard = prt(base + "--shard " + std::to_string(i) + "/3 --threads " + std::to_string(1 + i % 2) +
+                               " -o " + path("shard" + std::to_string(i) + ".glb"), dir);
+        ASSERT_EQ(shard.exitCode, 0) << shard.text;
+    }
+    prt::Bundle shard = prt::readBundle(path("shard1.glb"));
+    ASSERT_NE(prt::findLayer(shard, "glossy_lobes"), nullptr);
+    EXPECT_EQ(prt::findLayer(shard, "glossy_lobes")->domain, "vertex_range");
+    EXPECT_EQ(prt::findLayer(shard, "transfer")->domain, "vertex_range");
+    PrtRun merge = prt("merge " + path("shard2.glb") + " " + path("shard0.glb") + " " + path("shard1.glb") + " -o " +
+                           path("merged.glb") + " --quiet", dir);
+    ASSERT_EQ(merge.exitCode, 0) << merge.text;
+    EXPECT_EQ(fileBytes(path("merged.glb")), fileBytes(path("whole.glb")));
+
+    // A diffuse bundle given with --diffuse travels whole in every shard and merges as well.
+    ASSERT_EQ(prt(base + "-o " + path("d_whole.glb") + " --diffuse " + path("whole.glb"), dir).exitCode, 0);
+    for (int i = 0; i < 3; ++i)
+        ASSERT_EQ(prt(base + "--diffuse " + path("whole.glb") + " --shard " + std::to_string(i) + "/3 -o " +
+                          path("d" + std::to_string(i) + ".glb"), dir).exitCode, 0);
+    ASSERT_EQ(prt("merge " + path("d0.glb") + " " + path("d1.glb") + " " + path("d2.glb") + " -o " +
+                      path("d_merged.glb") + " --quiet", dir).exitCode, 0);
+    EXPECT_EQ(fileBytes(path("d_merged.glb")), fileBytes(path("d_whole.glb")));
+
+    // Interreflection gathers from every vertex: refused with a shard, nothing written.
+    PrtRun bounces = prt(base + "--bounces 1 --shard 0/3 -o " + path("b.glb"), dir);
+    EXPECT_EQ(bounces.exitCode, 2);
+    EXPECT_NE(bounces.text.find("--shard"), std::string::npos) << bounces.text;
+    EXPECT_FALSE(fs::exists(dir / "b.glb"));
+    PrtRun badShard = prt(base + "--shard 3/3 -o " + path("b.glb"), dir);
+    EXPECT_EQ(badShard.exitCode, 2);
+    EXPECT_FALSE(fs::exists(dir / "b.glb"));
+}
+
 } // namespace
