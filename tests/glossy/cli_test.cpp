@@ -1,7 +1,10 @@
 // `prt glossy` and `prt relight --eye` end to end: a small fit, the view-dependent radiance against the
 // reference, and every bad input refused with no output.
 #include "bundle.h"
+#include "compare.h"
 #include "core.h"
+#include "image.h"
+#include "render.h"
 
 #include <gtest/gtest.h>
 
@@ -91,6 +94,54 @@ TEST_F(GlossyCli, FitRelightsAndRefusesATamperedViewSet) {
     ASSERT_EQ(compare.exitCode, 0);
     nlohmann::json metrics = nlohmann::json::parse(std::ifstream(path("c.json")));
     EXPECT_LT(metrics["relative_rmse"].get<double>(), 0.25) << metrics.dump();
+}
+
+// `prt relight --image`: the glossy bundle's radiance toward the camera's eye, per vertex, drawn by the renderer of
+// `prt render` (so pixel for pixel what renderVertexRadiance makes of `relight --eye EYE`), and close to the
+// path-traced `prt reference --image` of the same camera.
+TEST_F(GlossyCli, RelightImageRendersTheLobesTowardTheCamera) {
+    std::string env = std::string(PRT_DATA_DIR) + "/env/courtyard.exr";
+    if (!fs::exists(env)) GTEST_SKIP() << "no " << env;
+    ASSERT_EQ(prt("glossy " + path("sphere.glb") + " -o " + path("g.glb") +
+                      " --brdf phong:8,0.5 --albedo 0.3 --grid 4 --samples 64 --quiet", dir).exitCode, 0);
+    const std::string camera = " --image 24,20 --camera 0,0.5,4,0,0,0,0,1,0,35";
+    PrtRun picture = prt("relight " + path("g.glb") + " --env " + env + camera + " -o " + path("pic.exr") + " --quiet", dir);
+    ASSERT_EQ(picture.exitCode, 0) << picture.text;
+    ASSERT_EQ(prt("relight " + path("g.glb") + " --env " + env + " --eye 0,0.5,4 -o " + path("eye.npy") + " --quiet",
+                  dir).exitCode, 0);
+    prt::PinholeCamera pinhole;
+    pinhole.eye = {0.0f, 0.5f, 4.0f};
+    pinhole.fovyDegrees = 35.0f;
+    pinhole.width = 24;
+    pinhole.height = 20;
+    prt::RenderedImage expected = prt::renderVertexRadiance(prt::readBundle(path("g.glb")).mesh,
+                                                            prt::readVertexRadiance(path("eye.npy")), pinhole);
+    prt::Image image = prt::readImage(path("pic.exr"));
+    ASSERT_EQ(image.rgb.size(), expected.radiance.rgb.size());
+    for (size_t i = 0; i < image.rgb.size(); ++i) ASSERT_FLOAT_EQ(image.rgb[i], expected.radiance.rgb[i]) << i;
+
+    PrtRun glossyOnly = prt("relight " + path("g.glb") + " --env " + env + camera + " --glossy-only -o " +
+                                path("lobes.png") + " --quiet", dir);
+    ASSERT_EQ(glossyOnly.exitCode, 0) << glossyOnly.text;
+    EXPECT_TRUE(fs::exists(dir / "lobes.png"));
+
+    ASSERT_EQ(prt("reference " + path("sphere.glb") + " --env " + env + " --brdf phong:8,0.5 --albedo 0.3" + camera +
+                      " --samples 64 -o " + path("ref.exr") + " --quiet", dir).exitCode, 0);
+    prt::Image reference = prt::readImage(path("ref.exr"));
+    // Over the sphere's pixels (the reference shows the map where rays escape).
+    prt::ImageComparison comparison = prt::compareImages(image.rgb.data(), reference.rgb.data(),
+                                                         expected.coverage.data(), 24, 20);
+    EXPECT_GT(comparison.maskPixels, 50u);
+    EXPECT_LT(comparison.metrics.relativeRmse, 0.3);
+
+    // Bad combinations: exit 2, no picture.
+    for (const std::string& bad : {std::string(" --image 24,20 -o ") + path("bad.exr"),
+                                   camera + " --eye 0,0,4 -o " + path("bad.exr"), camera + " -o " + path("bad.npy")}) {
+        PrtRun refused = prt("relight " + path("g.glb") + " --env " + env + bad, dir);
+        EXPECT_EQ(refused.exitCode, 2) << bad << ": " << refused.text;
+    }
+    EXPECT_FALSE(fs::exists(dir / "bad.exr"));
+    EXPECT_FALSE(fs::exists(dir / "bad.npy"));
 }
 
 std::string fileBytes(const std::string& path) {
