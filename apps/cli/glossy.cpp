@@ -41,6 +41,7 @@ struct GlossyArgs {
     std::string vertexStats;
     std::string lobeType = "float16";
     std::string shard;
+    bool indirectGlossy = false;
 };
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
@@ -82,6 +83,25 @@ Layer diffuseLayer(const GlossyArgs& args, const TriMesh& mesh, const std::array
     return layer;
 }
 
+// The grey per-vertex shadowed transfer of the whole mesh that indirect glossy reads at its hit points (every shard
+// computes all of it: hits land anywhere). Needs a grey albedo (checked by runGlossy): the kernel has one channel.
+void indirectTransfer(const GlossyArgs& args, const TriMesh& mesh, const std::array<double, 3>& albedo, int threads,
+                      glossy::GlossyOptions& options) {
+    TransferOptions transfer;
+    transfer.mode = TransferMode::Shadowed;
+    transfer.order = args.order;
+    transfer.samples = args.samples;
+    transfer.albedo = {float(albedo[0]), float(albedo[1]), float(albedo[2])};
+    transfer.albedoOverride = true;
+    transfer.threads = threads;
+    Transfer whole = computeTransfer(mesh, transfer);
+    const size_t coefficients = size_t(args.order) * args.order;
+    options.indirectTransfer.resize(mesh.vertexCount() * coefficients);
+    for (size_t i = 0; i < options.indirectTransfer.size(); ++i) options.indirectTransfer[i] = whole.coefficients[i * 3];
+    options.indirectOrder = args.order;
+    options.indirectSamples = args.samples;
+}
+
 void runGlossy(const GlossyArgs& args) {
     double start = nowSeconds();
     glossy::GlossyOptions options;
@@ -110,6 +130,8 @@ void runGlossy(const GlossyArgs& args) {
         throw usage("--lobe-type", "must be float16 or float32");
     options.lobeType = args.lobeType;
     std::array<double, 3> albedo = parseAlbedo(args.albedo);
+    if (args.indirectGlossy && (albedo[0] != albedo[1] || albedo[1] != albedo[2]))
+        throw usage("--indirect-glossy", "needs a grey --albedo: the glossy kernel has one channel");
     int shardIndex = 0, shardCount = 1;
     if (!args.shard.empty()) {
         parseShard(args.shard, shardIndex, shardCount);
@@ -147,6 +169,7 @@ void runGlossy(const GlossyArgs& args) {
     options.vertexBegin = range.begin;
     options.vertexEnd = range.end;
     Layer diffuse = diffuseLayer(args, mesh, albedo, options.solverOptions.threads, range, shardIndex, shardCount);
+    if (args.indirectGlossy) indirectTransfer(args, mesh, albedo, options.solverOptions.threads, options);
     glossy::GlossyLobes lobes = glossy::computeGlossyLobes(mesh, options);
 
     Bundle output;
@@ -227,6 +250,9 @@ void addGlossyCommand(CLI::App& app) {
                         "Also write per-vertex diagnostics [V,6] (.npy): normal, visible share, mean and worst "
                         "relative fit error");
     command->add_option("--lobe-type", args->lobeType, "Lobe layer storage: float16 (default) or float32");
+    command->add_flag("--indirect-glossy", args->indirectGlossy,
+                      "Also fit the glossy reflection of light that bounced once diffusely off the mesh (grey "
+                      "--albedo; docs/glossy.md)");
     command->add_option("--shard", args->shard,
                         "Compute only vertex range I of N (0-based) into a shard bundle; `prt merge` joins the N "
                         "shards into the unsharded bundle, bit for bit");

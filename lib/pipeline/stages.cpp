@@ -145,7 +145,8 @@ std::vector<StageSpec> makeCatalogue() {
                      {"delta", ParamType::Number, 0.0, 1e6},
                      {"no-coherence", ParamType::Boolean},
                      {"iterations", ParamType::Integer, 1.0, 100000.0},
-                     {"lobe-type", ParamType::String, 0.0, 0.0, {"float16", "float32"}}};
+                     {"lobe-type", ParamType::String, 0.0, 0.0, {"float16", "float32"}},
+                     {"indirect-glossy", ParamType::Boolean}};
     glossy.takesThreads = true;
     glossy.shardable = true;
     glossy.shardRefusal = glossyShardRefusal;

@@ -56,6 +56,9 @@ TEST_F(GlossyCli, BadInputsFailWithoutOutput) {
     EXPECT_NE(lobes.text.find("--lobes"), std::string::npos) << lobes.text;
     PrtRun solver = prt(base + "--brdf phong:8,0.5 --solver cuda", dir);
     EXPECT_EQ(solver.exitCode, 2);
+    PrtRun colour = prt(base + "--brdf phong:8,0.5 --indirect-glossy --albedo 0.5,0.4,0.3", dir);
+    EXPECT_EQ(colour.exitCode, 2);
+    EXPECT_NE(colour.text.find("grey"), std::string::npos) << colour.text;
     // No OpenCL platform: an empty ICD vendor folder.
     fs::create_directories(dir / "no_vendors");
     PrtRun platform = prt(base + "--brdf phong:8,0.5", dir, "OCL_ICD_VENDORS=" + path("no_vendors"));
