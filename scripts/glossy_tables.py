@@ -90,3 +90,12 @@ strip = os.path.join(folder, "strip_metrics.json")
 if os.path.exists(strip):
     print()
     print(f"Strip: relative RMSE over the bunny's pixels {100 * json.load(open(strip))['image_relative_rmse']:.1f}%")
+if "indirect" in r:
+    print()
+    print("Indirect glossy (1 lobe, n = 32, diffuse 1 bounce; full radiance against a 1-bounce reference, courtyard):")
+    print()
+    eyes_i = [k for k in next(iter(r["indirect"].values())) if k != "fit_seconds"]
+    print("| glossy part | " + " | ".join(eyes_i) + " | stage s |")
+    print("|---|" + "---|" * (len(eyes_i) + 1))
+    for label, v in r["indirect"].items():
+        print(f"| {label} | " + " | ".join(f"{100 * v[e]:.2f}%" for e in eyes_i) + f" | {v['fit_seconds']:.1f} |")
