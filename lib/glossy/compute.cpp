@@ -172,6 +172,14 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
                     if (!visible[t] && hit.Ng_x * d[0] + hit.Ng_y * d[1] + hit.Ng_z * d[2] < 0.0f)
                         hitTransfer(mesh, options.indirectTransfer, options.indirectOrder, hit.primID, hit.u, hit.v, row);
                 }
+                double upper = 0.0, seen = 0.0;
+                for (size_t t = 0; t < count; ++t) {
+                    const float* d = &grid.directions[t * 3];
+                    if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] <= 0.0f) continue;
+                    upper += grid.solidAngle[t];
+                    seen += visible[t] ? grid.solidAngle[t] : 0.0f;
+                }
+                result.visibleShare[i] = upper > 0.0 ? float(seen / upper) : 0.0f;
                 std::vector<float> table(count);
                 for (int v = 0; v < kViewCount; ++v) {
                     const float* view = views.directions[v].data();

@@ -170,6 +170,9 @@ TEST(GlossyIndirect, ConvexMeshUnchangedCavityGainsLight) {
     options.indirectTransfer.assign(sphere.vertexCount() * 4, 0.2f);
     GlossyLobes indirect = computeGlossyLobes(sphere, options);
     EXPECT_EQ(indirect.values, plain.values);
+    // Per-vertex statistics: a convex sphere sees its whole upper hemisphere.
+    for (size_t v = 0; v < sphere.vertexCount(); ++v)
+        ASSERT_FLOAT_EQ(plain.vertexStats[v * kVertexStatColumns + 3], 1.0f) << v;
 
     prt::TriMesh cavity = prt::makeOpenCavity(1.0f, 0.8f, 6, 10);
     options.indirectTransfer.clear();
@@ -185,6 +188,8 @@ TEST(GlossyIndirect, ConvexMeshUnchangedCavityGainsLight) {
         indirectSum += energy(&indirect.values[i]);
     }
     EXPECT_GT(indirectSum, 1.05 * plainSum);
+    // Inside the cavity the wall hides part of every hemisphere.
+    EXPECT_LT(plain.vertexStats[(cavity.vertexCount() - 1) * kVertexStatColumns + 3], 0.9f);
 }
 
 } // namespace
