@@ -183,6 +183,20 @@ TEST_F(GlossyCli, ThreeShardsMergeIntoTheUnshardedBundleByteForByte) {
                       path("d_merged.glb") + " --quiet", dir).exitCode, 0);
     EXPECT_EQ(fileBytes(path("d_merged.glb")), fileBytes(path("d_whole.glb")));
 
+    // Indirect glossy reads the whole mesh's transfer in every shard: still byte for byte (in the open cavity,
+    // where the wall blocks part of every lobe).
+    ASSERT_EQ(prt("scene cavity -o " + path("cavity.glb") + " --quiet", dir).exitCode, 0);
+    std::string indirect = base;
+    indirect.replace(indirect.find(path("sphere.glb")), path("sphere.glb").size(), path("cavity.glb"));
+    indirect += "--indirect-glossy ";
+    ASSERT_EQ(prt(indirect + "-o " + path("i_whole.glb"), dir).exitCode, 0);
+    for (int i = 0; i < 2; ++i)
+        ASSERT_EQ(prt(indirect + "--shard " + std::to_string(i) + "/2 -o " + path("i" + std::to_string(i) + ".glb"),
+                      dir).exitCode, 0);
+    ASSERT_EQ(prt("merge " + path("i1.glb") + " " + path("i0.glb") + " -o " + path("i_merged.glb") + " --quiet", dir)
+                  .exitCode, 0);
+    EXPECT_EQ(fileBytes(path("i_merged.glb")), fileBytes(path("i_whole.glb")));
+
     // Interreflection gathers from every vertex: refused with a shard, nothing written.
     PrtRun bounces = prt(base + "--bounces 1 --shard 0/3 -o " + path("b.glb"), dir);
     EXPECT_EQ(bounces.exitCode, 2);
