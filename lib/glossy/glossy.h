@@ -156,7 +156,7 @@ struct GlossyOptions {
     int lobes = 1;                // 1..kMaxLobes
     int gridResolution = 16;      // cube face resolution, 2..64
     Solver solver = Solver::OpenCl;
-    FitWeights weights{0.01, 0.01, 0.01}; // coherence pass weights; all zero: no coherence pass
+    FitWeights weights{0.001, 0.001, 0.001}; // coherence pass weights (measured, docs/results.md); all zero: no pass
     FitBounds bounds;
     SolverOptions solverOptions;
     size_t chunkVertices = 64;    // vertices tabulated and fitted together; results do not depend on it
