@@ -163,7 +163,9 @@ std::vector<StageSpec> makeCatalogue() {
                         {"samples", ParamType::Integer, 2.0, 16777216.0},
                         kAlbedo,
                         kSeed,
-                        {"lights-width", ParamType::Integer, 4.0, 16384.0}};
+                        {"lights-width", ParamType::Integer, 4.0, 16384.0},
+                        {"brdf", ParamType::String}, // phong:EXPONENT,KS: glossy ground truth toward `eye`
+                        {"eye", ParamType::String}};
     reference.takesThreads = true;
     stages.push_back(reference);
 
