@@ -6,6 +6,7 @@
 #include "core.h"
 #include "envlight.h"
 #include "raycast.h"
+#include "render.h"
 #include "runtime.h"
 
 #include <nlohmann/json.hpp>
@@ -32,6 +33,9 @@ struct RelightOptions {
     std::string bounceWindow = "hann";
     std::string eye; // "X,Y,Z": add the glossy lobes' radiance toward this point
     bool glossyOnly = false;
+    std::string imageSize; // "W,H": a picture through --camera instead of per-vertex radiance
+    std::string camera;    // "EYE,TARGET,UP,FOVY", as `prt render` and `prt reference --image`
+    float exposure = 0.0f;
 };
 
 // The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
@@ -113,10 +117,23 @@ void runRelight(const RelightOptions& options) {
     sh::Window window = sh::parseWindow(options.window);
     // writeVertexRadiance checks this too, but only after the work; a typo should fail at once.
     std::string outputExtension = fileExtension(options.output);
-    if (options.texels && outputExtension != "exr")
+    bool imageMode = !options.imageSize.empty();
+    if (imageMode != !options.camera.empty())
+        throw Error("", "--image", "--image and --camera go together", kExitUsage);
+    PinholeCamera camera;
+    if (imageMode) {
+        if (options.texels || !options.lights.empty())
+            throw Error("", "--image", "pictures are of per-vertex relights (use `prt render --texels` for a bake)",
+                        kExitUsage);
+        if (!options.eye.empty())
+            throw Error("", "--eye", "with --image the eye is the camera's (--camera)", kExitUsage);
+        if (outputExtension != "exr" && outputExtension != "png")
+            throw Error(options.output, "-o", "with --image the picture must end in .exr or .png", kExitUsage);
+        parsePinholeCamera(options.imageSize, "--image", options.camera, camera);
+    } else if (options.texels && outputExtension != "exr")
         throw Error(options.output, "-o", "with --texels the output is an atlas image and must end in .exr",
                     kExitUsage);
-    if (!options.texels && outputExtension != "npy" && outputExtension != "csv")
+    else if (!options.texels && outputExtension != "npy" && outputExtension != "csv")
         throw Error(options.output, "-o", "output must end in .npy or .csv", kExitUsage);
     if (!options.lights.empty()) return runHybridRelight(options, start);
     if (options.env.empty() && options.shJson.empty()) throw Error("", "--env", "give --env, --sh or --lights", kExitUsage);
@@ -124,17 +141,33 @@ void runRelight(const RelightOptions& options) {
 
     if (!options.eye.empty() && (options.texels || options.env.empty()))
         throw Error("", "--eye", "needs --env (an equirectangular map) and per-vertex output", kExitUsage);
-    if (!options.eye.empty() && options.rotateYDegrees != 0.0)
-        throw Error("", "--eye", "does not combine with --rotate-y", kExitUsage);
+    if (options.glossyOnly && options.eye.empty() && !imageMode)
+        throw Error("", "--glossy-only", "needs --eye or --image", kExitUsage);
     TexelRelightModel texelModel;
     std::optional<GlossyModel> glossy;
     RelightModel model;
+    TriMesh mesh; // --image: the mesh the picture is rendered from
+    std::array<float, 3> eye{};
+    if (!options.eye.empty()) eye = parsePoint(options.eye, "--eye");
+    if (imageMode) eye = {camera.eye[0], camera.eye[1], camera.eye[2]};
     if (options.texels) {
         texelModel = loadTexelRelightModel(options.bundle);
         model = std::move(texelModel.rows);
-    } else if (!options.eye.empty()) {
+    } else if (!options.eye.empty() || imageMode) {
         Bundle bundle = readBundle(options.bundle);
-        glossy = glossyModel(bundle, options.bundle);
+        // A picture of a glossy bundle is view dependent (toward the camera); of any other, the diffuse relight.
+        if (!options.eye.empty() || findLayer(bundle, "glossy_lobes")) {
+            if (options.env.empty())
+                throw Error("", "--env", "the glossy lobes of " + options.bundle + " need --env (an equirectangular map)",
+                            kExitUsage);
+            glossy = glossyModel(bundle, options.bundle);
+        } else if (options.glossyOnly) {
+            throw Error(options.bundle, "layers", "has no \"glossy_lobes\" layer for --glossy-only (prt glossy writes one)");
+        }
+        if (glossy && options.rotateYDegrees != 0.0)
+            throw Error("", "--rotate-y", "does not combine with glossy lobes (--eye, or --image of a glossy bundle)",
+                        kExitUsage);
+        if (imageMode) mesh = bundle.mesh;
         model = relightModel(std::move(bundle), options.bundle);
     } else {
         model = loadRelightModel(options.bundle);
@@ -176,7 +209,6 @@ void runRelight(const RelightOptions& options) {
     if (glossy) {
         if (environment.layout != EnvLayout::Equirectangular)
             throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map");
-        std::array<float, 3> eye = parsePoint(options.eye, "--eye");
         double glossyStart = nowSeconds();
         PrefilteredEnvironment prefiltered = prefilterEnvironment(
             environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height);
@@ -189,7 +221,11 @@ void runRelight(const RelightOptions& options) {
         logInfo(line);
     }
 
-    if (options.texels) {
+    if (imageMode) {
+        // Per-vertex radiance toward the camera's eye, interpolated over each hit triangle as `prt render` does.
+        RenderedImage picture = renderVertexRadiance(mesh, radiance, camera);
+        writeRenderedPicture(options.output, picture, options.exposure);
+    } else if (options.texels) {
         Image image;
         image.width = texelModel.width;
         image.height = texelModel.height;
@@ -237,7 +273,17 @@ void addRelightCommand(CLI::App& app) {
         ->required();
     command->add_option("--eye", options->eye,
                         "Eye point X,Y,Z: add the bundle's glossy lobes (from `prt glossy`), radiance toward it");
-    command->add_flag("--glossy-only", options->glossyOnly, "With --eye: the glossy part alone, without the diffuse SH");
+    command->add_flag("--glossy-only", options->glossyOnly,
+                      "With --eye or --image: the glossy part alone, without the diffuse SH");
+    command->add_option("--image", options->imageSize,
+                        "A W,H picture through --camera instead of per-vertex radiance (-o .exr linear RGBA or .png "
+                        "tone mapped); a glossy bundle's lobes are evaluated toward the camera's eye");
+    command->add_option("--camera", options->camera,
+                        "With --image: EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY (degrees), the camera of "
+                        "`prt render` and `prt reference --image`");
+    command->add_option("--exposure", options->exposure,
+                        "With --image and a .png: stops; x = radiance * 2^exposure, then x / (1 + x), then sRGB")
+        ->capture_default_str();
     command->callback([options] { runRelight(*options); });
 }
 

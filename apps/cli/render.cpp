@@ -66,12 +66,7 @@ void runRender(const RenderOptions& options) {
     } else {
         image = renderVertexRadiance(mesh, radiance, camera);
     }
-    if (extension == "exr") {
-        writeRenderedExr(options.output, image.radiance, image.coverage);
-    } else {
-        Picture picture = tonemappedPicture(image.radiance.rgb.data(), camera.width, camera.height, options.exposure);
-        writeImagePixels(options.output, picture.width, picture.height, {"R", "G", "B"}, picture.rgb.data());
-    }
+    writeRenderedPicture(options.output, image, options.exposure);
     logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +
             std::to_string(camera.height) + ", " + (options.texels ? "per texel" : "per vertex") + ")");
 

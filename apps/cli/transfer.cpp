@@ -97,16 +97,7 @@ Bundle transferBundle(const TransferArgs& args, const TransferOptions& options, 
                     {"ray_offset", rows.rayOffset},
                     {"rays", rows.rays},
                     {"back_face_hits", rows.backFaceHits}};
-    if (shardCount > 1) {
-        // A slice of the vertex rows; a merge step concatenates the shards into one "vertex" layer.
-        layer.domain = "vertex_range";
-        layer.params["shard"] = {shardIndex, shardCount};
-        layer.params["row_begin"] = rows.begin;
-        layer.params["row_end"] = rows.end;
-        layer.params["vertex_count"] = mesh.vertexCount();
-    } else {
-        layer.domain = "vertex";
-    }
+    markVertexShard(layer, rows.begin, rows.end, mesh.vertexCount(), shardIndex, shardCount);
 
     // The bounce part travels as its own layer, so a hybrid relight can send cone lights through it.
     Layer bounceLayer;

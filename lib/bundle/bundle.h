@@ -134,4 +134,9 @@ const Layer* findObjectLayer(const Bundle& bundle, const std::string& base, uint
 // another N, out of range or given twice.
 std::vector<size_t> orderShards(const std::vector<const Layer*>& layers, const std::vector<std::string>& files);
 
+// Marks `layer` (rows [rowBegin, rowEnd) of a per-vertex layer, shape[0] already rowEnd - rowBegin) as shard
+// `index` of `count`: domain "vertex_range" and params shard [I, N], row_begin, row_end, vertex_count, the
+// bookkeeping mergeShards (lib/pipeline) removes again. With count <= 1 it only sets domain "vertex".
+void markVertexShard(Layer& layer, uint64_t rowBegin, uint64_t rowEnd, uint64_t vertexCount, int index, int count);
+
 } // namespace prt

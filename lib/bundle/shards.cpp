@@ -33,4 +33,17 @@ std::vector<size_t> orderShards(const std::vector<const Layer*>& layers, const s
     return order;
 }
 
+void markVertexShard(Layer& layer, uint64_t rowBegin, uint64_t rowEnd, uint64_t vertexCount, int index, int count) {
+    if (count <= 1) {
+        layer.domain = "vertex";
+        return;
+    }
+    // A slice of the vertex rows; the merge concatenates the shards into one "vertex" layer.
+    layer.domain = "vertex_range";
+    layer.params["shard"] = {index, count};
+    layer.params["row_begin"] = rowBegin;
+    layer.params["row_end"] = rowEnd;
+    layer.params["vertex_count"] = vertexCount;
+}
+
 } // namespace prt

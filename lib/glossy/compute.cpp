@@ -41,6 +41,10 @@ void checkOptions(const TriMesh& mesh, const GlossyOptions& options) {
     if (options.chunkVertices < 1) throw Error("", "chunk", "must be >= 1", kExitUsage);
     if (mesh.normals.size() != mesh.positions.size())
         throw Error("", "mesh", "has no vertex normals (prt meshprep adds them)");
+    if (!options.indirectTransfer.empty() &&
+        (options.indirectOrder < 1 ||
+         options.indirectTransfer.size() != mesh.vertexCount() * size_t(options.indirectOrder) * options.indirectOrder))
+        throw Error("", "--indirect-glossy", "the indirect transfer has not V x order^2 values", kExitFailure);
 }
 
 // Solver form (a, m, log lambda) to output form (a, unit mu, lambda) and back.
@@ -129,11 +133,15 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
     }
     // Kernels for every view above the horizon, visibility shared by the views of a vertex.
     std::vector<std::vector<float>> kernels(chunk);
+    const bool indirect = !options.indirectTransfer.empty();
+    const size_t coefficients = size_t(options.indirectOrder) * options.indirectOrder;
+    const std::vector<float> basis = indirect ? gridBasis(grid, options.indirectOrder) : std::vector<float>();
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk, 1), [&](const tbb::blocked_range<size_t>& r) {
             RTCIntersectContext context;
             rtcInitIntersectContext(&context);
             std::vector<uint8_t> visible(count, 0);
+            std::vector<float> hits(indirect ? count * coefficients : 0, 0.0f); // per blocked direction: its hit's transfer
             uint64_t cast = 0;
             for (size_t i = r.begin(); i < r.end(); ++i) {
                 const float* p = &mesh.positions[(chunkBegin + i) * 3];
@@ -144,17 +152,42 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
                     // The shared spawn rule (lib/raycast), so glossy visibility leaks at creases no more than transfer's.
                     float origin[3];
                     spawnOrigin(p, &spawnNormal[(chunkBegin + i) * 3], offset, origin);
-                    RTCRay ray;
-                    spawnRay(ray, origin, d[0], d[1], d[2]);
-                    rtcOccluded1(scene->scene, &context, &ray);
-                    visible[t] = ray.tfar >= 0.0f;
                     ++cast;
+                    if (!indirect) {
+                        RTCRay ray;
+                        spawnRay(ray, origin, d[0], d[1], d[2]);
+                        rtcOccluded1(scene->scene, &context, &ray);
+                        visible[t] = ray.tfar >= 0.0f;
+                        continue;
+                    }
+                    RTCRayHit rayHit;
+                    spawnRay(rayHit.ray, origin, d[0], d[1], d[2]);
+                    rayHit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                    rtcIntersect1(scene->scene, &context, &rayHit);
+                    visible[t] = rayHit.hit.geomID == RTC_INVALID_GEOMETRY_ID;
+                    float* row = &hits[t * coefficients];
+                    std::fill(row, row + coefficients, 0.0f);
+                    // Embree's Ng is (v1 - v0) x (v2 - v0): a back face (facing > 0) reflects nothing, as in transfer.
+                    const RTCHit& hit = rayHit.hit;
+                    if (!visible[t] && hit.Ng_x * d[0] + hit.Ng_y * d[1] + hit.Ng_z * d[2] < 0.0f)
+                        hitTransfer(mesh, options.indirectTransfer, options.indirectOrder, hit.primID, hit.u, hit.v, row);
                 }
+                double upper = 0.0, seen = 0.0;
+                for (size_t t = 0; t < count; ++t) {
+                    const float* d = &grid.directions[t * 3];
+                    if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] <= 0.0f) continue;
+                    upper += grid.solidAngle[t];
+                    seen += visible[t] ? grid.solidAngle[t] : 0.0f;
+                }
+                result.visibleShare[i] = upper > 0.0 ? float(seen / upper) : 0.0f;
                 std::vector<float> table(count);
                 for (int v = 0; v < kViewCount; ++v) {
                     const float* view = views.directions[v].data();
                     if (n[0] * view[0] + n[1] * view[1] + n[2] * view[2] <= 0.0f) continue;
                     tabulateKernel(grid, n, view, options.phong, visible.data(), table.data());
+                    if (indirect)
+                        addIndirectKernel(grid, basis.data(), options.indirectOrder, n, view, options.phong,
+                                          visible.data(), hits.data(), table.data());
                     if (*std::max_element(table.begin(), table.end()) <= 0.0f) continue;
                     slot[i][v] = int(kernels[i].size() / count);
                     kernels[i].insert(kernels[i].end(), table.begin(), table.end());
@@ -370,11 +403,15 @@ FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t
     return all;
 }
 
-Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount) {
+Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount, int shardIndex,
+                int shardCount) {
     Layer layer;
     layer.name = "glossy_lobes";
     bool whole = lobes.vertexBegin == 0 && lobes.vertexEnd == vertexCount;
-    layer.domain = whole ? "vertex" : "vertex_range";
+    if (!whole && shardCount <= 1)
+        throw Error("", "glossy_lobes", "rows [" + std::to_string(lobes.vertexBegin) + ", " +
+                                            std::to_string(lobes.vertexEnd) + ") are not every vertex, but no shard",
+                    kExitFailure);
     layer.semantic = "sg_lobes";
     if (options.lobeType != "float16" && options.lobeType != "float32")
         throw Error("", "--lobe-type", "must be float16 or float32", kExitUsage);
@@ -397,7 +434,10 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
     layer.params["weights"] = {{"beta", options.weights.beta}, {"gamma", options.weights.gamma},
                                {"delta", options.weights.delta}};
     layer.params["lambda_bounds"] = {options.bounds.lambdaMin, options.bounds.lambdaMax};
-    if (!whole) layer.params["vertex_range"] = {lobes.vertexBegin, lobes.vertexEnd};
+    if (!options.indirectTransfer.empty()) // absent when off, so bundles without it keep their bytes
+        layer.params["indirect"] = {{"bounce", "one diffuse bounce off the mesh (shadowed SH transfer at the hit)"},
+                                    {"order", options.indirectOrder}, {"samples", options.indirectSamples}};
+    markVertexShard(layer, lobes.vertexBegin, lobes.vertexEnd, vertexCount, shardIndex, shardCount);
     return layer;
 }
 

@@ -64,6 +64,20 @@ struct Phong {
 void tabulateKernel(const DirectionGrid& grid, const float normal[3], const float outgoing[3], const Phong& phong,
                     const uint8_t* visibility, float* kernel);
 
+// ---- indirect glossy (optional) -----------------------------------------------------------------------------
+// SH basis (order bands, order^2 values) at every grid direction: [count][order^2].
+std::vector<float> gridBasis(const DirectionGrid& grid, int order);
+// The grey transfer [V][order^2] interpolated at Embree's hit (triangle, u, v) of `mesh`: order^2 values.
+void hitTransfer(const TriMesh& mesh, const std::vector<float>& transfer, int order, uint32_t triangle, float u,
+                 float v, float* out);
+// Adds to `kernel` the indirect glossy kernel of one vertex and view (indirect.cpp): the Phong lobe over the
+// directions visibility[i] == 0 blocks, each carrying the diffuse light of its hit point, hitTransfers[i]
+// ([count][order^2], zero rows for back-face hits), as a kernel over environment directions, clamped >= 0. Needs
+// basis = gridBasis(grid, order). Adds nothing when the lobe reaches no blocked direction.
+void addIndirectKernel(const DirectionGrid& grid, const float* basis, int order, const float normal[3],
+                       const float outgoing[3], const Phong& phong, const uint8_t* visibility,
+                       const float* hitTransfers, float* kernel);
+
 // ---- the fit -----------------------------------------------------------------------------------------------
 struct FitWeights {
     double beta = 0.0;  // mean coherence
@@ -142,13 +156,18 @@ struct GlossyOptions {
     int lobes = 1;                // 1..kMaxLobes
     int gridResolution = 16;      // cube face resolution, 2..64
     Solver solver = Solver::OpenCl;
-    FitWeights weights{0.01, 0.01, 0.01}; // coherence pass weights; all zero: no coherence pass
+    FitWeights weights{0.001, 0.001, 0.001}; // coherence pass weights (measured, docs/results.md); all zero: no pass
     FitBounds bounds;
     SolverOptions solverOptions;
     size_t chunkVertices = 64;    // vertices tabulated and fitted together; results do not depend on it
     size_t vertexBegin = 0, vertexEnd = SIZE_MAX;
     bool progress = true;
     std::string lobeType = "float16"; // the bundle layer's componentType: "float16" or "float32"
+    // Indirect glossy: the grey shadowed diffuse transfer of every vertex, [V][indirectOrder^2], albedo included
+    // (lib/transfer). Non-empty: blocked kernel directions carry their hit point's diffuse light (indirect.cpp).
+    std::vector<float> indirectTransfer;
+    int indirectOrder = 0;
+    int indirectSamples = 0; // recorded in the layer's params
 };
 
 struct GlossyStats {
@@ -184,8 +203,11 @@ struct GlossyLobes {
 GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options);
 
 // The bundle layer of the lobes ("glossy_lobes", semantic "sg_lobes", float16, shape [V, 92, N, 5]) and its
-// params: view set (directions), lobes, brdf, grid. `semantic` rows as GlossyLobes.values.
-Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount);
+// params: view set (directions), lobes, brdf, grid. `semantic` rows as GlossyLobes.values. Needs the lobes of
+// every vertex, or shardCount > 1: then the rows are shard shardIndex of a `--shard I/N` run (domain
+// "vertex_range", markVertexShard), which mergeShards joins bit for bit into the whole run's layer.
+Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount, int shardIndex = 0,
+                int shardCount = 1);
 
 // ---- solver comparison -------------------------------------------------------------------------------------
 struct SolverComparison {

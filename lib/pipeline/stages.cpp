@@ -31,6 +31,13 @@ int transferPasses(const nlohmann::json& params) {
     return int(bounces) + 1;
 }
 
+std::string glossyShardRefusal(const nlohmann::json& params) {
+    if (params.value("bounces", int64_t(0)) > 0)
+        return "diffuse interreflection (bounces) gathers from every vertex, so it cannot be sharded (set bounces = 0, "
+               "wire a transfer stage into the 'diffuse' input, or shards = 1)";
+    return "";
+}
+
 std::vector<StageSpec> makeCatalogue() {
     std::vector<StageSpec> stages;
 
@@ -119,6 +126,31 @@ std::vector<StageSpec> makeCatalogue() {
                        {"fixed-radius", ParamType::Number, 1e-3, 89.0}};
     stages.push_back(envlight);
 
+    // Glossy lobes per vertex and view plus the diffuse transfer (docs/glossy.md). Shards are vertex ranges joined by
+    // mergeShards; the diffuse part comes from `bounces` (unshardable above 0) or a wired transfer bundle.
+    StageSpec glossy{"glossy", 1, "glossy view-dependent transfer: spherical-Gaussian lobes per vertex and view"};
+    glossy.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"diffuse", FileKind::Bundle, "--diffuse", "", true}};
+    glossy.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
+    glossy.params = {{"brdf", ParamType::String, 0.0, 0.0, {}, false, true}, // phong:EXPONENT,KS
+                     kAlbedo,
+                     {"lobes", ParamType::Integer, 1.0, 4.0},
+                     {"solver", ParamType::String, 0.0, 0.0, {"pocl", "ceres"}},
+                     {"bounces", ParamType::Integer, 0.0, 64.0},
+                     {"order", ParamType::Integer, 1.0, kMaxOrder},
+                     {"samples", ParamType::Integer, 1.0, 65536.0},
+                     {"grid", ParamType::Integer, 2.0, 64.0},
+                     {"beta", ParamType::Number, 0.0, 1e6},
+                     {"gamma", ParamType::Number, 0.0, 1e6},
+                     {"delta", ParamType::Number, 0.0, 1e6},
+                     {"no-coherence", ParamType::Boolean},
+                     {"iterations", ParamType::Integer, 1.0, 100000.0},
+                     {"lobe-type", ParamType::String, 0.0, 0.0, {"float16", "float32"}},
+                     {"indirect-glossy", ParamType::Boolean}};
+    glossy.takesThreads = true;
+    glossy.shardable = true;
+    glossy.shardRefusal = glossyShardRefusal;
+    stages.push_back(glossy);
+
     StageSpec reference{"reference", 1, "ground-truth radiance by path tracing"};
     reference.inputs = {{"mesh", FileKind::Mesh, "", ""},
                         {"env", FileKind::Env, "--env", "", true},
@@ -130,7 +162,9 @@ std::vector<StageSpec> makeCatalogue() {
                         {"samples", ParamType::Integer, 2.0, 16777216.0},
                         kAlbedo,
                         kSeed,
-                        {"lights-width", ParamType::Integer, 4.0, 16384.0}};
+                        {"lights-width", ParamType::Integer, 4.0, 16384.0},
+                        {"brdf", ParamType::String}, // phong:EXPONENT,KS: glossy ground truth toward `eye`
+                        {"eye", ParamType::String}};
     reference.takesThreads = true;
     stages.push_back(reference);
 
@@ -141,7 +175,9 @@ std::vector<StageSpec> makeCatalogue() {
                       {"lights", FileKind::Sh, "--lights", "", true}};
     relight.exactlyOneInput = {"env", "sh", "lights"};
     relight.outputs = {{"radiance", FileKind::Radiance, "-o", "npy"}};
-    relight.params = {kRotateY, kWindow, {"light-samples", ParamType::Integer, 0.0, 65536.0}};
+    // eye (and glossy-only) add a glossy bundle's lobes toward that point.
+    relight.params = {kRotateY, kWindow, {"light-samples", ParamType::Integer, 0.0, 65536.0},
+                      {"eye", ParamType::String}, {"glossy-only", ParamType::Boolean}};
     stages.push_back(relight);
 
     StageSpec compare{"compare", 1, "error metrics of a result against a reference"};

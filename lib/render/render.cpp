@@ -1,6 +1,7 @@
 // prt render: primary rays through the shared pinhole camera, relit radiance interpolated at each hit.
 #include "render.h"
 
+#include "compare.h"
 #include "core.h"
 
 #include <tbb/blocked_range.h>
@@ -120,6 +121,19 @@ void writeRenderedExr(const std::string& path, const Image& image, const std::ve
         rgba[p * 4 + 3] = coverage.empty() ? 1.0f : coverage[p];
     }
     writeImagePixels(path, image.width, image.height, {"R", "G", "B", "A"}, rgba.data(), PixelStorage::Float);
+}
+
+void writeRenderedPicture(const std::string& path, const RenderedImage& image, float exposure) {
+    std::string extension = fileExtension(path);
+    if (extension == "exr") {
+        writeRenderedExr(path, image.radiance, image.coverage);
+    } else if (extension == "png") {
+        Picture picture = tonemappedPicture(image.radiance.rgb.data(), image.radiance.width, image.radiance.height,
+                                            exposure);
+        writeImagePixels(path, picture.width, picture.height, {"R", "G", "B"}, picture.rgb.data());
+    } else {
+        throw Error(path, "-o", "the image must end in .exr (linear) or .png (tone mapped)", kExitUsage);
+    }
 }
 
 } // namespace prt

@@ -34,4 +34,8 @@ RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const
 // PNG, `prt render` passes the radiance through compare.h's toneMap, the one tone map of prt's pictures.
 void writeRenderedExr(const std::string& path, const Image& image, const std::vector<float>& coverage);
 
+// Writes a render by the extension of `path`, atomically: .exr as writeRenderedExr, .png tone mapped by compare.h's
+// tonemappedPicture at `exposure` stops. Throws prt::Error(kExitUsage) naming -o for any other extension.
+void writeRenderedPicture(const std::string& path, const RenderedImage& image, float exposure);
+
 } // namespace prt

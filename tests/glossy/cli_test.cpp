@@ -1,7 +1,10 @@
 // `prt glossy` and `prt relight --eye` end to end: a small fit, the view-dependent radiance against the
 // reference, and every bad input refused with no output.
 #include "bundle.h"
+#include "compare.h"
 #include "core.h"
+#include "image.h"
+#include "render.h"
 
 #include <gtest/gtest.h>
 
@@ -53,6 +56,9 @@ TEST_F(GlossyCli, BadInputsFailWithoutOutput) {
     EXPECT_NE(lobes.text.find("--lobes"), std::string::npos) << lobes.text;
     PrtRun solver = prt(base + "--brdf phong:8,0.5 --solver cuda", dir);
     EXPECT_EQ(solver.exitCode, 2);
+    PrtRun colour = prt(base + "--brdf phong:8,0.5 --indirect-glossy --albedo 0.5,0.4,0.3", dir);
+    EXPECT_EQ(colour.exitCode, 2);
+    EXPECT_NE(colour.text.find("grey"), std::string::npos) << colour.text;
     // No OpenCL platform: an empty ICD vendor folder.
     fs::create_directories(dir / "no_vendors");
     PrtRun platform = prt(base + "--brdf phong:8,0.5", dir, "OCL_ICD_VENDORS=" + path("no_vendors"));
@@ -91,6 +97,114 @@ TEST_F(GlossyCli, FitRelightsAndRefusesATamperedViewSet) {
     ASSERT_EQ(compare.exitCode, 0);
     nlohmann::json metrics = nlohmann::json::parse(std::ifstream(path("c.json")));
     EXPECT_LT(metrics["relative_rmse"].get<double>(), 0.25) << metrics.dump();
+}
+
+// `prt relight --image`: the glossy bundle's radiance toward the camera's eye, per vertex, drawn by the renderer of
+// `prt render` (so pixel for pixel what renderVertexRadiance makes of `relight --eye EYE`), and close to the
+// path-traced `prt reference --image` of the same camera.
+TEST_F(GlossyCli, RelightImageRendersTheLobesTowardTheCamera) {
+    std::string env = std::string(PRT_DATA_DIR) + "/env/courtyard.exr";
+    if (!fs::exists(env)) GTEST_SKIP() << "no " << env;
+    ASSERT_EQ(prt("glossy " + path("sphere.glb") + " -o " + path("g.glb") +
+                      " --brdf phong:8,0.5 --albedo 0.3 --grid 4 --samples 64 --quiet", dir).exitCode, 0);
+    const std::string camera = " --image 24,20 --camera 0,0.5,4,0,0,0,0,1,0,35";
+    PrtRun picture = prt("relight " + path("g.glb") + " --env " + env + camera + " -o " + path("pic.exr") + " --quiet", dir);
+    ASSERT_EQ(picture.exitCode, 0) << picture.text;
+    ASSERT_EQ(prt("relight " + path("g.glb") + " --env " + env + " --eye 0,0.5,4 -o " + path("eye.npy") + " --quiet",
+                  dir).exitCode, 0);
+    prt::PinholeCamera pinhole;
+    pinhole.eye = {0.0f, 0.5f, 4.0f};
+    pinhole.fovyDegrees = 35.0f;
+    pinhole.width = 24;
+    pinhole.height = 20;
+    prt::RenderedImage expected = prt::renderVertexRadiance(prt::readBundle(path("g.glb")).mesh,
+                                                            prt::readVertexRadiance(path("eye.npy")), pinhole);
+    prt::Image image = prt::readImage(path("pic.exr"));
+    ASSERT_EQ(image.rgb.size(), expected.radiance.rgb.size());
+    for (size_t i = 0; i < image.rgb.size(); ++i) ASSERT_FLOAT_EQ(image.rgb[i], expected.radiance.rgb[i]) << i;
+
+    PrtRun glossyOnly = prt("relight " + path("g.glb") + " --env " + env + camera + " --glossy-only -o " +
+                                path("lobes.png") + " --quiet", dir);
+    ASSERT_EQ(glossyOnly.exitCode, 0) << glossyOnly.text;
+    EXPECT_TRUE(fs::exists(dir / "lobes.png"));
+
+    ASSERT_EQ(prt("reference " + path("sphere.glb") + " --env " + env + " --brdf phong:8,0.5 --albedo 0.3" + camera +
+                      " --samples 64 -o " + path("ref.exr") + " --quiet", dir).exitCode, 0);
+    prt::Image reference = prt::readImage(path("ref.exr"));
+    // Over the sphere's pixels (the reference shows the map where rays escape).
+    prt::ImageComparison comparison = prt::compareImages(image.rgb.data(), reference.rgb.data(),
+                                                         expected.coverage.data(), 24, 20);
+    EXPECT_GT(comparison.maskPixels, 50u);
+    EXPECT_LT(comparison.metrics.relativeRmse, 0.3);
+
+    // Bad combinations: exit 2, no picture.
+    for (const std::string& bad : {std::string(" --image 24,20 -o ") + path("bad.exr"),
+                                   camera + " --eye 0,0,4 -o " + path("bad.exr"), camera + " -o " + path("bad.npy")}) {
+        PrtRun refused = prt("relight " + path("g.glb") + " --env " + env + bad, dir);
+        EXPECT_EQ(refused.exitCode, 2) << bad << ": " << refused.text;
+    }
+    EXPECT_FALSE(fs::exists(dir / "bad.exr"));
+    EXPECT_FALSE(fs::exists(dir / "bad.npy"));
+}
+
+std::string fileBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Shards are vertex ranges; `prt merge` joins three of them, in any order, into the unsharded bundle byte for byte,
+// and neither the thread count nor the sharding changes a byte.
+TEST_F(GlossyCli, ThreeShardsMergeIntoTheUnshardedBundleByteForByte) {
+    const std::string base = "glossy " + path("sphere.glb") + " --brdf phong:16,0.5 --albedo 0.4 --lobes 2 "
+                             "--grid 4 --samples 32 --iterations 15 --quiet ";
+    ASSERT_EQ(prt(base + "-o " + path("whole.glb") + " --threads 2", dir).exitCode, 0);
+    ASSERT_EQ(prt(base + "-o " + path("one.glb") + " --threads 1", dir).exitCode, 0);
+    EXPECT_EQ(fileBytes(path("one.glb")), fileBytes(path("whole.glb")));
+    for (int i = 0; i < 3; ++i) {
+        PrtRun shard = prt(base + "--shard " + std::to_string(i) + "/3 --threads " + std::to_string(1 + i % 2) +
+                               " -o " + path("shard" + std::to_string(i) + ".glb"), dir);
+        ASSERT_EQ(shard.exitCode, 0) << shard.text;
+    }
+    prt::Bundle shard = prt::readBundle(path("shard1.glb"));
+    ASSERT_NE(prt::findLayer(shard, "glossy_lobes"), nullptr);
+    EXPECT_EQ(prt::findLayer(shard, "glossy_lobes")->domain, "vertex_range");
+    EXPECT_EQ(prt::findLayer(shard, "transfer")->domain, "vertex_range");
+    PrtRun merge = prt("merge " + path("shard2.glb") + " " + path("shard0.glb") + " " + path("shard1.glb") + " -o " +
+                           path("merged.glb") + " --quiet", dir);
+    ASSERT_EQ(merge.exitCode, 0) << merge.text;
+    EXPECT_EQ(fileBytes(path("merged.glb")), fileBytes(path("whole.glb")));
+
+    // A diffuse bundle given with --diffuse travels whole in every shard and merges as well.
+    ASSERT_EQ(prt(base + "-o " + path("d_whole.glb") + " --diffuse " + path("whole.glb"), dir).exitCode, 0);
+    for (int i = 0; i < 3; ++i)
+        ASSERT_EQ(prt(base + "--diffuse " + path("whole.glb") + " --shard " + std::to_string(i) + "/3 -o " +
+                          path("d" + std::to_string(i) + ".glb"), dir).exitCode, 0);
+    ASSERT_EQ(prt("merge " + path("d0.glb") + " " + path("d1.glb") + " " + path("d2.glb") + " -o " +
+                      path("d_merged.glb") + " --quiet", dir).exitCode, 0);
+    EXPECT_EQ(fileBytes(path("d_merged.glb")), fileBytes(path("d_whole.glb")));
+
+    // Indirect glossy reads the whole mesh's transfer in every shard: still byte for byte (in the open cavity,
+    // where the wall blocks part of every lobe).
+    ASSERT_EQ(prt("scene cavity -o " + path("cavity.glb") + " --quiet", dir).exitCode, 0);
+    std::string indirect = base;
+    indirect.replace(indirect.find(path("sphere.glb")), path("sphere.glb").size(), path("cavity.glb"));
+    indirect += "--indirect-glossy ";
+    ASSERT_EQ(prt(indirect + "-o " + path("i_whole.glb"), dir).exitCode, 0);
+    for (int i = 0; i < 2; ++i)
+        ASSERT_EQ(prt(indirect + "--shard " + std::to_string(i) + "/2 -o " + path("i" + std::to_string(i) + ".glb"),
+                      dir).exitCode, 0);
+    ASSERT_EQ(prt("merge " + path("i1.glb") + " " + path("i0.glb") + " -o " + path("i_merged.glb") + " --quiet", dir)
+                  .exitCode, 0);
+    EXPECT_EQ(fileBytes(path("i_merged.glb")), fileBytes(path("i_whole.glb")));
+
+    // Interreflection gathers from every vertex: refused with a shard, nothing written.
+    PrtRun bounces = prt(base + "--bounces 1 --shard 0/3 -o " + path("b.glb"), dir);
+    EXPECT_EQ(bounces.exitCode, 2);
+    EXPECT_NE(bounces.text.find("--shard"), std::string::npos) << bounces.text;
+    EXPECT_FALSE(fs::exists(dir / "b.glb"));
+    PrtRun badShard = prt(base + "--shard 3/3 -o " + path("b.glb"), dir);
+    EXPECT_EQ(badShard.exitCode, 2);
+    EXPECT_FALSE(fs::exists(dir / "b.glb"));
 }
 
 } // namespace

@@ -125,3 +125,71 @@ TEST(GlossyStage, ChunksAndRangesGiveTheSameRowsAndSolversAgree) {
 }
 
 } // namespace
+
+namespace {
+
+// The indirect kernel of a vertex whose upper hemisphere is all blocked by surfaces of constant diffuse radiance
+// c L_0 (transfer c in the first SH coefficient): under a constant unit environment it adds ks c L_0 at normal
+// incidence, ks being the normalised lobe's directional albedo there (docs/conventions.md), L_0 = sqrt(4 pi).
+TEST(GlossyIndirect, KernelOfAFullyBlockedHemisphereReflectsItsHitRadiance) {
+    const prt::glossy::DirectionGrid grid = prt::glossy::cubeGrid(16);
+    const int order = 3;
+    const std::vector<float> basis = prt::glossy::gridBasis(grid, order);
+    const float up[3] = {0.0f, 1.0f, 0.0f};
+    const prt::glossy::Phong phong{8.0, 0.5};
+    std::vector<uint8_t> visibility(grid.count(), 0);
+    std::vector<float> hits(grid.count() * 9, 0.0f);
+    const double c = 0.3;
+    for (size_t t = 0; t < grid.count(); ++t) hits[t * 9] = float(c);
+    std::vector<float> kernel(grid.count(), 0.0f);
+    prt::glossy::addIndirectKernel(grid, basis.data(), order, up, up, phong, visibility.data(), hits.data(),
+                                   kernel.data());
+    double integral = 0.0;
+    for (size_t t = 0; t < grid.count(); ++t) integral += kernel[t] * grid.solidAngle[t];
+    const double expected = phong.ks * c * std::sqrt(4.0 * std::numbers::pi);
+    EXPECT_NEAR(integral, expected, 0.02 * expected);
+    // Nothing blocked: nothing added.
+    std::fill(visibility.begin(), visibility.end(), 1);
+    std::vector<float> none(grid.count(), 0.0f);
+    prt::glossy::addIndirectKernel(grid, basis.data(), order, up, up, phong, visibility.data(), hits.data(), none.data());
+    EXPECT_EQ(*std::max_element(none.begin(), none.end()), 0.0f);
+}
+
+// On a convex sphere nothing is blocked, so indirect glossy changes no lobe; inside an open cavity it adds light:
+// the fitted lobes carry more energy at every vertex that sees the cavity wall.
+TEST(GlossyIndirect, ConvexMeshUnchangedCavityGainsLight) {
+    using namespace prt::glossy;
+    GlossyOptions options;
+    options.phong = {8.0, 0.5};
+    options.gridResolution = 4;
+    options.progress = false;
+    options.weights = FitWeights{};
+    prt::TriMesh sphere = prt::makeSphere(1.0f, 5, 8);
+    GlossyLobes plain = computeGlossyLobes(sphere, options);
+    options.indirectOrder = 2;
+    options.indirectTransfer.assign(sphere.vertexCount() * 4, 0.2f);
+    GlossyLobes indirect = computeGlossyLobes(sphere, options);
+    EXPECT_EQ(indirect.values, plain.values);
+    // Per-vertex statistics: a convex sphere sees its whole upper hemisphere.
+    for (size_t v = 0; v < sphere.vertexCount(); ++v)
+        ASSERT_FLOAT_EQ(plain.vertexStats[v * kVertexStatColumns + 3], 1.0f) << v;
+
+    prt::TriMesh cavity = prt::makeOpenCavity(1.0f, 0.8f, 6, 10);
+    options.indirectTransfer.clear();
+    plain = computeGlossyLobes(cavity, options);
+    options.indirectTransfer.assign(cavity.vertexCount() * 4, 0.0f);
+    for (size_t v = 0; v < cavity.vertexCount(); ++v) options.indirectTransfer[v * 4] = 0.2f; // constant radiance
+    indirect = computeGlossyLobes(cavity, options);
+    double plainSum = 0.0, indirectSum = 0.0;
+    for (size_t i = 0; i < plain.values.size(); i += kLobeParams) {
+        // Energy of a lobe a exp(lambda (mu.w - 1)): 2 pi a (1 - exp(-2 lambda)) / lambda.
+        auto energy = [](const float* lobe) { return lobe[0] * (1.0 - std::exp(-2.0 * lobe[4])) / lobe[4]; };
+        plainSum += energy(&plain.values[i]);
+        indirectSum += energy(&indirect.values[i]);
+    }
+    EXPECT_GT(indirectSum, 1.05 * plainSum);
+    // Inside the cavity the wall hides part of every hemisphere.
+    EXPECT_LT(plain.vertexStats[(cavity.vertexCount() - 1) * kVertexStatColumns + 3], 0.9f);
+}
+
+} // namespace
