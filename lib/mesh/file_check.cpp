@@ -237,13 +237,21 @@ CheckedFile checkOff(std::string_view text, const std::string& path) {
         if (size_t(k) >= tokens.size() || !parseInteger(tokens[k], declared[k]) || declared[k] < 0)
             throw Error(path, lineName(lines.number), "expected three counts: vertices faces edges");
 
+    // OpenMesh reads the counts and every face token by token, not line by line, so whatever follows the checked
+    // tokens on those lines (face colours, or junk) would be read as the next number it wants: a fuzzed "1 0
+    // 066666666" made it read a face of 66 M corners, "3 7 0 1 0 0" made it read the vertices from the counts
+    // line and the faces out of step. Only the checked tokens reach it; these ranges are blanked.
+    std::vector<std::pair<size_t, size_t>> trailing; // [begin, end) of a line after its checked tokens
+    auto blankAfter = [&](std::string_view token) {
+        trailing.push_back({size_t(token.data() + token.size() - text.data()), size_t(line.data() + line.size() - text.data())});
+    };
+    blankAfter(tokens[2]);
     checkElementCount(uint64_t(declared[0]), "vertices", path, lineName(lines.number));
     checkElementCount(uint64_t(declared[1]), "faces", path, lineName(lines.number));
     CheckedFile counts;
     counts.vertices = size_t(declared[0]);
     counts.faces = size_t(declared[1]);
     size_t numbers = hasNormals ? 6 : 3;
-    std::vector<std::pair<size_t, size_t>> trailing; // [begin, end) of each face line after its indices
     for (size_t v = 0; v < counts.vertices; ++v) {
         std::string what = "vertex " + std::to_string(v);
         if (!nextDataLine())
@@ -270,11 +278,7 @@ CheckedFile checkOff(std::string_view text, const std::string& path) {
             if (!parseInteger(tokens[k], index))
                 throw Error(path, lineName(lines.number), what + ": '" + std::string(tokens[k]) + "' is not an index");
         }
-        // OpenMesh reads faces token by token, not line by line, so what follows the indices (face colours, or
-        // junk) would become the next face's corner count: a fuzzed "1 0 066666666" made it read 66 M corners.
-        // Only the checked tokens reach it.
-        size_t end = size_t(tokens[size_t(corners)].data() + tokens[size_t(corners)].size() - text.data());
-        trailing.push_back({end, size_t(line.data() + line.size() - text.data())});
+        blankAfter(tokens[size_t(corners)]);
     }
     counts.readerInput = stripOffComments(text);
     for (auto [begin, end] : trailing) std::fill(counts.readerInput.begin() + long(begin), counts.readerInput.begin() + long(end), ' ');

@@ -134,15 +134,19 @@ TEST_F(LoadMesh, OffWithCommentsAndFacesOfFewerThanThreeCorners) {
     EXPECT_EQ(info.polygonsTriangulated, 1u);
 }
 
-// Found by fuzz_mesh_off: OpenMesh reads faces token by token, so a face line's trailing tokens (face colours, or
-// junk) became the next face's corner count, and "066666666" made it read 66 M corners (2.4 GB). Only the checked
-// tokens reach OpenMesh now: the trailing ones are ignored, as face colours are.
-TEST_F(LoadMesh, OffFaceLineTrailingTokensAreNotReadAsTheNextFace) {
-    std::string file = write("trailing.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n"
-                                             "3 0 1 3 066666666 0\n3 0 3 2 0.5 0.5 0.5\n");
-    TriMesh mesh = loadMesh(file);
-    EXPECT_EQ(mesh.vertexCount(), 4u);
-    EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 3, 0, 3, 2}));
+// Found by fuzz_mesh_off (twice): OpenMesh reads the counts and the faces token by token, so trailing tokens on
+// those lines (face colours, or junk) were read as the next number it wanted: "066666666" after a face became the
+// next face's corner count (66 M corners, 2.4 GB), and "3 7 0 1 0 0" on the counts line put the vertices and faces
+// out of step until a failed read looped to 2 GB. Only the checked tokens reach OpenMesh now.
+TEST_F(LoadMesh, OffTrailingTokensOnCountAndFaceLinesAreNotReadAsTheNextNumbers) {
+    std::string faces = write("trailing.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n"
+                                              "3 0 1 3 066666666 0\n3 0 3 2 0.5 0.5 0.5\n");
+    std::string counts = write("counts.off", "OFF\n4 2 0 1 0 0 1 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 3\n3 0 3 2\n");
+    for (const std::string& file : {faces, counts}) {
+        TriMesh mesh = loadMesh(file);
+        EXPECT_EQ(mesh.vertexCount(), 4u) << file;
+        EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 3, 0, 3, 2})) << file;
+    }
 }
 
 TEST_F(LoadMesh, GlbThroughReadBundle) {
