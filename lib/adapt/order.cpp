@@ -11,6 +11,59 @@
 
 namespace prt::adapt {
 
+namespace {
+
+// What one lighting of the prior needs, computed once per lighting: its band norms per channel (the worst case
+// bounds band l of a row by |row_l| |lighting_l|) and the sum of the squared full-order radiance over every vertex
+// and channel (the error scale). Throws prt::Error naming lighting k when that sum is 0: a black relight has no
+// relative error.
+struct LightingPrior {
+    std::vector<double> bandNorm; // [order][3]
+    double sumSquares = 0.0;
+};
+
+LightingPrior lightingPrior(const float* transfer, size_t vertexCount, int order, const std::vector<float>& lighting,
+                            size_t k) {
+    const size_t coefficients = size_t(order) * order;
+    LightingPrior p;
+    p.bandNorm.assign(size_t(order) * 3, 0.0);
+    for (int l = 0; l < order; ++l)
+        for (int j = l * l; j < (l + 1) * (l + 1); ++j)
+            for (int c = 0; c < 3; ++c) p.bandNorm[l * 3 + c] += double(lighting[j * 3 + c]) * lighting[j * 3 + c];
+    for (double& value : p.bandNorm) value = std::sqrt(value);
+    for (size_t v = 0; v < vertexCount; ++v)
+        for (int c = 0; c < 3; ++c) {
+            double radiance = 0.0;
+            for (size_t j = 0; j < coefficients; ++j)
+                radiance += double(transfer[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
+            p.sumSquares += radiance * radiance;
+        }
+    if (!(p.sumSquares > 0.0))
+        throw Error("", "lighting " + std::to_string(k), "relights the mesh to black at full order, so no "
+                    "relative error can be measured under it", kExitInput);
+    return p;
+}
+
+// Band l's part of one vertex row's radiance, per channel, into partial[l * 3 + c]: the exact value under the
+// lighting (Prior::Maps) or its Cauchy-Schwarz bound (Prior::Worst).
+void bandParts(const float* row, const std::vector<float>& lighting, const LightingPrior& p, int order, Prior prior,
+               double* partial) {
+    for (int l = 0; l < order; ++l)
+        for (int c = 0; c < 3; ++c) {
+            double value = 0.0;
+            if (prior == Prior::Maps) {
+                for (int j = l * l; j < (l + 1) * (l + 1); ++j) value += double(row[j * 3 + c]) * lighting[j * 3 + c];
+            } else {
+                double norm = 0.0;
+                for (int j = l * l; j < (l + 1) * (l + 1); ++j) norm += double(row[j * 3 + c]) * row[j * 3 + c];
+                value = std::sqrt(norm) * p.bandNorm[l * 3 + c];
+            }
+            partial[l * 3 + c] = value;
+        }
+}
+
+} // namespace
+
 std::vector<float> truncationError(const float* transfer, size_t vertexCount, int order,
                                    const std::vector<std::vector<float>>& lightings, Prior prior) {
     if (order < 1 || order > sh::kMaxOrder)
@@ -25,41 +78,11 @@ std::vector<float> truncationError(const float* transfer, size_t vertexCount, in
             throw Error("", "truncationError", "lighting " + std::to_string(k) + " has " +
                                                    std::to_string(lighting.size()) + " values, not " +
                                                    std::to_string(coefficients * 3), kExitFailure);
-        // Band norms of the lighting, per channel, for the worst case.
-        std::vector<double> lightingNorm(size_t(order) * 3, 0.0);
-        for (int l = 0; l < order; ++l)
-            for (int j = l * l; j < (l + 1) * (l + 1); ++j)
-                for (int c = 0; c < 3; ++c) lightingNorm[l * 3 + c] += double(lighting[j * 3 + c]) * lighting[j * 3 + c];
-        for (double& value : lightingNorm) value = std::sqrt(value);
-
+        const LightingPrior p = lightingPrior(transfer, vertexCount, order, lighting, k);
         // The scale: RMS full-order radiance over the mesh.
-        double sumSquares = 0.0;
-        for (size_t v = 0; v < vertexCount; ++v)
-            for (int c = 0; c < 3; ++c) {
-                double radiance = 0.0;
-                for (size_t j = 0; j < coefficients; ++j)
-                    radiance += double(transfer[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
-                sumSquares += radiance * radiance;
-            }
-        double scale = std::sqrt(sumSquares / double(std::max<size_t>(1, vertexCount * 3)));
-        if (!(scale > 0.0))
-            throw Error("", "lighting " + std::to_string(k), "relights the mesh to black at full order, so no "
-                        "relative error can be measured under it", kExitInput);
-
+        double scale = std::sqrt(p.sumSquares / double(std::max<size_t>(1, vertexCount * 3)));
         for (size_t v = 0; v < vertexCount; ++v) {
-            const float* row = transfer + v * coefficients * 3;
-            for (int l = 0; l < order; ++l)
-                for (int c = 0; c < 3; ++c) {
-                    double value = 0.0;
-                    if (prior == Prior::Maps) {
-                        for (int j = l * l; j < (l + 1) * (l + 1); ++j) value += double(row[j * 3 + c]) * lighting[j * 3 + c];
-                    } else {
-                        double norm = 0.0;
-                        for (int j = l * l; j < (l + 1) * (l + 1); ++j) norm += double(row[j * 3 + c]) * row[j * 3 + c];
-                        value = std::sqrt(norm) * lightingNorm[l * 3 + c];
-                    }
-                    partial[l * 3 + c] = value;
-                }
+            bandParts(transfer + v * coefficients * 3, lighting, p, order, prior, partial.data());
             // Tail from band n on: what order n leaves out.
             for (int c = 0; c < 3; ++c) {
                 double tail = 0.0;
@@ -152,36 +175,10 @@ std::vector<double> truncationErrorSquared(const float* transfer, size_t vertexC
     std::vector<double> partial(size_t(order) * 3);
     for (size_t k = 0; k < lightings.size(); ++k) {
         const std::vector<float>& lighting = lightings[k];
-        std::vector<double> lightingNorm(size_t(order) * 3, 0.0);
-        for (int l = 0; l < order; ++l)
-            for (int j = l * l; j < (l + 1) * (l + 1); ++j)
-                for (int c = 0; c < 3; ++c) lightingNorm[l * 3 + c] += double(lighting[j * 3 + c]) * lighting[j * 3 + c];
-        for (double& value : lightingNorm) value = std::sqrt(value);
-        double sumSquares = 0.0;
-        for (size_t v = 0; v < vertexCount; ++v)
-            for (int c = 0; c < 3; ++c) {
-                double radiance = 0.0;
-                for (size_t j = 0; j < coefficients; ++j)
-                    radiance += double(transfer[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
-                sumSquares += radiance * radiance;
-            }
-        if (!(sumSquares > 0.0))
-            throw Error("", "lighting " + std::to_string(k), "relights the mesh to black at full order, so no "
-                        "relative error can be measured under it", kExitInput);
+        const LightingPrior p = lightingPrior(transfer, vertexCount, order, lighting, k);
+        const double sumSquares = p.sumSquares;
         for (size_t v = 0; v < vertexCount; ++v) {
-            const float* row = transfer + v * coefficients * 3;
-            for (int l = 0; l < order; ++l)
-                for (int c = 0; c < 3; ++c) {
-                    double value = 0.0;
-                    if (prior == Prior::Maps) {
-                        for (int j = l * l; j < (l + 1) * (l + 1); ++j) value += double(row[j * 3 + c]) * lighting[j * 3 + c];
-                    } else {
-                        double norm = 0.0;
-                        for (int j = l * l; j < (l + 1) * (l + 1); ++j) norm += double(row[j * 3 + c]) * row[j * 3 + c];
-                        value = std::sqrt(norm) * lightingNorm[l * 3 + c];
-                    }
-                    partial[l * 3 + c] = value;
-                }
+            bandParts(transfer + v * coefficients * 3, lighting, p, order, prior, partial.data());
             double* slots = out.data() + (k * vertexCount + v) * order;
             for (int c = 0; c < 3; ++c) {
                 double tail = 0.0;
