@@ -7,8 +7,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-
-#include <cmath>
 #include <exception>
 #include <sstream>
 #include <thread>
@@ -19,6 +17,26 @@ namespace prt::cli {
 namespace {
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
+
+// The items of a comma-separated list, as std::getline splits it (a trailing comma adds no item).
+std::vector<std::string> commaItems(const std::string& text) {
+    std::vector<std::string> items;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, ',')) items.push_back(item);
+    return items;
+}
+
+// One item as a double (std::stod): false unless the whole item is the number.
+bool parseItem(const std::string& item, double& value) {
+    size_t used = 0;
+    try {
+        value = std::stod(item, &used);
+    } catch (const std::exception&) {
+        return false;
+    }
+    return used != 0 && used == item.size();
+}
 
 // Parses exactly `count` comma-separated finite numbers.
 std::vector<float> parseNumbers(const std::string& text, size_t count, const char* option) {
@@ -63,17 +81,9 @@ void parsePinholeCamera(const std::string& size, const char* sizeOption, const s
 
 std::array<double, 3> parseAlbedo(const std::string& text) {
     std::vector<double> values;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        size_t used = 0;
+    for (const std::string& item : commaItems(text)) {
         double value = 0.0;
-        try {
-            value = std::stod(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == 0 || used != item.size()) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
+        if (!parseItem(item, value)) throw usage("--albedo", "'" + text + "' is not R,G,B or a single value");
         if (!(value >= 0.0 && value <= 1.0)) throw usage("--albedo", "components must lie in [0, 1]");
         values.push_back(value);
     }
@@ -93,18 +103,9 @@ namespace {
 
 std::vector<double> parseNumberList(const std::string& text, const std::string& flag, const std::string& form) {
     std::vector<double> values;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        size_t used = 0;
+    for (const std::string& item : commaItems(text)) {
         double value = 0.0;
-        try {
-            value = std::stod(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == 0 || used != item.size() || !std::isfinite(value))
-            throw usage(flag, "'" + text + "' is not " + form);
+        if (!parseItem(item, value) || !std::isfinite(value)) throw usage(flag, "'" + text + "' is not " + form);
         values.push_back(value);
     }
     return values;
@@ -125,17 +126,9 @@ void parsePhongBrdf(const std::string& text, double& exponent, double& ks) {
 
 std::array<float, 3> parsePoint(const std::string& text, const char* option) {
     std::vector<float> values;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        size_t used = 0;
+    for (const std::string& item : commaItems(text)) {
         double value = 0.0;
-        try {
-            value = std::stod(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == 0 || used != item.size() || !std::isfinite(value) || std::abs(value) > 3e38)
+        if (!parseItem(item, value) || !std::isfinite(value) || std::abs(value) > 3e38)
             throw usage(option, "'" + text + "' is not three finite numbers X,Y,Z");
         values.push_back(float(value));
     }
