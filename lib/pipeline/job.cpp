@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
@@ -42,6 +43,21 @@ std::string shellQuote(const std::string& text) {
     std::string quoted = "'";
     for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return quoted + "'";
+}
+
+std::string captureCommand(const std::vector<std::string>& args, bool withStderr, int& status) {
+    std::string command;
+    for (const std::string& arg : args) command += shellQuote(arg) + " ";
+    command += withStderr ? "2>&1" : "2>/dev/null";
+    std::FILE* pipe = popen(command.c_str(), "r");
+    if (!pipe) throw Error("", args[0], "cannot run", kExitFailure);
+    std::string output;
+    char buffer[4096];
+    size_t got;
+    while ((got = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output.append(buffer, got);
+    int wait = pclose(pipe);
+    status = WIFEXITED(wait) ? WEXITSTATUS(wait) : 128;
+    return output;
 }
 
 std::map<std::string, std::string> inputHashes(const StageInputs& inputs) {

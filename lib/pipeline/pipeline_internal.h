@@ -28,6 +28,9 @@ double epochSeconds(); // wall-clock seconds since 1970: comparable between proc
 std::string storeDir(const RunOptions& options);
 std::string absolutePath(const std::string& path);
 std::string shellQuote(const std::string& text); // for /bin/sh, whatever the text holds
+// Runs `args` (each quoted by shellQuote) and returns its stdout, with its stderr too when `withStderr` (else
+// dropped); `status` gets its exit status, 128 when a signal ended it. Throws prt::Error when it cannot start.
+std::string captureCommand(const std::vector<std::string>& args, bool withStderr, int& status);
 
 // `stage`'s command line after `prt` (subcommand, parameters, inputs as "input-PORT", outputs), as stageCommand
 // builds it, without --log-json, --threads or --shard: what --resolved-options is asked about.

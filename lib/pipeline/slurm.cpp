@@ -24,22 +24,6 @@ namespace {
 volatile std::sig_atomic_t gInterrupted = 0;
 void onInterrupt(int) { gInterrupted = 1; }
 
-// Runs a command and returns its stdout and stderr; `status` gets its exit status.
-std::string capture(const std::vector<std::string>& args, int& status) {
-    std::string command;
-    for (const std::string& arg : args) command += shellQuote(arg) + " ";
-    command += "2>&1";
-    std::FILE* pipe = popen(command.c_str(), "r");
-    if (!pipe) throw Error("", args[0], "cannot run", kExitFailure);
-    std::string output;
-    char buffer[4096];
-    size_t got;
-    while ((got = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output.append(buffer, got);
-    int wait = pclose(pipe);
-    status = WIFEXITED(wait) ? WEXITSTATUS(wait) : 128;
-    return output;
-}
-
 struct Job {
     std::string slurmId; // "12" or "12_3" for a task of array 12
     std::string baseId;  // "12"
@@ -53,7 +37,7 @@ struct Job {
 
 std::string submit(std::vector<std::string> args) {
     int status = 0;
-    std::string output = capture(args, status);
+    std::string output = captureCommand(args, true, status);
     // --parsable prints "JOBID" or "JOBID;CLUSTER".
     std::string id = output.substr(0, output.find_first_of(";\n"));
     if (status != 0 || id.empty() || id.find_first_not_of("0123456789") != std::string::npos)
@@ -73,8 +57,8 @@ bool queryStates(const std::set<std::string>& baseIds, std::map<std::string, std
     std::string ids;
     for (const std::string& id : baseIds) ids += (ids.empty() ? "" : ",") + id;
     int status = 0;
-    std::string output = capture({"squeue", "--noheader", "--array", "--states=all", "--jobs=" + ids,
-                                  "--format=%i|%T|%r"}, status);
+    std::string output = captureCommand({"squeue", "--noheader", "--array", "--states=all", "--jobs=" + ids,
+                                         "--format=%i|%T|%r"}, true, status);
     if (status != 0) return false;
     size_t start = 0;
     while (start < output.size()) {
@@ -97,7 +81,7 @@ void cancel(const std::vector<Job>& jobs) {
     std::vector<std::string> args = {"scancel"};
     args.insert(args.end(), ids.begin(), ids.end());
     int status = 0;
-    capture(args, status);
+    captureCommand(args, true, status);
 }
 
 // While alive: Ctrl-C and SIGTERM set gInterrupted instead of ending the process. When it goes, for whatever

@@ -32,22 +32,6 @@ nlohmann::json keyIngredients(const PipelineStage& stage, const std::map<std::st
 
 namespace {
 
-// stdout of `args` (stderr dropped) and its exit status.
-std::string captureStdout(const std::vector<std::string>& args, int& status) {
-    std::string command;
-    for (const std::string& arg : args) command += shellQuote(arg) + " ";
-    command += "2>/dev/null";
-    std::FILE* pipe = popen(command.c_str(), "r");
-    if (!pipe) throw Error("", args[0], "cannot run", kExitFailure);
-    std::string output;
-    char buffer[4096];
-    size_t got;
-    while ((got = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output.append(buffer, got);
-    int wait = pclose(pipe);
-    status = WIFEXITED(wait) ? WEXITSTATUS(wait) : 128;
-    return output;
-}
-
 nlohmann::json askPrt(const std::vector<std::string>& args, const RunOptions& options) {
     static std::mutex mutex;
     static std::map<std::vector<std::string>, nlohmann::json> answers;
@@ -56,7 +40,7 @@ nlohmann::json askPrt(const std::vector<std::string>& args, const RunOptions& op
     if (known != answers.end()) return known->second;
     if (options.askPrt) return answers[args] = options.askPrt(args);
     int status = 0;
-    std::string output = captureStdout(args, status);
+    std::string output = captureCommand(args, false, status);
     nlohmann::json answer = nlohmann::json::parse(output, nullptr, false);
     if (status != 0 || !answer.is_object()) {
         std::string command;
