@@ -40,6 +40,25 @@ std::vector<float> coverageMask(const std::string& path) {
     return readImageChannels(path, {"A"}).values;
 }
 
+// The metrics every comparison reports, appended to `document` in this order.
+void addMetrics(nlohmann::ordered_json& document, const ErrorMetrics& metrics) {
+    document["count"] = metrics.count;
+    document["rmse"] = metrics.rmse;
+    document["relative_rmse"] = metrics.relativeRmse;
+    document["nrmse"] = metrics.nrmse;
+    document["max_abs_error"] = metrics.maxAbsError;
+    document["mean_abs_luminance_error"] = metrics.meanAbsLuminanceError;
+    document["mean_luminance_bias"] = metrics.meanLuminanceBias;
+}
+
+// Ends the report with the luminance weights, prints it, and writes it to `path` too unless that is empty.
+void report(nlohmann::ordered_json& document, const std::string& path) {
+    document["luminance_weights"] = kLuminanceWeights;
+    std::string text = document.dump(2) + "\n";
+    if (!path.empty()) writeBytesAtomic(path, text);
+    std::fputs(text.c_str(), stdout);
+}
+
 void runCompareImages(const CompareOptions& options) {
     if (fileExtension(options.output) != "png")
         throw Error(options.output, "-o", "with --image the output is the error picture and must end in .png",
@@ -70,23 +89,14 @@ void runCompareImages(const CompareOptions& options) {
         {"width", result.width},
         {"height", result.height},
         {"mask", mask.empty() ? "every pixel" : "the result's A channel > 0.5"},
-        {"count", metrics.count},
-        {"rmse", metrics.rmse},
-        {"relative_rmse", metrics.relativeRmse},
-        {"nrmse", metrics.nrmse},
-        {"max_abs_error", metrics.maxAbsError},
-        {"mean_abs_luminance_error", metrics.meanAbsLuminanceError},
-        {"mean_luminance_bias", metrics.meanLuminanceBias},
-        {"mean_relative_luminance_error", comparison.meanRelativeError},
-        {"p95_relative_luminance_error", comparison.p95RelativeError},
-        {"max_relative_luminance_error", comparison.maxRelativeError},
-        {"relative_floor", comparison.relativeFloor},
-        {"picture_scale_top", options.scaleTop},
-        {"luminance_weights", kLuminanceWeights},
     };
-    std::string text = document.dump(2) + "\n";
-    if (!options.metricsOutput.empty()) writeBytesAtomic(options.metricsOutput, text);
-    std::fputs(text.c_str(), stdout);
+    addMetrics(document, metrics);
+    document["mean_relative_luminance_error"] = comparison.meanRelativeError;
+    document["p95_relative_luminance_error"] = comparison.p95RelativeError;
+    document["max_relative_luminance_error"] = comparison.maxRelativeError;
+    document["relative_floor"] = comparison.relativeFloor;
+    document["picture_scale_top"] = options.scaleTop;
+    report(document, options.metricsOutput);
 }
 
 void runCompare(const CompareOptions& options) {
@@ -97,18 +107,9 @@ void runCompare(const CompareOptions& options) {
     nlohmann::ordered_json document = {
         {"result", options.result},
         {"reference", options.reference},
-        {"count", metrics.count},
-        {"rmse", metrics.rmse},
-        {"relative_rmse", metrics.relativeRmse},
-        {"nrmse", metrics.nrmse},
-        {"max_abs_error", metrics.maxAbsError},
-        {"mean_abs_luminance_error", metrics.meanAbsLuminanceError},
-        {"mean_luminance_bias", metrics.meanLuminanceBias},
-        {"luminance_weights", kLuminanceWeights},
     };
-    std::string text = document.dump(2) + "\n";
-    if (!options.output.empty()) writeBytesAtomic(options.output, text);
-    std::fputs(text.c_str(), stdout);
+    addMetrics(document, metrics);
+    report(document, options.output);
 }
 
 } // namespace
