@@ -3,6 +3,7 @@
 #include "bundle.h"
 
 #include "core.h"
+#include "gltf_data_uri.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -23,24 +24,6 @@ fs::path scratch(const std::string& name) {
     return dir / name;
 }
 
-std::string base64(const std::string& bytes) {
-    static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    size_t i = 0;
-    for (; i + 2 < bytes.size(); i += 3) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16 | uint32_t(uint8_t(bytes[i + 1])) << 8 | uint8_t(bytes[i + 2]);
-        for (int k = 3; k >= 0; --k) out += digits[(v >> (6 * k)) & 63];
-    }
-    if (i + 1 == bytes.size()) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
-        out += {digits[v >> 18], digits[(v >> 12) & 63], '=', '='};
-    } else if (i + 2 == bytes.size()) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16 | uint32_t(uint8_t(bytes[i + 1])) << 8;
-        out += {digits[v >> 18], digits[(v >> 12) & 63], digits[(v >> 6) & 63], '='};
-    }
-    return out;
-}
-
 // Four vertices of a unit square in z = 0 (0,0) (1,0) (1,1) (0,1), then six uint16 indices 0 1 2 0 2 3.
 std::string squareBytes() {
     const float positions[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
@@ -56,7 +39,7 @@ json squareGltf(int mode = 4, bool indexed = true, const std::string& uri = "") 
     std::string bytes = squareBytes();
     json gltf = {{"asset", {{"version", "2.0"}}},
                  {"buffers", {{{"byteLength", bytes.size()},
-                               {"uri", uri.empty() ? "data:application/octet-stream;base64," + base64(bytes) : uri}}}},
+                               {"uri", uri.empty() ? prt::test::dataUri(bytes) : uri}}}},
                  {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
                                   {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 12}}}},
                  {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"},
@@ -173,7 +156,7 @@ TEST(HostileGltf, TriangleStripsAndFansAreRead) {
     std::string bytes = squareBytes();
     const uint16_t stripCorners[6] = {0, 1, 3, 2, 0, 0}; // 4 used; the last two pad the view
     std::memcpy(bytes.data() + 48, stripCorners, sizeof stripCorners);
-    strip["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64(bytes);
+    strip["buffers"][0]["uri"] = prt::test::dataUri(bytes);
     prt::TriMesh mesh = prt::readBundle(writeGltf(strip, "strip.gltf")).mesh;
     ASSERT_EQ(mesh.triangleCount(), 2u);
     EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 3, 1, 2, 3}));

@@ -4,6 +4,7 @@
 #include "bundle.h"
 #include "bundle_internal.h"
 #include "core.h"
+#include "gltf_data_uri.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -52,24 +53,6 @@ std::string floats(std::initializer_list<float> values) {
 }
 
 // ---- glTF pieces ----
-std::string base64(const std::string& bytes) {
-    static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    size_t i = 0;
-    for (; i + 2 < bytes.size(); i += 3) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16 | uint32_t(uint8_t(bytes[i + 1])) << 8 | uint8_t(bytes[i + 2]);
-        for (int k = 3; k >= 0; --k) out += digits[(v >> (6 * k)) & 63];
-    }
-    if (i + 1 == bytes.size()) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16;
-        out += {digits[v >> 18], digits[(v >> 12) & 63], '=', '='};
-    } else if (i + 2 == bytes.size()) {
-        uint32_t v = uint32_t(uint8_t(bytes[i])) << 16 | uint32_t(uint8_t(bytes[i + 1])) << 8;
-        out += {digits[v >> 18], digits[(v >> 12) & 63], digits[(v >> 6) & 63], '='};
-    }
-    return out;
-}
-
 std::string squareBuffer() {
     std::string bytes = floats({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0});
     const uint16_t indices[6] = {0, 1, 2, 0, 2, 3};
@@ -80,7 +63,7 @@ std::string squareBuffer() {
 json square(const std::function<void(json&)>& edit = nullptr) {
     std::string bytes = squareBuffer();
     json gltf = {{"asset", {{"version", "2.0"}}},
-                 {"buffers", {{{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes)}}}},
+                 {"buffers", {{{"byteLength", bytes.size()}, {"uri", prt::test::dataUri(bytes)}}}},
                  {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
                                   {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 12}}}},
                  {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"},
