@@ -36,6 +36,7 @@ void addFivshadeCommand(CLI::App& app);
 void addFivsceneCommand(CLI::App& app);
 void addGlossyCommand(CLI::App& app);
 void addServeCommand(CLI::App& app);
+void addSpecularCommand(CLI::App& app);
 
 // What a pipeline cache key holds about this prt (`prt --build-info`): its version, build type, compiler, the
 // content hash of its executable, and the versions of the libraries it was compiled against and has loaded.
@@ -65,6 +66,20 @@ void parsePinholeCamera(const std::string& size, const char* sizeOption, const s
                         PinholeCamera& camera);
 // Parses "X,Y,Z": exactly three finite numbers. Throws prt::Error(kExitUsage) naming `option` otherwise.
 std::array<float, 3> parsePoint(const std::string& text, const char* option);
+
+// `prt relight --brdf` (relight_specular.cpp): specular through SH triple products on a bundle's
+// "specular_visibility" layer. addSpecularRelightOptions adds the options to relight's command;
+// runSpecularRelight runs when --brdf is given, toward --eye, under --env, writing per-vertex radiance to `output`
+// (with the transfer layer's diffuse part unless glossyOnly). Throws prt::Error on bad input.
+struct SpecularRelightArgs {
+    std::string brdf;           // phong:N,KS; empty: not a specular relight
+    int lightOrder = 0;         // 0: the visibility's order
+    int productBands = 0;       // 0: the visibility's order
+    double bandTolerance = 0.02; // specular::kDefaultBandTolerance
+};
+void addSpecularRelightOptions(CLI::App* command, SpecularRelightArgs& args);
+void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bundle, const std::string& env,
+                        const std::string& eye, const std::string& output, bool glossyOnly);
 
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);

@@ -36,6 +36,7 @@ struct RelightOptions {
     std::string imageSize; // "W,H": a picture through --camera instead of per-vertex radiance
     std::string camera;    // "EYE,TARGET,UP,FOVY", as `prt render` and `prt reference --image`
     float exposure = 0.0f;
+    SpecularRelightArgs specular; // --brdf: relight_specular.cpp
 };
 
 // The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
@@ -113,6 +114,9 @@ void runHybridRelight(const RelightOptions& options, double start) {
 }
 
 void runRelight(const RelightOptions& options) {
+    if (!options.specular.brdf.empty())
+        return runSpecularRelight(options.specular, options.bundle, options.env, options.eye, options.output,
+                                  options.glossyOnly);
     double start = nowSeconds();
     sh::Window window = sh::parseWindow(options.window);
     // writeVertexRadiance checks this too, but only after the work; a typo should fail at once.
@@ -284,6 +288,7 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--exposure", options->exposure,
                         "With --image and a .png: stops; x = radiance * 2^exposure, then x / (1 + x), then sRGB")
         ->capture_default_str();
+    addSpecularRelightOptions(command, options->specular);
     command->callback([options] { runRelight(*options); });
 }
 
