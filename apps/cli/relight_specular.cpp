@@ -51,6 +51,9 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
                         std::to_string(lightOrder + visibility.order - 1) + ")",
                     kExitUsage);
     const int bands = specular::adaptiveBands(phong.exponent, productBands, args.bandTolerance);
+    // Lighting bands above bands + visibility order - 2 meet no kept output band (triangle rule of the Gaunt
+    // tensor), so projecting them would change nothing: drop them, and the tensor stays small.
+    const int lightOrderUsed = std::min(lightOrder, bands + visibility.order - 1);
     const TriMesh& mesh = bundle.mesh;
     std::vector<float> radiance(mesh.vertexCount() * 3, 0.0f);
     EnvironmentMap environment = readEnvironmentMap(envPath);
@@ -65,12 +68,12 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
     }
 
     double projectStart = nowSeconds();
-    std::vector<float> lighting = environmentLighting(environment, lightOrder, nullptr, sh::Window::None);
+    std::vector<float> lighting = environmentLighting(environment, lightOrderUsed, nullptr, sh::Window::None);
     double tensorStart = nowSeconds();
-    sh::TripleProduct tensor = sh::tripleProduct(std::max({lightOrder, visibility.order, bands}));
+    sh::TripleProduct tensor = sh::tripleProduct(std::max({lightOrderUsed, visibility.order, bands}));
     double productStart = nowSeconds();
     specular::LightProduct product =
-        specular::lightProduct(tensor, lighting.data(), lightOrder, visibility.order, bands, phong);
+        specular::lightProduct(tensor, lighting.data(), lightOrderUsed, visibility.order, bands, phong);
     double shadeStart = nowSeconds();
     std::vector<float> glossy(radiance.size());
     specular::glossyRadiance(mesh, visibility, product, eye.data(), glossy.data());
@@ -81,13 +84,13 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
     std::snprintf(line, sizeof line,
                   "relight: specular, %zu vertices, visibility order %d, lighting order %d, %d of %d product bands "
                   "(Phong n = %g): light product %.3f ms, shading %.3f ms",
-                  mesh.vertexCount(), visibility.order, lightOrder, bands, productBands, phong.exponent,
+                  mesh.vertexCount(), visibility.order, lightOrderUsed, bands, productBands, phong.exponent,
                   (shadeStart - productStart) * 1e3, (end - shadeStart) * 1e3);
     logInfo(line);
     writeVertexRadiance(output, radiance);
     logInfo("relight: wrote " + output);
     nlohmann::json record = {{"vertices", mesh.vertexCount()},          {"visibility_order", visibility.order},
-                             {"light_order", lightOrder},               {"product_bands", productBands},
+                             {"light_order", lightOrderUsed},               {"product_bands", productBands},
                              {"bands", bands},                          {"exponent", phong.exponent},
                              {"project_seconds", tensorStart - projectStart},
                              {"tensor_seconds", productStart - tensorStart},
