@@ -14,9 +14,12 @@
 namespace prt::cli {
 
 void addSpecularRelightOptions(CLI::App* command, SpecularRelightArgs& args) {
-    command->add_option("--brdf", args.brdf,
-                        "phong:EXPONENT,KS with --eye: specular through SH triple products from the bundle's "
-                        "specular_visibility layer (`prt specular`)");
+    CLI::Option* brdf = command->add_option("--brdf", args.brdf,
+                                            "phong:EXPONENT,KS with --eye: specular through SH triple products from "
+                                            "the bundle's specular_visibility layer (`prt specular`)");
+    // What the specular relight does not do is refused rather than ignored (called after relight's own options).
+    for (const char* other : {"--texels", "--image", "--camera", "--lights", "--sh", "--rotate-y", "--window"})
+        if (CLI::Option* option = command->get_option_no_throw(other)) brdf->excludes(option);
     command->add_option("--light-order", args.lightOrder,
                         "With --brdf: SH bands of the lighting in the product (default: the visibility's order)");
     command->add_option("--product-bands", args.productBands,
@@ -32,10 +35,12 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
     double start = nowSeconds();
     specular::Phong phong;
     parsePhongBrdf(args.brdf, phong.exponent, phong.ks);
-    if (eyeText.empty()) throw Error("", "--brdf", "needs --eye X,Y,Z: the specular part is view dependent", kExitUsage);
+    if (eyeText.empty())
+        throw Error("", "--brdf", "needs --eye X,Y,Z: the specular part is view dependent", kExitUsage);
     if (envPath.empty()) throw Error("", "--brdf", "needs --env", kExitUsage);
     std::string extension = fileExtension(output);
-    if (extension != "npy" && extension != "csv") throw Error(output, "-o", "output must end in .npy or .csv", kExitUsage);
+    if (extension != "npy" && extension != "csv")
+        throw Error(output, "-o", "output must end in .npy or .csv", kExitUsage);
     if (!(args.bandTolerance >= 0.0)) throw Error("", "--band-tolerance", "must be >= 0", kExitUsage);
     std::array<float, 3> eye = parsePoint(eyeText, "--eye");
 
@@ -43,7 +48,8 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
     specular::Visibility visibility = specular::readVisibility(bundle, bundlePath);
     const int lightOrder = args.lightOrder > 0 ? args.lightOrder : visibility.order;
     const int productBands = args.productBands > 0 ? args.productBands : visibility.order;
-    if (lightOrder > sh::kMaxOrder) throw Error("", "--light-order", "above " + std::to_string(sh::kMaxOrder), kExitUsage);
+    if (lightOrder > sh::kMaxOrder)
+        throw Error("", "--light-order", "above " + std::to_string(sh::kMaxOrder), kExitUsage);
     if (productBands > std::min(sh::kMaxOrder, lightOrder + visibility.order - 1))
         throw Error("", "--product-bands",
                     std::to_string(productBands) + " is more than the product of order " + std::to_string(lightOrder) +
@@ -60,8 +66,8 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
     if (!glossyOnly) {
         if (!findLayer(bundle, "transfer"))
             throw Error(bundlePath, "layers",
-                        "has no \"transfer\" layer for the diffuse part: give --glossy-only, or run `prt specular` on a "
-                        "bundle from `prt transfer`");
+                        "has no \"transfer\" layer for the diffuse part: give --glossy-only, or run `prt specular` "
+                        "on a bundle from `prt transfer`");
         RelightModel diffuse = relightModel(bundle, bundlePath);
         std::vector<float> lighting = environmentLighting(environment, diffuse.order, nullptr, sh::Window::None);
         relight(diffuse, lighting.data(), 0, diffuse.vertexCount, radiance.data());

@@ -15,8 +15,11 @@ namespace prt::specular {
 
 LightProduct lightProduct(const sh::TripleProduct& tensor, const float* lighting, int lightOrder, int visibilityOrder,
                           int bands, const Phong& phong) {
-    auto usage = [](const std::string& place, const std::string& problem) { return Error("", place, problem, kExitUsage); };
-    if (lightOrder < 1 || lightOrder > sh::kMaxOrder) throw usage("light order", "outside 1.." + std::to_string(sh::kMaxOrder));
+    auto usage = [](const std::string& place, const std::string& problem) {
+        return Error("", place, problem, kExitUsage);
+    };
+    if (lightOrder < 1 || lightOrder > sh::kMaxOrder)
+        throw usage("light order", "outside 1.." + std::to_string(sh::kMaxOrder));
     if (visibilityOrder < 1 || visibilityOrder > sh::kMaxOrder)
         throw usage("visibility order", "outside 1.." + std::to_string(sh::kMaxOrder));
     if (bands < 1 || bands > lightOrder + visibilityOrder - 1)
@@ -101,7 +104,8 @@ void glossyRadiance(const TriMesh& mesh, const Visibility& o, const LightProduct
         for (size_t v = range.begin(); v < range.end(); ++v) {
             const float* p = &mesh.positions[3 * v];
             const float* m = &mesh.normals[3 * v];
-            double n[3] = {m[0], m[1], m[2]}, wo[3] = {eye[0] - double(p[0]), eye[1] - double(p[1]), eye[2] - double(p[2])};
+            double n[3] = {m[0], m[1], m[2]};
+            double wo[3] = {eye[0] - double(p[0]), eye[1] - double(p[1]), eye[2] - double(p[2])};
             double nLength = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             double woLength = std::sqrt(wo[0] * wo[0] + wo[1] * wo[1] + wo[2] * wo[2]);
             float* out = &radiance[3 * v];

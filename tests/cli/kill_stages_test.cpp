@@ -80,6 +80,7 @@ TEST(KillStages, EveryStageKilledAnywhereLeavesWholeOutputsOrNoneAndRerunsToTheS
         {"adapt", "adapt base.glb --max-error 0.05" + env + " -o adaptive.glb", {"adaptive.glb"}},
         {"glossy", "glossy sphere.glb --brdf phong:8,0.5 --lobes 1 --grid 4 --samples 64 -o glossy.glb",
          {"glossy.glb"}},
+        {"specular", "specular base.glb --order 4 --samples 64 -o specular.glb", {"specular.glb"}},
     };
     size_t kills = 0, points = 0;
     for (const StageCase& stage : stages) {

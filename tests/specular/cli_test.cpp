@@ -60,7 +60,8 @@ TEST_F(SpecularCli, RelightsAgainstTheReference) {
     const std::string relight = "relight " + path("s.glb") + " --env " + env + " --brdf phong:8,0.5 --eye 0,1,4 ";
     ASSERT_EQ(run(relight + "--glossy-only -o " + path("glossy.npy") + " --quiet").exitCode, 0);
     ASSERT_EQ(run(relight + "-o " + path("full.npy") + " --quiet").exitCode, 0);
-    ASSERT_EQ(run("relight " + path("t.glb") + " --env " + env + " -o " + path("diffuse.npy") + " --quiet").exitCode, 0);
+    ASSERT_EQ(run("relight " + path("t.glb") + " --env " + env + " -o " + path("diffuse.npy") + " --quiet").exitCode,
+              0);
     std::vector<float> glossy = prt::readVertexRadiance(path("glossy.npy"));
     std::vector<float> full = prt::readVertexRadiance(path("full.npy"));
     std::vector<float> diffuse = prt::readVertexRadiance(path("diffuse.npy"));
@@ -80,20 +81,27 @@ TEST_F(SpecularCli, RelightsAgainstTheReference) {
 TEST_F(SpecularCli, BadInputFailsWithoutOutput) {
     if (!fs::exists(env)) GTEST_SKIP() << "no " << env;
     // No visibility layer.
-    prt::test::CliRun missing = run("relight " + path("t.glb") + " --env " + env + " --brdf phong:8,0.5 --eye 0,0,4 -o " +
-                                    path("bad.npy"));
+    prt::test::CliRun missing =
+        run("relight " + path("t.glb") + " --env " + env + " --brdf phong:8,0.5 --eye 0,0,4 -o " + path("bad.npy"));
     EXPECT_EQ(missing.exitCode, 3);
     EXPECT_NE(missing.stderrText.find("specular_visibility"), std::string::npos) << missing.stderrText;
-    ASSERT_EQ(run("specular " + path("sphere.glb") + " -o " + path("s.glb") + " --order 4 --samples 16 --quiet").exitCode, 0);
+    const std::string stage = "specular " + path("sphere.glb") + " -o " + path("s.glb") + " --order 4 --samples 16";
+    ASSERT_EQ(run(stage + " --quiet").exitCode, 0);
     const std::string base = "relight " + path("s.glb") + " --env " + env + " ";
     prt::test::CliRun exponent = run(base + "--brdf phong:0,0.5 --eye 0,0,4 --glossy-only -o " + path("bad.npy"));
     EXPECT_EQ(exponent.exitCode, 2);
     prt::test::CliRun noEye = run(base + "--brdf phong:8,0.5 --glossy-only -o " + path("bad.npy"));
     EXPECT_EQ(noEye.exitCode, 2);
     EXPECT_NE(noEye.stderrText.find("--eye"), std::string::npos) << noEye.stderrText;
-    prt::test::CliRun bands = run(base + "--brdf phong:8,0.5 --eye 0,0,4 --glossy-only --product-bands 9 -o " + path("bad.npy"));
+    prt::test::CliRun bands =
+        run(base + "--brdf phong:8,0.5 --eye 0,0,4 --glossy-only --product-bands 9 -o " + path("bad.npy"));
     EXPECT_EQ(bands.exitCode, 2);
     EXPECT_NE(bands.stderrText.find("--product-bands"), std::string::npos) << bands.stderrText;
+    // Options the specular relight does not take are refused, not ignored.
+    prt::test::CliRun rotate =
+        run(base + "--brdf phong:8,0.5 --eye 0,0,4 --glossy-only --rotate-y 30 -o " + path("bad.npy"));
+    EXPECT_EQ(rotate.exitCode, 2);
+    EXPECT_NE(rotate.stderrText.find("--rotate-y"), std::string::npos) << rotate.stderrText;
     // No transfer layer for the diffuse part.
     prt::test::CliRun diffuse = run(base + "--brdf phong:8,0.5 --eye 0,0,4 -o " + path("bad.npy"));
     EXPECT_EQ(diffuse.exitCode, 3);

@@ -16,7 +16,8 @@ namespace {
 
 using prt::specular::Phong;
 
-double evaluateSh(int order, const std::vector<double>& coefficients, const double w[3], int stride = 1, int channel = 0) {
+double evaluateSh(int order, const std::vector<double>& coefficients, const double w[3], int stride = 1,
+                  int channel = 0) {
     std::vector<double> basis(size_t(order) * order);
     prt::sh::evaluate(order, w[0], w[1], w[2], basis.data());
     double sum = 0.0;
@@ -99,7 +100,8 @@ TEST(SpecularShade, LightProductEqualsSparseMultiplyThenConvolution) {
     std::vector<float> lighting(order * order * 3), o(order * order);
     for (float& value : lighting) value = uniform(random);
     for (float& value : o) value = uniform(random);
-    prt::specular::LightProduct product = prt::specular::lightProduct(tensor, lighting.data(), order, order, order, phong);
+    prt::specular::LightProduct product =
+        prt::specular::lightProduct(tensor, lighting.data(), order, order, order, phong);
     std::vector<double> multiplier = prt::specular::phongMultipliers(phong.exponent, order);
     double R[3] = {0.3, -0.5, 0.8};
     unit(R);
@@ -205,7 +207,8 @@ TEST(SpecularShade, ResultDoesNotDependOnThreadCount) {
     std::vector<float> lighting(16 * 3);
     for (float& value : lighting) value = uniform(random);
     prt::sh::TripleProduct tensor = prt::sh::tripleProduct(4);
-    prt::specular::LightProduct product = prt::specular::lightProduct(tensor, lighting.data(), 4, 4, 4, Phong{16.0, 0.5});
+    prt::specular::LightProduct product =
+        prt::specular::lightProduct(tensor, lighting.data(), 4, 4, 4, Phong{16.0, 0.5});
     float eye[3] = {0.3f, 0.2f, 4.0f};
     std::vector<float> one(many.vertexCount() * 3), all(many.vertexCount() * 3);
     {
@@ -230,7 +233,8 @@ TEST(SpecularShade, BadInputIsRefused) {
     prt::specular::Visibility o;
     o.order = 3;
     o.coefficients.assign(mesh.vertexCount() * 9, 0.0f);
-    prt::specular::LightProduct product = prt::specular::lightProduct(tensor, lighting.data(), 4, 4, 4, Phong{8.0, 0.5});
+    prt::specular::LightProduct product =
+        prt::specular::lightProduct(tensor, lighting.data(), 4, 4, 4, Phong{8.0, 0.5});
     std::vector<float> out(mesh.vertexCount() * 3);
     float eye[3] = {0, 0, 3};
     try {
