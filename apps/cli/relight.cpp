@@ -127,7 +127,10 @@ void runHybridRelight(const RelightOptions& options, double start) {
         lighting = rotateHybridLighting(lighting, R);
     }
     sh::applyWindow(window, lighting.order, lighting.residual.data(), 3);
-    lighting.bounceWindow = sh::parseWindow(options.bounceWindow);
+    if (options.bounceWindow == "off")
+        model.bounce.clear();
+    else
+        lighting.bounceWindow = sh::parseWindow(options.bounceWindow);
 
     double visibilityStart = nowSeconds();
     std::vector<envlight::ConeLight> cones;
@@ -151,7 +154,7 @@ void runHybridRelight(const RelightOptions& options, double start) {
                   model.bounce.empty() ? "no" : "with", relightSeconds * 1e3, visibilitySeconds * 1e3,
                   (unsigned long long)rays);
     logInfo(line);
-    if (model.bounce.empty() && !cones.empty())
+    if (model.bounce.empty() && !cones.empty() && options.bounceWindow != "off")
         logWarn(options.texels
                     ? "relight: the bake has no \"texel_transfer_bounce\" layer, so the lights light only directly "
                       "(their interreflected light is lost); bake with --bounces"
@@ -334,7 +337,8 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--light-samples", options->lightSamples,
                         "Occlusion rays per vertex and light over each cone, for --lights (default 64; 0: unshadowed)");
     command->add_option("--bounce-window", options->bounceWindow,
-                        "With --lights: window on the lights' SH where they meet the bounce layer: none, hann (default), lanczos");
+                        "With --lights: window on the lights' SH where they meet the bounce layer: none, hann (default), "
+                        "lanczos; or off: the lights light only directly (to measure what their bounce adds)");
     command->add_option("-o,--output", options->output,
                         "Per-vertex radiance [V,3]: .npy (float32) or .csv; with --texels an RGB float .exr atlas")
         ->required();
