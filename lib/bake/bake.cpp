@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <filesystem>
 
 namespace prt {
@@ -80,7 +79,6 @@ std::vector<float> scatter(const TexelSamples& samples, const float* rows, int c
     return atlas;
 }
 
-
 } // namespace
 
 BakeSurface bakeSurface(const BakeOptions& options) {
@@ -141,7 +139,8 @@ BakeSurface bakeSurface(const BakeOptions& options) {
         surface.detailNormals = projection.normals;
         if (options.highPosition) positions = std::move(projection.positions);
         normals = std::move(projection.normals);
-        surface.highRecord = {{"mesh", std::filesystem::path(options.high).filename().string()}, {"hash", hashFile(options.high)},
+        surface.highRecord = {{"mesh", std::filesystem::path(options.high).filename().string()},
+                              {"hash", hashFile(options.high)},
                               {"cage", cage}, {"position", options.highPosition ? "high" : "low"},
                               {"misses", projection.misses}};
     }
@@ -225,7 +224,8 @@ TexelTransferRows bakeTexelTransfer(const BakeSurface& surface, const BakeOption
 
 namespace {
 
-// Scales each texel's 3 channels starting at `first` to unit length; (0, 0, 1) where they vanish.
+// Scales each texel's 3 channels starting at `first` to unit length; (0, 0, 1) where they vanish (far from every
+// chart, where nothing reads them).
 void normaliseTexels(float* texels, size_t count, int channels, int first) {
     for (size_t t = 0; t < count; ++t) {
         float* n = texels + t * channels + first;
@@ -233,7 +233,7 @@ void normaliseTexels(float* texels, size_t count, int channels, int first) {
         if (length > 1e-6)
             for (int a = 0; a < 3; ++a) n[a] = float(n[a] / length);
         else
-            n[0] = n[1] = 0.0f, n[2] = 1.0f; // far from every chart: flat
+            n[0] = n[1] = 0.0f, n[2] = 1.0f;
     }
 }
 

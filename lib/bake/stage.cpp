@@ -234,6 +234,7 @@ void runBake(const BakeOptions& options) {
         bounceLayer = coefficientLayer("texel_transfer_bounce", "sh_transfer_bounce_rgb", "bounce", baked.bounce,
                                        params, options, base, written, storedBytes);
     }
+    const uint64_t coefficientBytes = storedBytes; // the transfer and, with bounces, its bounce part
     Layer surfaceLayer = texelSurfaceLayer(baked.surface, size, options, base, written, storedBytes);
 
     std::vector<uint8_t> normalBytes(baked.normals.size());
@@ -273,7 +274,8 @@ void runBake(const BakeOptions& options) {
     double texelsPerSecond = stats.transferSeconds > 0.0 ? stats.texels / stats.transferSeconds : 0.0;
     double raysPerSecond = stats.directSeconds > 0.0 ? stats.rays / stats.directSeconds : 0.0;
     logInfo("bake: wrote " + options.output + " and " + std::to_string(written.paths.size()) + " texture files (" +
-            std::to_string(storedBytes) + " bytes of " + texelFormatName(options.format) + " coefficients); " +
+            std::to_string(coefficientBytes) + " bytes of " + texelFormatName(options.format) + " coefficients, " +
+            std::to_string(storedBytes - coefficientBytes) + " of surface); " +
             std::to_string(texelsPerSecond) + " texels/s, " + std::to_string(raysPerSecond / 1e6) +
             " Mrays/s, fill " + std::to_string(stats.fillSeconds) + " s, " + std::to_string(stats.seamEdges) +
             " seam edges, " + std::to_string(stats.stitchedTexels) + " texels stitched");
@@ -289,7 +291,8 @@ void runBake(const BakeOptions& options) {
                              {"fill_seconds", stats.fillSeconds},
                              {"seam_edges", stats.seamEdges},
                              {"stitched_texels", stats.stitchedTexels},
-                             {"stored_bytes", storedBytes}};
+                             {"stored_bytes", storedBytes},
+                             {"coefficient_bytes", coefficientBytes}};
     if (yardstick) record["bare_rays_per_second"] = stats.bareRaysPerSecond;
     logEvent("bake_stats", record.dump());
 
