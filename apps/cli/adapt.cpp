@@ -22,6 +22,33 @@ struct AdaptArgs {
     int clusters = 64, components = 0, maxStep = 1;
 };
 
+// A bake's per-texel transfer read from its texture into the layer (adapted texels live in the bundle's own
+// buffers); the other layers whose data lie in files next to the input are left out, so the output never names a
+// file that is not next to it.
+void readBakeIntoBundle(Bundle& bundle, const std::string& path, const std::string& output) {
+    TexelRelightModel rows = loadTexelRelightModel(path);
+    std::vector<std::string> dropped;
+    std::vector<Layer> kept;
+    for (Layer& layer : bundle.layers) {
+        if (layer.name == "texel_transfer") {
+            for (const char* key : {"uri", "hash", "files", "channels"}) layer.params.erase(key);
+            layer.params["format"] = "bundle";
+            layer.data = std::move(rows.rows.transfer);
+        } else if (layer.params.contains("uri")) {
+            dropped.push_back(layer.name);
+            continue;
+        }
+        kept.push_back(std::move(layer));
+    }
+    bundle.layers = std::move(kept);
+    if (!dropped.empty()) {
+        std::string names;
+        for (const std::string& name : dropped) names += (names.empty() ? "" : ", ") + name;
+        logWarn("adapt: " + output + " leaves out the layers whose data lie in files next to " + path + " (" + names +
+                "): bake with --format bundle to keep them inline");
+    }
+}
+
 void runAdapt(const AdaptArgs& args, const CLI::App& command) {
     double start = nowSeconds();
     const bool haveError = command.count("--max-error") > 0, haveOrder = command.count("--order") > 0;
@@ -59,9 +86,13 @@ void runAdapt(const AdaptArgs& args, const CLI::App& command) {
     options.maxStep = args.maxStep;
 
     Bundle bundle = readBundle(args.bundle);
+    const bool texels = findLayer(bundle, "texel_transfer") != nullptr;
+    if (texels) readBakeIntoBundle(bundle, args.bundle, args.output);
     const Layer* transfer = findLayer(bundle, "transfer");
+    if (!transfer) transfer = findLayer(bundle, "texel_transfer");
     if (!transfer || transfer->shape.size() != 3)
-        throw Error(args.bundle, "PRT_bundle", "no full-order \"transfer\" layer to adapt (run `prt transfer`)");
+        throw Error(args.bundle, "PRT_bundle", "no full-order \"transfer\" layer to adapt (run `prt transfer`, or "
+                                               "`prt bake` for texels)");
     int order = 1;
     while (uint64_t(order) * order < transfer->shape[1] && order < sh::kMaxOrder) ++order;
     if (haveOrder && args.order > order)
@@ -88,9 +119,9 @@ void runAdapt(const AdaptArgs& args, const CLI::App& command) {
 
     char line[320];
     std::snprintf(line, sizeof line,
-                  "adapt: %zu vertices, mean order %.2f of %d (%.1f coefficients), %zu raised by smoothing; "
-                  "%s: %.1f bytes per vertex (float order %d: %.1f), relative RMSE under the prior %.4g",
-                  stats.vertexCount, stats.meanOrder, stats.fullOrder, stats.meanCoefficients, stats.raisedBySmoothing,
+                  "adapt: %zu %s, mean order %.2f of %d (%.1f coefficients), %zu raised by smoothing; "
+                  "%s: %.1f bytes per row (float order %d: %.1f), relative RMSE under the prior %.4g",
+                  stats.vertexCount, texels ? "texels" : "vertices", stats.meanOrder, stats.fullOrder, stats.meanCoefficients, stats.raisedBySmoothing,
                   args.format.c_str(), double(stats.layerBytes) / double(stats.vertexCount), stats.fullOrder,
                   double(stats.fullLayerBytes) / double(stats.vertexCount), stats.relativeRmse);
     logInfo(line);

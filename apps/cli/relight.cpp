@@ -2,6 +2,7 @@
 // environment map or SH lighting.
 #include "cli.h"
 
+#include "bake.h"
 #include "compare.h"
 #include "core.h"
 #include "envlight.h"
@@ -39,19 +40,77 @@ struct RelightOptions {
     SpecularRelightArgs specular; // --brdf: relight_specular.cpp
 };
 
+// What the hybrid relights: rows (vertices, or texels of a bake) and, for the cone visibility, where each row lies
+// and the mesh whose shadows fall on it.
+struct HybridRows {
+    HybridModel model;
+    TriMesh mesh;
+    std::vector<float> points, spawn; // [rows][3]; spawn empty: the normals (points inside triangles)
+    int width = 0, height = 0;        // texels: the atlas
+    std::vector<uint8_t> covered;     // texels: 1 where the bake sampled the surface
+};
+
+HybridRows hybridRows(const RelightOptions& options) {
+    HybridRows rows;
+    Bundle bundle = readBundle(options.bundle);
+    if (!options.texels) {
+        rows.mesh = bundle.mesh;
+        rows.model = hybridModel(std::move(bundle), options.bundle);
+        rows.points = rows.mesh.positions;
+        rows.spawn = spawnNormals(rows.mesh);
+        return rows;
+    }
+    const Layer* transfer = findLayer(bundle, "texel_transfer");
+    if (transfer && transfer->params.contains("high"))
+        throw Error(options.bundle, "layer \"texel_transfer\", params.high",
+                    "the bake sampled a high-resolution mesh, whose shadows the texel hybrid's cone visibility would "
+                    "need; only bakes of one mesh are supported");
+    rows.mesh = std::move(bundle.mesh);
+    TexelHybridModel texels = loadTexelHybridModel(options.bundle);
+    rows.model = std::move(texels.rows);
+    rows.points = std::move(texels.positions);
+    rows.width = texels.width;
+    rows.height = texels.height;
+    rows.covered = std::move(texels.covered);
+    return rows;
+}
+
+// Each cone's visibility per row ([rows][lights]) by Embree. Texels: cast at covered texels, then gutters filled by
+// push-pull as the bake fills the transfer's, so that filtered lookups across chart borders stay smooth.
+std::vector<float> hybridVisibility(const HybridRows& rows, const std::vector<envlight::ConeLight>& cones, int samples,
+                                    uint64_t* rays) {
+    const size_t count = rows.model.total.vertexCount;
+    if (samples == 0 || cones.empty()) return std::vector<float>(count * cones.size(), 1.0f);
+    const float* normals = rows.model.normals.data();
+    if (rows.covered.empty())
+        return envlight::coneVisibility(rows.mesh, rows.points.data(), normals, rows.spawn.data(), count, cones,
+                                        samples, rays);
+    std::vector<size_t> texels;
+    std::vector<float> points, coveredNormals;
+    for (size_t t = 0; t < count; ++t)
+        if (rows.covered[t]) {
+            texels.push_back(t);
+            points.insert(points.end(), &rows.points[3 * t], &rows.points[3 * t] + 3);
+            coveredNormals.insert(coveredNormals.end(), normals + 3 * t, normals + 3 * t + 3);
+        }
+    std::vector<float> visible = envlight::coneVisibility(rows.mesh, points.data(), coveredNormals.data(), nullptr,
+                                                          texels.size(), cones, samples, rays);
+    std::vector<float> visibility(count * cones.size(), 0.0f);
+    for (size_t i = 0; i < texels.size(); ++i)
+        std::copy(&visible[i * cones.size()], &visible[(i + 1) * cones.size()], &visibility[texels[i] * cones.size()]);
+    pushPull(visibility.data(), rows.width, rows.height, int(cones.size()), rows.covered.data());
+    return visibility;
+}
+
 // The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
 // an engine's shadow maps.
 void runHybridRelight(const RelightOptions& options, double start) {
-    if (options.texels)
-        throw Error("", "--lights", "the texel variant of the hybrid needs per-texel normals and bounce layers, which "
-                                    "bake bundles do not carry yet", kExitUsage);
     if (!options.shJson.empty()) throw Error("", "--lights", "give --lights or --sh, not both", kExitUsage);
     if (options.lightSamples < 0 || options.lightSamples > 65536)
         throw Error("", "--light-samples", "outside 0..65536", kExitUsage);
     sh::Window window = sh::parseWindow(options.window);
-    Bundle bundle = readBundle(options.bundle);
-    TriMesh mesh = bundle.mesh;
-    HybridModel model = hybridModel(std::move(bundle), options.bundle);
+    HybridRows rows = hybridRows(options);
+    HybridModel& model = rows.model;
     HybridLighting lighting = readHybridLightingJson(options.lights);
     checkHybridOrder(model, lighting, options.lights);
     if (!options.env.empty()) {
@@ -69,7 +128,10 @@ void runHybridRelight(const RelightOptions& options, double start) {
         lighting = rotateHybridLighting(lighting, R);
     }
     sh::applyWindow(window, lighting.order, lighting.residual.data(), 3);
-    lighting.bounceWindow = sh::parseWindow(options.bounceWindow);
+    if (options.bounceWindow == "off")
+        model.bounce.clear();
+    else
+        lighting.bounceWindow = sh::parseWindow(options.bounceWindow);
 
     double visibilityStart = nowSeconds();
     std::vector<envlight::ConeLight> cones;
@@ -78,11 +140,7 @@ void runHybridRelight(const RelightOptions& options, double start) {
                          {light.radiance[0], light.radiance[1], light.radiance[2]},
                          light.angularRadius});
     uint64_t rays = 0;
-    std::vector<float> visibility =
-        options.lightSamples == 0
-            ? std::vector<float>(size_t(model.total.vertexCount) * cones.size(), 1.0f)
-            : envlight::coneVisibility(mesh, mesh.positions.data(), model.normals.data(), spawnNormals(mesh).data(),
-                                       model.total.vertexCount, cones, options.lightSamples, &rays);
+    std::vector<float> visibility = hybridVisibility(rows, cones, options.lightSamples, &rays);
     double visibilitySeconds = nowSeconds() - visibilityStart;
 
     double relightStart = nowSeconds();
@@ -91,15 +149,27 @@ void runHybridRelight(const RelightOptions& options, double start) {
     double relightSeconds = nowSeconds() - relightStart;
     char line[240];
     std::snprintf(line, sizeof line,
-                  "relight: hybrid, %u vertices, order %d, %zu lights, %s bounce layer: relight %.3f ms, cone "
+                  "relight: hybrid, %u %s, order %d, %zu lights, %s bounce layer: relight %.3f ms, cone "
                   "visibility %.1f ms (%llu rays)",
-                  model.total.vertexCount, model.total.order, cones.size(), model.bounce.empty() ? "no" : "with",
-                  relightSeconds * 1e3, visibilitySeconds * 1e3, (unsigned long long)rays);
+                  model.total.vertexCount, options.texels ? "texels" : "vertices", model.total.order, cones.size(),
+                  model.bounce.empty() ? "no" : "with", relightSeconds * 1e3, visibilitySeconds * 1e3,
+                  (unsigned long long)rays);
     logInfo(line);
-    if (model.bounce.empty() && !cones.empty())
-        logWarn("relight: the bundle has no \"transfer_bounce\" layer, so the lights light only directly (their "
-                "interreflected light is lost); make it with `prt transfer --mode interreflected`");
-    writeVertexRadiance(options.output, radiance);
+    if (model.bounce.empty() && !cones.empty() && options.bounceWindow != "off")
+        logWarn(options.texels
+                    ? "relight: the bake has no \"texel_transfer_bounce\" layer, so the lights light only directly "
+                      "(their interreflected light is lost); bake with --bounces"
+                    : "relight: the bundle has no \"transfer_bounce\" layer, so the lights light only directly "
+                      "(their interreflected light is lost); make it with `prt transfer --mode interreflected`");
+    if (options.texels) {
+        Image image;
+        image.width = rows.width;
+        image.height = rows.height;
+        image.rgb = std::move(radiance);
+        writeImage(options.output, image); // float EXR, atomic
+    } else {
+        writeVertexRadiance(options.output, radiance);
+    }
     logInfo("relight: wrote " + options.output);
     nlohmann::json record = {{"relight_seconds", relightSeconds}, {"visibility_seconds", visibilitySeconds},
                              {"visibility_rays", rays}, {"lights", cones.size()}};
@@ -271,7 +341,8 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--light-samples", options->lightSamples,
                         "Occlusion rays per vertex and light over each cone, for --lights (default 64; 0: unshadowed)");
     command->add_option("--bounce-window", options->bounceWindow,
-                        "With --lights: window on the lights' SH where they meet the bounce layer: none, hann (default), lanczos");
+                        "With --lights: window on the lights' SH where they meet the bounce layer: none, hann (default), "
+                        "lanczos; or off: the lights light only directly (to measure what their bounce adds)");
     command->add_option("-o,--output", options->output,
                         "Per-vertex radiance [V,3]: .npy (float32) or .csv; with --texels an RGB float .exr atlas")
         ->required();

@@ -155,8 +155,13 @@ struct AdaptStats {
     std::vector<SeamMeasure> seams;  // ragged formats, per lighting: the stored transfer against the input's
 };
 
+// The texel grid as triangles over texel indices (two per 2 x 2 block), so that smoothOrders and seamMeasure grade
+// and measure texel neighbours as they do mesh edges.
+std::vector<uint32_t> gridTriangles(int width, int height);
+
 // Replaces the bundle's "transfer" layer (vertex, sh_transfer_rgb) by the adaptive layers of docs/bundle.md
-// ("Adaptive transfer"). `lightings` is the prior ([L*L][3] each, L the transfer's order); it may be empty only
+// ("Adaptive transfer"); or a bake's "texel_transfer" (its rows held in the layer's data, params width and height)
+// by the same layers of domains texel, texel_offsets, texel_ragged and texel_bands, graded over the texel grid. `lightings` is the prior ([L*L][3] each, L the transfer's order); it may be empty only
 // with options.order (and, for CPCA, options.components) given. Errors in the stats are against the input. Throws prt::Error
 // naming `source` for a bundle without a usable transfer layer. Returns what it did.
 AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& lightings, const AdaptOptions& options,

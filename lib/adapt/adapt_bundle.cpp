@@ -60,21 +60,51 @@ const char* priorName(Prior prior) { return prior == Prior::Maps ? "maps" : "wor
 
 } // namespace
 
+std::vector<uint32_t> gridTriangles(int width, int height) {
+    std::vector<uint32_t> triangles;
+    for (int y = 0; y + 1 < height; ++y)
+        for (int x = 0; x + 1 < width; ++x) {
+            const uint32_t i = uint32_t(y) * width + x, right = i + 1, below = i + width;
+            triangles.insert(triangles.end(), {i, right, below, right, below + 1, below});
+        }
+    return triangles;
+}
+
 AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& inputLightings, const AdaptOptions& options,
                        const std::string& source) {
     auto found = std::find_if(bundle.layers.begin(), bundle.layers.end(), [](const Layer& l) { return l.name == "transfer"; });
     if (found == bundle.layers.end())
-        throw Error(source, "PRT_bundle", "no full-order \"transfer\" layer to adapt (run `prt transfer` to make one)");
+        found = std::find_if(bundle.layers.begin(), bundle.layers.end(),
+                             [](const Layer& l) { return l.name == "texel_transfer"; });
+    if (found == bundle.layers.end())
+        throw Error(source, "PRT_bundle", "no full-order \"transfer\" (or \"texel_transfer\") layer to adapt (run `prt "
+                                          "transfer` or `prt bake` to make one)");
     Layer input = std::move(*found);
     bundle.layers.erase(found);
-    const size_t V = bundle.mesh.vertexCount();
+    // Rows are vertices, whose neighbours are the mesh's edges, or texels of a bake, neighbours on the texel grid.
+    const bool texels = input.name == "texel_transfer";
+    const std::string domain = texels ? "texel" : "vertex";
+    const std::string place = "layer \"" + input.name + "\"";
+    int width = 0, height = 0;
+    if (texels) {
+        auto side = [&](const char* key) {
+            const nlohmann::json& value = input.params.contains(key) ? input.params[key] : nlohmann::json();
+            if (!value.is_number_integer() || value.get<int64_t>() < 1 || value.get<int64_t>() > 65536)
+                throw Error(source, place + ", params." + key, "is missing or not a size in 1..65536");
+            return int(value.get<int64_t>());
+        };
+        width = side("width"), height = side("height");
+    }
+    const size_t V = texels ? size_t(width) * height : bundle.mesh.vertexCount();
+    const std::vector<uint32_t> triangles = texels ? gridTriangles(width, height) : triangles;
     int order = input.shape.size() == 3 ? int(std::lround(std::sqrt(double(input.shape[1])))) : 0;
-    if (input.domain != "vertex" || input.semantic != "sh_transfer_rgb" || input.shape.size() != 3 ||
+    if (input.domain != domain || input.semantic != "sh_transfer_rgb" || input.shape.size() != 3 ||
         input.shape[0] != V || input.shape[2] != 3 || order < 1 || order > sh::kMaxOrder ||
         uint64_t(order) * order != input.shape[1] || input.data.size() != V * input.shape[1] * 3)
-        throw Error(source, "layer \"transfer\"", "is not a vertex sh_transfer_rgb layer [V, L*L, 3] of float values");
+        throw Error(source, place, "is not a " + domain + " sh_transfer_rgb layer [rows, L*L, 3] of float values held in "
+                                   "the bundle (a bake's texture must be read into it first)");
     for (float value : input.data)
-        if (!std::isfinite(value)) throw Error(source, "layer \"transfer\"", "holds a value that is not finite");
+        if (!std::isfinite(value)) throw Error(source, place, "holds a value that is not finite");
     const uint64_t inputBytes = uint64_t(input.data.size()) * 4;
     const std::vector<float> inputFull = input.data;
     const int inputOrder = order;
@@ -116,6 +146,7 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
                              {"budget", options.perVertexBudget ? "vertex" : "rms"},
                              {"lightings", options.lightingNames},
                              {"transfer", input.params}};
+    if (texels) params["width"] = width, params["height"] = height;
     std::vector<Layer> added;
 
     if (options.format == Format::Cpca) {
@@ -142,10 +173,10 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
         params["components"] = cpca.components;
         params["cluster_layer"] = "transfer_cpca_cluster";
         params["weights_layer"] = "transfer_cpca_weights";
-        Layer cluster = makeLayer("transfer_cpca_cluster", "vertex", "cluster_index", {V},
+        Layer cluster = makeLayer("transfer_cpca_cluster", domain, "cluster_index", {V},
                                   clusters <= 65536 ? "uint16" : "uint32");
         cluster.integers = cpca.cluster;
-        Layer weights = makeLayer("transfer_cpca_weights", "vertex", "cpca_weights", {V, uint64_t(cpca.components)},
+        Layer weights = makeLayer("transfer_cpca_weights", domain, "cpca_weights", {V, uint64_t(cpca.components)},
                                   "float32");
         weights.data = std::move(cpca.weights);
         Layer basis = makeLayer("transfer_cpca_basis", "cluster", "cpca_mean_basis",
@@ -160,14 +191,14 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
             if (options.perVertexBudget) {
                 std::vector<float> error = truncationError(full.data(), V, order, lightings, options.prior);
                 orders = selectOrders(error, V, order, options.maxError);
-                stats.raisedBySmoothing = smoothOrders(bundle.mesh.indices, orders, options.maxStep);
+                stats.raisedBySmoothing = smoothOrders(triangles, orders, options.maxStep);
             } else {
                 // Truncation error is not monotone in the order (bands can cancel), so grading can overshoot the
                 // budget: then spend a smaller one until the graded field fits (at worst the full order, exact).
                 std::vector<double> error = truncationErrorSquared(full.data(), V, order, lightings, options.prior);
                 for (double budget = options.maxError;; budget *= 0.9) {
                     orders = budgetOrders(error, lightings.size(), V, order, budget < 1e-4 * options.maxError ? 0.0 : budget);
-                    stats.raisedBySmoothing = smoothOrders(bundle.mesh.indices, orders, options.maxStep);
+                    stats.raisedBySmoothing = smoothOrders(triangles, orders, options.maxStep);
                     std::vector<float> truncated = denseTransfer(raggedTransfer(full.data(), V, order, orders));
                     if (budget < 1e-4 * options.maxError ||
                         priorRelativeRmse(truncated.data(), full.data(), V, order, lightings) <= options.maxError)
@@ -184,12 +215,12 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
         params["offsets"] = "transfer_offsets";
         params["max_step"] = options.maxStep;
 
-        Layer offsets = makeLayer("transfer_offsets", "vertex_offsets", "sh_coefficient_offsets", {V + 1}, "uint32");
+        Layer offsets = makeLayer("transfer_offsets", domain + "_offsets", "sh_coefficient_offsets", {V + 1}, "uint32");
         offsets.integers = ragged.offsets;
         const uint64_t rows = ragged.offsets[V];
         std::vector<float> stored;
         if (options.format == Format::Float || options.format == Format::Half) {
-            Layer data = makeLayer("transfer_ragged", "vertex_ragged", "sh_transfer_rgb", {rows, 3},
+            Layer data = makeLayer("transfer_ragged", domain + "_ragged", "sh_transfer_rgb", {rows, 3},
                                    options.format == Format::Float ? "float32" : "float16");
             data.data = ragged.values;
             if (options.format == Format::Half)
@@ -216,19 +247,19 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
             params["bits"] = bits;
             params["scales"] = options.perClusterScales ? "per-cluster" : "per-vertex";
             params["scale_layer"] = "transfer_band_scales";
-            Layer data = makeLayer("transfer_ragged", "vertex_ragged", "sh_transfer_rgb_quantised", {rows, 3},
+            Layer data = makeLayer("transfer_ragged", domain + "_ragged", "sh_transfer_rgb_quantised", {rows, 3},
                                    bits == 8 ? "uint8" : "uint16");
             data.integers = std::move(q.codes);
             Layer scales = options.perClusterScales
                                ? makeLayer("transfer_band_scales", "cluster", "sh_band_scales",
                                            {uint64_t(clusters), uint64_t(order)}, "float16")
-                               : makeLayer("transfer_band_scales", "vertex_bands", "sh_band_scales",
+                               : makeLayer("transfer_band_scales", domain + "_bands", "sh_band_scales",
                                            {uint64_t(q.scales.size())}, "float16");
             scales.data = std::move(q.scales);
             if (options.perClusterScales) {
                 params["cluster_layer"] = "transfer_scale_cluster";
                 params["clusters"] = clusters;
-                Layer clusterLayer = makeLayer("transfer_scale_cluster", "vertex", "cluster_index", {V},
+                Layer clusterLayer = makeLayer("transfer_scale_cluster", domain, "cluster_index", {V},
                                                clusters <= 65536 ? "uint16" : "uint32");
                 clusterLayer.integers = std::move(cluster);
                 added.push_back(std::move(clusterLayer));
@@ -252,7 +283,7 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
                     }
                     a[v * 3 + c] = float(sa), f[v * 3 + c] = float(sf);
                 }
-            stats.seams.push_back(seamMeasure(bundle.mesh.indices, orders, a.data(), f.data()));
+            stats.seams.push_back(seamMeasure(triangles, orders, a.data(), f.data()));
         }
     }
     for (Layer& layer : added) {

@@ -1,18 +1,16 @@
-// The `prt bake` stage: validate everything, bake per-texel transfer (all texels, or one shard's range), fill,
-// stitch, write textures then the bundle; or join shards and finish as the unsharded bake does.
+// The bake's computation: validate everything, bake per-texel transfer (all texels, or one shard's range), fill and
+// stitch. stage.cpp writes the results.
 #include "bake.h"
 
 #include "core.h"
 #include "image.h"
+#include "runtime.h"
 #include "sh.h"
 #include "transfer.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
-#include <functional>
-#include <unistd.h>
 
 namespace prt {
 
@@ -81,66 +79,6 @@ std::vector<float> scatter(const TexelSamples& samples, const float* rows, int c
     return atlas;
 }
 
-// The textures of one bake. Each is named by its content (NAME.KIND.<16 hex>.EXT), so a new bake never
-// overwrites a file the previous bundle references: until the new bundle replaces it, the last good result stays
-// whole, and a failure removes only the files this bake created. Once committed, the previous bundle's textures
-// that the new one does not use are removed.
-struct WrittenFiles {
-    std::vector<std::string> paths;   // every texture the new bundle references
-    std::vector<std::string> created; // those that did not exist before
-    std::vector<std::string> previous; // the textures of the bundle being replaced
-    bool committed = false;
-    ~WrittenFiles() {
-        if (committed) {
-            for (const std::string& path : previous)
-                if (std::find(paths.begin(), paths.end(), path) == paths.end()) std::remove(path.c_str());
-            return;
-        }
-        for (const std::string& path : created) std::remove(path.c_str());
-    }
-};
-
-// Writes a texture through `write` (into a hidden temporary file with the right extension, which the writer needs)
-// and moves it to BASE.KIND.<first 16 hex digits of its content hash>.EXTENSION; returns that path.
-std::string writeContentAddressed(const std::string& base, const std::string& kind, const std::string& extension,
-                                  WrittenFiles& written, const std::function<void(const std::string&)>& write) {
-    std::filesystem::path stem(base);
-    std::string tmp = (stem.parent_path() / ("." + stem.filename().string() + "." + kind + ".tmp-" +
-                                             std::to_string(getpid()) + "." + extension)).string();
-    write(tmp);
-    std::string hash = hashFile(tmp);
-    std::string path = base + "." + kind + "." + hash.substr(hash.find(':') + 1, 16) + "." + extension;
-    std::error_code error;
-    if (std::filesystem::exists(path, error)) {
-        std::remove(tmp.c_str()); // the same name holds the same bytes
-    } else {
-        std::filesystem::rename(tmp, path);
-        written.created.push_back(path);
-    }
-    written.paths.push_back(path);
-    return path;
-}
-
-// The external files of the bundle at `path` (params.files of its layers), if it is a readable bundle.
-std::vector<std::string> bundleTextures(const std::string& path) {
-    std::vector<std::string> files;
-    std::error_code error;
-    if (!std::filesystem::exists(path, error)) return files;
-    try {
-        std::filesystem::path folder = std::filesystem::path(path).parent_path();
-        for (const Layer& layer : readBundle(path).layers)
-            if (layer.params.contains("files") && layer.params["files"].is_array())
-                for (const nlohmann::json& name : layer.params["files"])
-                    if (name.is_string() && std::filesystem::path(name.get<std::string>()).filename() == name.get<std::string>())
-                        files.push_back((folder / name.get<std::string>()).string());
-    } catch (const Error&) {
-        // Not a bundle we can read: nothing of it to clean up.
-    }
-    return files;
-}
-
-std::string fileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
-
 } // namespace
 
 BakeSurface bakeSurface(const BakeOptions& options) {
@@ -201,7 +139,8 @@ BakeSurface bakeSurface(const BakeOptions& options) {
         surface.detailNormals = projection.normals;
         if (options.highPosition) positions = std::move(projection.positions);
         normals = std::move(projection.normals);
-        surface.highRecord = {{"mesh", fileName(options.high)}, {"hash", hashFile(options.high)},
+        surface.highRecord = {{"mesh", std::filesystem::path(options.high).filename().string()},
+                              {"hash", hashFile(options.high)},
                               {"cage", cage}, {"position", options.highPosition ? "high" : "low"},
                               {"misses", projection.misses}};
     }
@@ -220,6 +159,7 @@ TransferOptions texelTransferOptions(const BakeOptions& options) {
     transferOptions.albedoOverride = options.albedoOverride;
     transferOptions.seed = options.seed;
     transferOptions.threads = options.threads;
+    transferOptions.keepDirect = options.bounces > 0; // the bounce layer: what the hybrid sends cone lights through
     return transferOptions;
 }
 
@@ -274,12 +214,56 @@ TexelTransferRows bakeTexelTransfer(const BakeSurface& surface, const BakeOption
         stats.bareRaysPerSecond = bare.seconds > 0.0 ? bare.rays / bare.seconds : 0.0;
     }
     result.rows = std::move(transfer.coefficients);
+    if (!transfer.direct.empty()) {
+        result.bounce = std::move(transfer.direct);
+        for (size_t i = 0; i < result.bounce.size(); ++i) result.bounce[i] = result.rows[i] - result.bounce[i];
+    }
     result.rayOffset = transfer.stats.rayOffset;
     return result;
 }
 
-BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vector<float> rows, float rayOffset,
-                      BakeStats stats) {
+namespace {
+
+// Scales each texel's 3 channels starting at `first` to unit length; (0, 0, 1) where they vanish (far from every
+// chart, where nothing reads them).
+void normaliseTexels(float* texels, size_t count, int channels, int first) {
+    for (size_t t = 0; t < count; ++t) {
+        float* n = texels + t * channels + first;
+        double length = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+        if (length > 1e-6)
+            for (int a = 0; a < 3; ++a) n[a] = float(n[a] / length);
+        else
+            n[0] = n[1] = 0.0f, n[2] = 1.0f;
+    }
+}
+
+// The "texel_surface" atlas: receivers' positions, normals and albedo, gutters filled, coverage exact.
+// Needs the bake's mesh and samples and its receivers' positions and normals ([covered texel][3]).
+std::vector<float> surfaceAtlas(const TriMesh& mesh, const TexelSamples& samples, const std::vector<float>& positions,
+                                const std::vector<float>& normals, const BakeOptions& options, const uint8_t* covered) {
+    const size_t count = samples.texel.size();
+    std::vector<float> albedo = sampleAlbedo(mesh, samples, options.albedoOverride);
+    std::vector<float> rows(count * kTexelSurfaceChannels);
+    for (size_t i = 0; i < count; ++i) {
+        float* row = &rows[i * kTexelSurfaceChannels];
+        for (int a = 0; a < 3; ++a) {
+            row[a] = positions[3 * i + a];
+            row[3 + a] = normals[3 * i + a];
+            row[6 + a] = albedo.empty() ? options.albedo[a] : albedo[3 * i + a];
+        }
+    }
+    std::vector<float> atlas = scatter(samples, rows.data(), kTexelSurfaceChannels);
+    const size_t texels = size_t(samples.width) * samples.height;
+    pushPull(atlas.data(), samples.width, samples.height, kTexelSurfaceChannels, covered);
+    normaliseTexels(atlas.data(), texels, kTexelSurfaceChannels, 3);
+    for (size_t t = 0; t < texels; ++t) atlas[t * kTexelSurfaceChannels + 9] = covered[t] ? 1.0f : 0.0f;
+    return atlas;
+}
+
+} // namespace
+
+BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vector<float> rows,
+                      std::vector<float> bounce, float rayOffset, BakeStats stats) {
     const int size = options.resolution;
     const int channels = 3 * options.order * options.order;
     BakedAtlas baked;
@@ -288,38 +272,36 @@ BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vect
     const TriMesh& mesh = baked.mesh;
     const TexelSamples& samples = baked.samples;
     const size_t count = samples.texel.size();
-    if (rows.size() != count * channels)
+    if (rows.size() != count * channels || (options.bounces > 0 && bounce.size() != rows.size()))
         throw Error("", "bake", "finishing needs the rows of all " + std::to_string(count) + " covered texels",
                     kExitFailure);
     stats.texels = count;
 
     // Atlas images: fill the gutters, then make seams agree (lookups on chart borders read the gutters).
-    baked.transfer = scatter(samples, rows.data(), channels);
-    rows = {};
     std::vector<uint8_t> covered = coverageMask(samples);
-    double fillStart = nowSeconds();
-    if (options.dilateOnly)
-        dilateOneRing(baked.transfer.data(), size, size, channels, covered.data());
-    else
-        pushPull(baked.transfer.data(), size, size, channels, covered.data());
-    stats.fillSeconds = nowSeconds() - fillStart;
     std::vector<SeamEdge> seams = findSeams(mesh);
     stats.seamEdges = seams.size();
-    if (options.seamStitch)
-        stats.stitchedTexels = stitchSeams(mesh, seams, size, size, baked.transfer.data(), channels);
+    auto atlasOf = [&](std::vector<float>& part) {
+        std::vector<float> atlas = scatter(samples, part.data(), channels);
+        part = {};
+        double fillStart = nowSeconds();
+        if (options.dilateOnly)
+            dilateOneRing(atlas.data(), size, size, channels, covered.data());
+        else
+            pushPull(atlas.data(), size, size, channels, covered.data());
+        stats.fillSeconds += nowSeconds() - fillStart;
+        if (options.seamStitch) stats.stitchedTexels = stitchSeams(mesh, seams, size, size, atlas.data(), channels);
+        return atlas;
+    };
+    baked.transfer = atlasOf(rows);
+    if (!bounce.empty()) baked.bounce = atlasOf(bounce);
+    baked.surface = surfaceAtlas(mesh, samples, surface.positions, surface.normals, options, covered.data());
 
     std::vector<float> tangentNormals =
         tangentSpaceNormals(mesh, vertexTangents(mesh), samples, surface.detailNormals);
     baked.normals = scatter(samples, tangentNormals.data(), 3);
     pushPull(baked.normals.data(), size, size, 3, covered.data());
-    for (size_t t = 0; t < baked.normals.size() / 3; ++t) {
-        float* n = &baked.normals[3 * t];
-        double length = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
-        if (length > 1e-6)
-            for (int a = 0; a < 3; ++a) n[a] = float(n[a] / length);
-        else
-            n[0] = n[1] = 0.0f, n[2] = 1.0f; // far from every chart: flat
-    }
+    normaliseTexels(baked.normals.data(), baked.normals.size() / 3, 3, 0);
 
     baked.params = {{"width", size},
                     {"height", size},
@@ -349,171 +331,8 @@ BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vect
 BakedAtlas bakeAtlas(const BakeOptions& options) {
     BakeSurface surface = bakeSurface(options);
     TexelTransferRows rows = bakeTexelTransfer(surface, options, 0, surface.samples.texel.size());
-    return finishBake(std::move(surface), options, std::move(rows.rows), rows.rayOffset, rows.stats);
-}
-
-namespace {
-
-void reportBakeCost(double start, const BakeStats& stats) {
-    StageCost cost;
-    cost.stage = "bake";
-    cost.seconds = nowSeconds() - start;
-    cost.rays = stats.rays + stats.cageRays;
-    cost.peakMemoryBytes = peakMemoryBytes();
-    reportCost(cost);
-}
-
-// One shard: the transfer of its range of covered texels, written as a texel_range bundle.
-void runBakeShard(const BakeOptions& options, double start) {
-    BakeSurface surface = bakeSurface(options);
-    RowRange range = shardRows(surface.samples.texel.size(), options.shardIndex, options.shardCount);
-    TexelTransferRows rows = bakeTexelTransfer(surface, options, range.begin, range.end);
-    writeTexelShard(options, surface, rows);
-    logInfo("bake: wrote shard " + std::to_string(options.shardIndex) + "/" + std::to_string(options.shardCount) +
-            " (covered texels " + std::to_string(range.begin) + ".." + std::to_string(range.end) + ") to " +
-            options.output);
-    reportBakeCost(start, rows.stats);
-}
-
-// The merge: every shard's rows joined, then the unsharded bake's finishing.
-BakedAtlas bakeFromShards(const BakeOptions& options) {
-    BakeSurface surface = bakeSurface(options);
-    float rayOffset = 0.0f;
-    std::vector<float> rows = joinTexelShards(options, surface, rayOffset);
-    BakeStats stats;
-    stats.cageRays = surface.cageRays;
-    logInfo("bake: joined " + std::to_string(options.shardFiles.size()) + " shards");
-    return finishBake(std::move(surface), options, std::move(rows), rayOffset, stats);
-}
-
-} // namespace
-
-void runBake(const BakeOptions& options) {
-    double start = nowSeconds();
-    if (fileExtension(options.output) != "glb") throw usage("-o", "the output bundle must end in .glb");
-    if (options.shardCount < 1 || options.shardIndex < 0 || options.shardIndex >= options.shardCount)
-        throw usage("--shard", std::to_string(options.shardIndex) + "/" + std::to_string(options.shardCount) +
-                                   " is not I/N with 0 <= I < N");
-    if (options.shardCount > 1 && !options.shardFiles.empty())
-        throw usage("--merge", "joins the shards of a bake; it does not go with --shard");
-    if (options.shardCount > 1) return runBakeShard(options, start);
-    BakedAtlas baked = options.shardFiles.empty() ? bakeAtlas(options) : bakeFromShards(options);
-    const BakeStats& stats = baked.stats;
-    const int size = options.resolution;
-    const int coefficients = options.order * options.order;
-    const int channels = 3 * coefficients;
-    const size_t texelCount = size_t(size) * size;
-
-    // Textures first, the bundle that references them last.
-    std::string base = options.output.substr(0, options.output.size() - 4);
-    WrittenFiles written;
-    written.previous = bundleTextures(options.output);
-    Layer layer;
-    layer.name = "texel_transfer";
-    layer.domain = "texel";
-    layer.semantic = "sh_transfer_rgb";
-    layer.shape = {texelCount, uint64_t(coefficients), 3};
-    layer.params = baked.params;
-    layer.params["format"] = texelFormatName(options.format);
-    uint64_t storedBytes = 0;
-    std::string transferPath;
-    if (options.format == TexelFormat::Bundle) {
-        // The rows in the bundle's own buffer: the thin runtime (texelRelightModel) and the viewer read them.
-        layer.data = baked.transfer;
-        storedBytes = layer.data.size() * sizeof(float);
-    } else {
-        if (options.format == TexelFormat::U8) {
-            RangeCompressed compressed = rangeCompress(baked.transfer.data(), texelCount, coefficients, 3);
-            nlohmann::json layers = nlohmann::json::array();
-            std::vector<uint8_t> plane(texelCount * 3);
-            for (int j = 0; j < coefficients; ++j) {
-                for (size_t t = 0; t < texelCount; ++t)
-                    for (int c = 0; c < 3; ++c) plane[3 * t + c] = compressed.values[t * channels + 3 * j + c];
-                char kind[32];
-                std::snprintf(kind, sizeof kind, "transfer.T%03d", j);
-                std::string path = writeContentAddressed(base, kind, "png", written, [&](const std::string& tmp) {
-                    writeImagePixels(tmp, size, size, {"R", "G", "B"}, plane.data());
-                });
-                storedBytes += std::filesystem::file_size(path);
-                layers.push_back({{"coefficient", j}, {"uri", fileName(path)}, {"hash", hashFile(path)},
-                                  {"min", compressed.range[2 * j]}, {"max", compressed.range[2 * j + 1]}});
-            }
-            nlohmann::json sidecar = {{"format", "prt-texel-u8"}, {"version", 1}, {"width", size}, {"height", size},
-                                      {"order", options.order},
-                                      {"decode", "value = min + q * (max - min) / 255, per coefficient layer"},
-                                      {"layers", layers}};
-            transferPath = writeContentAddressed(base, "transfer", "json", written, [&](const std::string& tmp) {
-                writeBytesAtomic(tmp, sidecar.dump(2) + "\n");
-            });
-        } else {
-            transferPath = writeContentAddressed(base, "transfer", "exr", written, [&](const std::string& tmp) {
-                writeCoefficientExr(tmp, baked.transfer.data(), size, size, coefficients, options.format == TexelFormat::Half);
-            });
-            layer.params["channels"] = "T{j:03d}.{R,G,B} for coefficient j";
-        }
-        storedBytes += std::filesystem::file_size(transferPath);
-        layer.params["files"] = nlohmann::json::array();
-        for (const std::string& path : written.paths) layer.params["files"].push_back(fileName(path));
-        layer.params["uri"] = fileName(transferPath);
-        layer.params["hash"] = hashFile(transferPath);
-    }
-
-    std::vector<uint8_t> normalBytes(baked.normals.size());
-    for (size_t i = 0; i < normalBytes.size(); ++i)
-        normalBytes[i] = uint8_t(std::lround(std::clamp((double(baked.normals[i]) + 1.0) * 127.5, 0.0, 255.0)));
-    std::string normalPath = writeContentAddressed(base, "normal", "png", written, [&](const std::string& tmp) {
-        writeImagePixels(tmp, size, size, {"R", "G", "B"}, normalBytes.data());
-    });
-    Layer normalLayer;
-    normalLayer.name = "normal_map";
-    normalLayer.domain = "texel";
-    normalLayer.semantic = "tangent_normal";
-    normalLayer.shape = {texelCount, 3};
-    normalLayer.params = {{"uri", fileName(normalPath)},
-                          {"files", {fileName(normalPath)}},
-                          {"hash", hashFile(normalPath)},
-                          {"width", size},
-                          {"height", size},
-                          {"uv_set", 0},
-                          {"encoding", "rgb8 = round((n + 1) * 127.5)"},
-                          {"frame", "x along +u, y along -v (image up), z the interpolated vertex normal"},
-                          {"source", options.high.empty() ? "low mesh normals" : "high mesh normals"}};
-
-    Bundle bundle;
-    bundle.mesh = std::move(baked.mesh);
-    bundle.layers.push_back(std::move(layer));
-    bundle.layers.push_back(std::move(normalLayer));
-    bundle.producer = {{"tool", "prt"}, {"version", options.toolVersion}, {"stage", "bake"}};
-    bundle.inputs = {{"mesh", hashFile(options.input)}};
-    if (!options.high.empty()) bundle.inputs["high"] = hashFile(options.high);
-    bundle.convention = conventionRecord();
-    writeBundle(options.output, bundle); // atomic: on failure neither it nor (below) the textures remain
-    written.committed = true;
-
-    double texelsPerSecond = stats.transferSeconds > 0.0 ? stats.texels / stats.transferSeconds : 0.0;
-    double raysPerSecond = stats.directSeconds > 0.0 ? stats.rays / stats.directSeconds : 0.0;
-    logInfo("bake: wrote " + options.output + " and " + std::to_string(written.paths.size()) + " texture files (" +
-            std::to_string(storedBytes) + " bytes of " + texelFormatName(options.format) + " coefficients); " +
-            std::to_string(texelsPerSecond) + " texels/s, " + std::to_string(raysPerSecond / 1e6) +
-            " Mrays/s, fill " + std::to_string(stats.fillSeconds) + " s, " + std::to_string(stats.seamEdges) +
-            " seam edges, " + std::to_string(stats.stitchedTexels) + " texels stitched");
-    bool yardstick = options.yardstick && options.shardFiles.empty(); // a merge casts no transfer rays
-    if (yardstick)
-        logInfo("bake: bare Embree over the same rays: " + std::to_string(stats.bareRaysPerSecond / 1e6) +
-                " Mrays/s; the bake reached " + std::to_string(raysPerSecond / stats.bareRaysPerSecond) + " of it");
-    nlohmann::json record = {{"texels", stats.texels},
-                             {"texels_per_second", texelsPerSecond},
-                             {"rays", stats.rays},
-                             {"rays_per_second", raysPerSecond},
-                             {"transfer_seconds", stats.transferSeconds},
-                             {"fill_seconds", stats.fillSeconds},
-                             {"seam_edges", stats.seamEdges},
-                             {"stitched_texels", stats.stitchedTexels},
-                             {"stored_bytes", storedBytes}};
-    if (yardstick) record["bare_rays_per_second"] = stats.bareRaysPerSecond;
-    logEvent("bake_stats", record.dump());
-
-    reportBakeCost(start, stats);
+    return finishBake(std::move(surface), options, std::move(rows.rows), std::move(rows.bounce), rows.rayOffset,
+                      rows.stats);
 }
 
 } // namespace prt

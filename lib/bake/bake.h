@@ -269,6 +269,9 @@ struct BakedAtlas {
     TriMesh mesh;                    // the low mesh with the atlas as texcoords (generated when it had none)
     TexelSamples samples;
     std::vector<float> transfer;     // [width * height][order^2][3]: filled and stitched
+    std::vector<float> bounce;       // the same for what the bounces add (transfer minus the direct part);
+                                     // empty without bounces. Filled and stitched alike (both are linear).
+    std::vector<float> surface;      // [width * height][kTexelSurfaceChannels] (runtime.h, "texel_surface"), filled
     std::vector<float> normals;      // [width * height][3]: tangent-space unit normals, filled
     nlohmann::json params;           // what the texel layer records about the bake (docs/bundle.md)
     BakeStats stats;
@@ -297,15 +300,17 @@ BakeSurface bakeSurface(const BakeOptions& options);
 struct TexelTransferRows {
     size_t begin = 0, end = 0; // covered texels
     std::vector<float> rows;   // [end - begin][order^2][3]
+    std::vector<float> bounce; // the same for the bounces' part (rows minus the direct pass); empty without bounces
     float rayOffset = 0.0f;
     BakeStats stats;           // rays, transferSeconds, directSeconds, bareRaysPerSecond
 };
 TexelTransferRows bakeTexelTransfer(const BakeSurface& surface, const BakeOptions& options, size_t begin,
                                     size_t end);
 
-// Needs rows of every covered texel ([covered][order^2][3]) from bakeTexelTransfer with these options.
-BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vector<float> rows, float rayOffset,
-                      BakeStats stats);
+// Needs rows of every covered texel ([covered][order^2][3]) from bakeTexelTransfer with these options, and their
+// bounce rows (empty without bounces).
+BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vector<float> rows,
+                      std::vector<float> bounce, float rayOffset, BakeStats stats);
 
 BakedAtlas bakeAtlas(const BakeOptions& options);
 
@@ -327,10 +332,12 @@ nlohmann::json texelShardIdentity(const BakeOptions& options, const BakeSurface&
 // "texel_range" holding the rows, params = identity + {shard: [I, N], row_begin, row_end, ray_offset}.
 void writeTexelShard(const BakeOptions& options, const BakeSurface& surface, const TexelTransferRows& rows);
 
-// Reads options.shardFiles and joins their rows: [covered][order^2][3], and the ray offset they record.
+// Reads options.shardFiles and joins their rows: [covered][order^2][3], their bounce rows (the shards' layer
+// "texel_transfer_bounce", present with bounces > 0) into `bounce`, and the ray offset they record.
 // Needs shards 0..N-1 of one N, each once (any order), every identity member equal to this bake's, rows tiling
 // [0, covered) exactly. Throws prt::Error(shard file, place, problem, kExitInput) naming the first shard and
 // member that does not fit.
-std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface& surface, float& rayOffset);
+std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface& surface, float& rayOffset,
+                                   std::vector<float>& bounce);
 
 } // namespace prt

@@ -11,6 +11,7 @@ namespace prt {
 namespace {
 
 const char* const kShardLayer = "texel_transfer";
+const char* const kShardBounceLayer = "texel_transfer_bounce";
 
 // A shard's params member as text for messages ("(none)" when absent).
 std::string memberText(const nlohmann::json& params, const std::string& key) {
@@ -63,13 +64,22 @@ void writeTexelShard(const BakeOptions& options, const BakeSurface& surface, con
     Bundle bundle;
     bundle.mesh = surface.mesh;
     bundle.inputs = layer.params["inputs"];
+    Layer bounce;
+    bounce.name = kShardBounceLayer;
+    bounce.domain = "texel_range";
+    bounce.semantic = "sh_transfer_bounce_rgb";
+    bounce.shape = layer.shape;
+    bounce.data = rows.bounce;
+    bounce.params = {{"row_begin", rows.begin}, {"row_end", rows.end}};
     bundle.layers.push_back(std::move(layer));
+    if (!rows.bounce.empty()) bundle.layers.push_back(std::move(bounce));
     bundle.producer = {{"tool", "prt"}, {"version", options.toolVersion}, {"stage", "bake"}};
     bundle.convention = conventionRecord();
     writeBundle(options.output, bundle);
 }
 
-std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface& surface, float& rayOffset) {
+std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface& surface, float& rayOffset,
+                                   std::vector<float>& bounce) {
     const std::vector<std::string>& files = options.shardFiles;
     std::vector<Bundle> shards;
     std::vector<const Layer*> layers;
@@ -99,6 +109,7 @@ std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface
     const size_t rowWidth = size_t(3) * options.order * options.order;
     std::vector<float> rows;
     rows.reserve(texels * rowWidth);
+    bounce.clear();
     uint64_t next = 0;
     for (size_t index = 0; index < order.size(); ++index) {
         const std::string& file = files[order[index]];
@@ -126,6 +137,16 @@ std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface
                         "differs from shard 0's: the shards traced other geometry", kExitInput);
         rayOffset = offset;
         rows.insert(rows.end(), layer.data.begin(), layer.data.end());
+        if (options.bounces > 0) {
+            const Layer* bounceLayer = findLayer(shards[order[index]], kShardBounceLayer);
+            if (!bounceLayer || bounceLayer->domain != "texel_range" || bounceLayer->shape != layer.shape ||
+                bounceLayer->data.size() != layer.data.size())
+                throw Error(file, std::string("layer ") + kShardBounceLayer,
+                            "is missing or not shaped like the shard's transfer rows (a bake with bounces keeps "
+                            "their part apart)",
+                            kExitInput);
+            bounce.insert(bounce.end(), bounceLayer->data.begin(), bounceLayer->data.end());
+        }
         next = end;
     }
     if (next != texels)

@@ -53,15 +53,33 @@ int layerOrder(const Layer& layer, const std::string& source) {
     return int(order);
 }
 
+// The rows of adaptive layers of `domain` (vertex: the mesh's vertices; texel: params width x height of `layer`).
+size_t adaptiveRows(const Bundle& bundle, const Layer& layer, const std::string& domain, const std::string& source) {
+    if (domain == "vertex") return bundle.mesh.vertexCount();
+    const std::string place = "layer \"" + layer.name + "\"";
+    uint64_t rows = 1;
+    for (const char* key : {"width", "height"}) {
+        const nlohmann::json& value = layer.params.contains(key) ? layer.params[key] : nlohmann::json();
+        if (!value.is_number_integer() || value.get<int64_t>() < 1 || value.get<int64_t>() > 65536)
+            throw Error(source, place + ", params." + key, "is missing or not a size in 1..65536");
+        rows *= value.get<uint64_t>();
+    }
+    if (rows > std::numeric_limits<uint32_t>::max()) throw Error(source, place, "too many texels");
+    return size_t(rows);
+}
+
 RelightModel raggedModel(Bundle& bundle, const std::string& source) {
     Layer& data = const_cast<Layer&>(*findLayer(bundle, "transfer_ragged"));
     const std::string place = "layer \"transfer_ragged\"";
-    const size_t V = bundle.mesh.vertexCount();
-    if (data.domain != "vertex_ragged") throw Error(source, place, "domain \"" + data.domain + "\", expected vertex_ragged");
+    if (data.domain != "vertex_ragged" && data.domain != "texel_ragged")
+        throw Error(source, place, "domain \"" + data.domain + "\", expected vertex_ragged or texel_ragged");
+    const std::string domain = data.domain.substr(0, data.domain.find('_')); // vertex or texel
+    const size_t V = adaptiveRows(bundle, data, domain, source);
     const int order = layerOrder(data, source);
     const Layer& offsetsLayer = requireLayer(bundle, data.params, "offsets", source, place);
-    if (offsetsLayer.domain != "vertex_offsets")
-        throw Error(source, "layer \"" + offsetsLayer.name + "\"", "domain \"" + offsetsLayer.domain + "\", expected vertex_offsets");
+    if (offsetsLayer.domain != domain + "_offsets")
+        throw Error(source, "layer \"" + offsetsLayer.name + "\"", "domain \"" + offsetsLayer.domain + "\", expected " +
+                                                                   domain + "_offsets");
     requireShape(offsetsLayer, {V + 1}, "uint32", source);
     const std::vector<uint32_t>& offsets = offsetsLayer.integers;
     if (offsets[0] != 0) throw Error(source, "layer \"" + offsetsLayer.name + "\"", "does not start at 0");
@@ -112,12 +130,13 @@ RelightModel raggedModel(Bundle& bundle, const std::string& source) {
                     throw Error(source, "layer \"" + clusterLayer.name + "\", vertex " + std::to_string(v),
                                 "cluster index out of range");
             cluster = &clusterLayer.integers;
-        } else if (scales.domain == "vertex_bands") {
+        } else if (scales.domain == domain + "_bands") {
             uint64_t bands = 0;
             for (size_t v = 0; v < V; ++v) bands += uint64_t(std::lround(std::sqrt(double(offsets[v + 1] - offsets[v]))));
             requireShape(scales, {bands}, "", source);
         } else {
-            throw Error(source, "layer \"" + scales.name + "\"", "domain \"" + scales.domain + "\", expected vertex_bands or cluster");
+            throw Error(source, "layer \"" + scales.name + "\"", "domain \"" + scales.domain + "\", expected " + domain +
+                                                              "_bands or cluster");
         }
         checkFiniteRows(scales.data, 1, source, "layer \"" + scales.name + "\"", "scale");
         model.transfer.resize(rows * 3);
@@ -146,7 +165,8 @@ RelightModel raggedModel(Bundle& bundle, const std::string& source) {
 RelightModel cpcaModel(Bundle& bundle, const std::string& source) {
     const Layer& basis = *findLayer(bundle, "transfer_cpca_basis");
     const std::string place = "layer \"transfer_cpca_basis\"";
-    const size_t V = bundle.mesh.vertexCount();
+    const bool texels = basis.params.contains("width");
+    const size_t V = adaptiveRows(bundle, basis, texels ? "texel" : "vertex", source);
     const int order = layerOrder(basis, source);
     if (basis.semantic != "cpca_mean_basis" || basis.shape.size() != 4)
         throw Error(source, place, "is not a cpca_mean_basis layer [clusters, components + 1, L*L, 3]");
@@ -157,6 +177,9 @@ RelightModel cpcaModel(Bundle& bundle, const std::string& source) {
     const Layer& cluster = requireLayer(bundle, basis.params, "cluster_layer", source, place);
     requireShape(weights, {V, components}, "float32", source);
     requireShape(cluster, {V}, "", source);
+    for (const Layer* layer : {&weights, &cluster})
+        if (layer->domain != (texels ? "texel" : "vertex"))
+            throw Error(source, "layer \"" + layer->name + "\"", "domain \"" + layer->domain + "\" is not the basis's");
     checkFiniteRows(basis.data, dim, source, place, "row");
     checkFiniteRows(weights.data, components ? components : 1, source, "layer \"" + weights.name + "\"", "vertex");
     RelightModel model;

@@ -288,6 +288,31 @@ struct HybridModel {
 HybridModel hybridModel(Bundle bundle, const std::string& source);
 HybridModel loadHybridModel(const std::string& bundlePath);
 
+// ---- the texel hybrid (bundles from `prt bake`) ------------------------------------------------------------------
+// Channels of a bake's "texel_surface" layer (docs/bundle.md): per texel in object space, the receiver's position
+// and unit normal (the high mesh's with --high), its diffuse albedo, and coverage (1 for covered texels, 0 in
+// gutters, whose other channels push-pull fills from the covered ones; normals renormalised).
+inline constexpr int kTexelSurfaceChannels = 10;
+inline constexpr const char* kTexelSurfaceChannelNames[kTexelSurfaceChannels] = {
+    "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "albedo.R", "albedo.G", "albedo.B", "coverage"};
+
+// The hybrid's rows for every texel of a bake, and where each texel lies, so that a caller can sample each cone
+// light's visibility there (or look it up in its shadow maps).
+struct TexelHybridModel {
+    int width = 0, height = 0;
+    HybridModel rows;             // rows = texels, row-major from the top: total, bounce, normals, albedo
+    std::vector<float> positions; // [texels][3], object space
+    std::vector<uint8_t> covered; // [texels]: 1 where the bake sampled the surface, 0 in gutters
+};
+
+// prt::runtime_images only. Reads a bake bundle's "texel_transfer", its "texel_transfer_bounce" (present when the
+// bake had bounces; without it the rows' bounce stays empty and cone lights light only directly) and
+// "texel_surface", from their textures or inline (format "bundle").
+// Throws prt::Error naming the bundle or texture, the place and the problem: a missing or malformed layer (bakes
+// written before the texel hybrid lack "texel_surface" and must be baked again), sizes that disagree, texture hashes
+// that differ from the recorded ones, non-finite values.
+TexelHybridModel loadTexelHybridModel(const std::string& bundlePath);
+
 // Throws prt::Error(lightsSource, "order", ...) unless the lighting's order equals the model's.
 void checkHybridOrder(const HybridModel& model, const HybridLighting& lighting, const std::string& lightsSource);
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "bundle.h"
+#include "runtime.h"
 
 #include <cstddef>
 #include <string>
@@ -28,5 +29,8 @@ struct TexelLayerShape {
     int width = 0, height = 0, order = 0;
 };
 TexelLayerShape texelLayerShape(const Layer& layer, const std::string& source);
+// The texel-domain adaptive layers of an adapted bake (`prt adapt` of a `prt bake` bundle) as a texel model.
+// Needs hasAdaptiveTransfer(bundle).
+TexelRelightModel adaptiveTexelModel(Bundle& bundle, const std::string& source);
 
 } // namespace prt

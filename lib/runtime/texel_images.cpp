@@ -1,6 +1,6 @@
-// prt::runtime_images: a bundle's per-texel transfer (the "texel_transfer" layer of `prt bake`) read from the
-// texture it references, through lib/image (OpenImageIO). Kept out of prt_runtime so the thin runtime needs no image
-// library.
+// prt::runtime_images: a bake bundle's per-texel layers ("texel_transfer", and the texel hybrid's
+// "texel_transfer_bounce" and "texel_surface") read from the textures they reference, through lib/image
+// (OpenImageIO). Kept out of prt_runtime so the thin runtime needs no image library.
 #include "runtime.h"
 
 #include "core.h"
@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -96,33 +97,109 @@ std::vector<float> readU8Rows(const std::string& sidecarPath, int width, int hei
     return rows;
 }
 
+// The rows of a texel coefficient layer ([W*H][coefficients][3]): inline, or from the texture params.uri names.
+std::vector<float> texelLayerRows(const std::string& bundlePath, const Layer& layer, int width, int height,
+                                  int coefficients) {
+    const std::string place = std::string("layer \"").append(layer.name).append("\"");
+    const size_t values = size_t(width) * height * 3 * size_t(coefficients);
+    // The size comes from the bundle's JSON: bounded before anything is allocated for it.
+    checkedProduct({uint64_t(width) * uint64_t(height), 3 * uint64_t(coefficients)}, "texel values", bundlePath, place);
+    std::vector<float> rows;
+    if (!layer.params.contains("uri")) {
+        if (layer.data.size() != values)
+            throw Error(bundlePath, place, "holds " + std::to_string(layer.data.size()) + " values, not " +
+                                               std::to_string(values));
+        rows = layer.data;
+    } else {
+        std::string format = stringParam(layer, "format", bundlePath, place);
+        std::string path = referencedFile(bundlePath, stringParam(layer, "uri", bundlePath, place),
+                                          layer.params.value("hash", nlohmann::json()), place + ", params.uri");
+        if (format == "half" || format == "float")
+            rows = readExrRows(path, width, height, coefficients);
+        else if (format == "u8")
+            rows = readU8Rows(path, width, height, coefficients);
+        else
+            throw Error(bundlePath, place + ", params.format", "'" + format + "' is not one of half, float, u8");
+        checkFiniteRows(rows, 3 * size_t(coefficients), path, "texture", "texel");
+        return rows;
+    }
+    checkFiniteRows(rows, 3 * size_t(coefficients), bundlePath, place, "texel");
+    return rows;
+}
+
 } // namespace
 
 TexelRelightModel loadTexelRelightModel(const std::string& bundlePath) {
     Bundle bundle = readBundle(bundlePath);
+    if (!findLayer(bundle, "texel_transfer") && hasAdaptiveTransfer(bundle)) return adaptiveTexelModel(bundle, bundlePath);
     const Layer* layer = &transferLayer(bundle, "texel_transfer", "texel", bundlePath, "bake");
     if (!layer->params.contains("uri")) return texelRelightModel(std::move(bundle), bundlePath); // texels inline
-    const std::string place = "layer \"texel_transfer\"";
     TexelLayerShape shape = texelLayerShape(*layer, bundlePath);
-    // The size comes from the bundle's JSON: bounded before anything is allocated for it.
-    checkedProduct({uint64_t(shape.width) * uint64_t(shape.height), 3 * uint64_t(shape.order) * uint64_t(shape.order)},
-                   "texel transfer values", bundlePath, place);
-    std::string format = stringParam(*layer, "format", bundlePath, place);
-    std::string path = referencedFile(bundlePath, stringParam(*layer, "uri", bundlePath, place),
-                                      layer->params.value("hash", nlohmann::json()), place + ", params.uri");
-    const int coefficients = shape.order * shape.order;
     TexelRelightModel model;
     model.width = shape.width;
     model.height = shape.height;
     model.rows.vertexCount = uint32_t(size_t(shape.width) * shape.height);
     model.rows.order = shape.order;
-    if (format == "half" || format == "float")
-        model.rows.transfer = readExrRows(path, shape.width, shape.height, coefficients);
-    else if (format == "u8")
-        model.rows.transfer = readU8Rows(path, shape.width, shape.height, coefficients);
-    else
-        throw Error(bundlePath, place + ", params.format", "'" + format + "' is not one of half, float, u8");
-    checkFiniteRows(model.rows.transfer, 3 * size_t(coefficients), path, "texture", "texel");
+    model.rows.transfer = texelLayerRows(bundlePath, *layer, shape.width, shape.height, shape.order * shape.order);
+    return model;
+}
+
+TexelHybridModel loadTexelHybridModel(const std::string& bundlePath) {
+    Bundle bundle = readBundle(bundlePath);
+    const Layer* surface = findLayer(bundle, "texel_surface");
+    const Layer* bounce = findLayer(bundle, "texel_transfer_bounce");
+    TexelRelightModel total = loadTexelRelightModel(bundlePath);
+    TexelHybridModel model;
+    model.width = total.width;
+    model.height = total.height;
+    const size_t texels = size_t(total.width) * total.height;
+    const int coefficients = total.rows.order * total.rows.order;
+    if (!surface)
+        throw Error(bundlePath, "layers", "has no \"texel_surface\" layer (texel positions, normals and albedo for the "
+                                          "cone lights): it was baked before the texel hybrid; bake it again");
+    const std::string place = "layer \"texel_surface\"";
+    if (surface->domain != "texel" || surface->shape != std::vector<uint64_t>{texels, uint64_t(kTexelSurfaceChannels)})
+        throw Error(bundlePath, place, "expected domain \"texel\" and shape [" + std::to_string(texels) + ", " +
+                                           std::to_string(kTexelSurfaceChannels) + "] (the transfer's texels)");
+    std::vector<float> values;
+    if (!surface->params.contains("uri")) {
+        if (surface->data.size() != texels * kTexelSurfaceChannels)
+            throw Error(bundlePath, place, "holds " + std::to_string(surface->data.size()) + " values, not " +
+                                               std::to_string(texels * kTexelSurfaceChannels));
+        values = surface->data;
+    } else {
+        std::string path = referencedFile(bundlePath, stringParam(*surface, "uri", bundlePath, place),
+                                          surface->params.value("hash", nlohmann::json()), place + ", params.uri");
+        ImageChannels image = readImageChannels(
+            path, std::vector<std::string>(kTexelSurfaceChannelNames, kTexelSurfaceChannelNames + kTexelSurfaceChannels));
+        checkSize(image, total.width, total.height, path);
+        values = std::move(image.values);
+    }
+    checkFiniteRows(values, kTexelSurfaceChannels, bundlePath, place, "texel");
+    model.positions.resize(texels * 3);
+    model.covered.resize(texels);
+    model.rows.normals.resize(texels * 3);
+    model.rows.albedo.resize(texels * 3);
+    for (size_t t = 0; t < texels; ++t) {
+        const float* row = &values[t * kTexelSurfaceChannels];
+        double length = std::sqrt(double(row[3]) * row[3] + double(row[4]) * row[4] + double(row[5]) * row[5]);
+        if (!(length > 0.5 && length < 1.5))
+            throw Error(bundlePath, place + ", texel " + std::to_string(t), "normal is not unit length");
+        for (int a = 0; a < 3; ++a) {
+            model.positions[t * 3 + a] = row[a];
+            model.rows.normals[t * 3 + a] = float(row[3 + a] / length);
+            model.rows.albedo[t * 3 + a] = row[6 + a];
+        }
+        model.covered[t] = row[9] > 0.5f;
+    }
+    if (bounce) {
+        if (bounce->domain != "texel" || bounce->semantic != "sh_transfer_bounce_rgb" ||
+            bounce->shape != std::vector<uint64_t>{texels, uint64_t(coefficients), 3})
+            throw Error(bundlePath, "layer \"texel_transfer_bounce\"",
+                        "expected domain \"texel\", semantic \"sh_transfer_bounce_rgb\" and the transfer's shape");
+        model.rows.bounce = texelLayerRows(bundlePath, *bounce, total.width, total.height, coefficients);
+    }
+    model.rows.total = std::move(total.rows);
     return model;
 }
 

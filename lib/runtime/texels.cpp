@@ -41,7 +41,21 @@ std::string texelCoefficientChannel(int coefficient, int colour) {
     return name;
 }
 
+TexelRelightModel adaptiveTexelModel(Bundle& bundle, const std::string& source) {
+    const Layer* layer = findLayer(bundle, "transfer_ragged");
+    if (!layer) layer = findLayer(bundle, "transfer_cpca_basis");
+    const std::string place = "layer \"" + layer->name + "\"";
+    if (!layer->params.contains("width"))
+        throw Error(source, place, "holds per-vertex adaptive transfer: relight it without --texels");
+    TexelRelightModel model;
+    model.width = sizeParam(layer->params, "width", source, place + ", params");
+    model.height = sizeParam(layer->params, "height", source, place + ", params");
+    model.rows = adaptiveRelightModel(bundle, source);
+    return model;
+}
+
 TexelRelightModel texelRelightModel(Bundle bundle, const std::string& source) {
+    if (!findLayer(bundle, "texel_transfer") && hasAdaptiveTransfer(bundle)) return adaptiveTexelModel(bundle, source);
     Layer& layer = transferLayer(bundle, "texel_transfer", "texel", source, "bake");
     TexelLayerShape shape = texelLayerShape(layer, source);
     const size_t rowValues = 3 * size_t(shape.order) * shape.order;

@@ -438,7 +438,8 @@ Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, 
     stats.rayOffset = context.offset;
     std::vector<float>& total = result.coefficients;
     total.resize(receivers.count * context.stride);
-    stats.transferBytes = (total.size() + outgoing.size()) * sizeof(float);
+    if (gather && options.keepDirect) result.direct.resize(total.size());
+    stats.transferBytes = (total.size() + result.direct.size() + outgoing.size()) * sizeof(float);
 
     tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
     arena.execute([&] {
@@ -463,6 +464,8 @@ Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, 
             directPass(context, scene, rows, nullptr, gather ? &hitBlocks : nullptr, counts,
                        progress ? &*progress : nullptr);
             if (!gather) continue;
+            if (options.keepDirect)
+                std::copy(rows, rows + count * context.stride, result.direct.begin() + first * context.stride);
             stats.hitRecordBytes = std::max(stats.hitRecordBytes, hitRecordBytes(hitBlocks));
             bounce(context, hitBlocks, 3, outgoing.data(), nullptr, rows, 1, nullptr);
         }

@@ -178,7 +178,8 @@ struct Receivers {
 // Transfer at `receivers` with rays against `geometry`: the per-vertex integrator of computeTransfer (same
 // direction set, frames, ray offset rayOffset(geometry), estimator and blocks), with receiver i standing where a
 // vertex with index keys[i] would. Rows follow the receivers: coefficients [count][order^2][3]; vertexBegin 0,
-// vertexEnd count. options.vertexBegin / vertexEnd are ignored; options.albedoOverride applies to receivers too.
+// vertexEnd count. options.vertexBegin / vertexEnd are ignored; options.albedoOverride applies to receivers too;
+// options.keepDirect fills Transfer::direct with each receiver's direct pass, as computeTransfer does.
 // Unshadowed and shadowed: bit-identical to the row of a vertex of `geometry` with that index at (p, n) (a
 // vertex on no triangle), whatever `threads`. Interreflected with B > 0 bounces: computes the (B - 1)-bounce
 // per-vertex transfer of `geometry` first, then each receiver's direct pass gathers it once at its front-face

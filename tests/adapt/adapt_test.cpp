@@ -93,6 +93,63 @@ TEST(Adapt, ThresholdZeroRelightsBitForBitLikeFullOrder) {
     }
 }
 
+// A bake's per-texel transfer, inline (format bundle), over a width x height atlas.
+Bundle texelBundle(int width, int height, int order, uint32_t seed) {
+    Bundle bundle;
+    bundle.mesh = stripMesh(4);
+    Layer layer;
+    layer.name = "texel_transfer";
+    layer.domain = "texel";
+    layer.semantic = "sh_transfer_rgb";
+    const size_t texels = size_t(width) * height;
+    layer.shape = {texels, uint64_t(order) * order, 3};
+    layer.params = {{"order", order}, {"width", width}, {"height", height}, {"format", "bundle"}};
+    layer.data = decayingTransfer(texels, order, seed);
+    bundle.layers.push_back(layer);
+    return bundle;
+}
+
+TEST(AdaptTexels, ThresholdZeroRelightsBitForBitLikeTheBake) {
+    Bundle bundle = texelBundle(9, 7, 5, 11);
+    TexelRelightModel full = texelRelightModel(bundle, "full");
+    std::vector<float> lighting = randomLighting(5, 4);
+    adapt::adaptBundle(bundle, {lighting}, adapt::AdaptOptions{}, "test");
+    ASSERT_EQ(findLayer(bundle, "texel_transfer"), nullptr);
+    ASSERT_NE(findLayer(bundle, "transfer_ragged"), nullptr);
+    EXPECT_EQ(findLayer(bundle, "transfer_ragged")->domain, "texel_ragged");
+    EXPECT_EQ(findLayer(bundle, "transfer_offsets")->domain, "texel_offsets");
+    TexelRelightModel adaptive = texelRelightModel(bundle, "adaptive");
+    EXPECT_EQ(adaptive.width, 9);
+    EXPECT_EQ(adaptive.height, 7);
+    std::vector<float> a = relightAll(adaptive.rows, lighting), b = relightAll(full.rows, lighting);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+}
+
+TEST(AdaptTexels, OrdersStayWithinTheBoundAndGradedOverTheTexelGrid) {
+    const int width = 12, height = 10, order = 6;
+    Bundle bundle = texelBundle(width, height, order, 5);
+    std::vector<float> full = bundle.layers[0].data, lighting = randomLighting(order, 9);
+    adapt::AdaptOptions options;
+    options.maxError = 0.02;
+    adapt::AdaptStats stats = adapt::adaptBundle(bundle, {lighting}, options, "test");
+    EXPECT_LE(stats.relativeRmse, 0.02);
+    EXPECT_LT(stats.meanCoefficients, double(order * order)) << "some texels need fewer bands";
+    TexelRelightModel model = texelRelightModel(bundle, "adaptive");
+    auto orderOf = [&](size_t t) { return int(std::lround(std::sqrt(model.rows.offsets[t + 1] - model.rows.offsets[t]))); };
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            size_t t = size_t(y) * width + x;
+            if (x + 1 < width) EXPECT_LE(std::abs(orderOf(t) - orderOf(t + 1)), 1) << "texel " << t;
+            if (y + 1 < height) EXPECT_LE(std::abs(orderOf(t) - orderOf(t + width)), 1) << "texel " << t;
+        }
+    // A per-vertex runtime call on texel layers is refused rather than misread.
+    Bundle vertexBundle = transferBundle(10, 3, 1);
+    adapt::AdaptOptions lossless;
+    adapt::adaptBundle(vertexBundle, {randomLighting(3, 1)}, lossless, "vertex");
+    EXPECT_THROW(texelRelightModel(vertexBundle, "vertex"), Error);
+}
+
 TEST(Adapt, EveryVertexStaysWithinTheBoundAndSmoothVerticesGetFewBands) {
     const int order = 6;
     const size_t V = 70;

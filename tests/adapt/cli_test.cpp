@@ -86,6 +86,38 @@ TEST_F(AdaptCli, AdaptiveBundleRelightsCloseToFullOrder) {
     }
 }
 
+// A bake's texture is read into the adaptive texel layers; the output relights like the bake within the bound and
+// names no file next to the input.
+TEST_F(AdaptCli, ABakeAdaptsPerTexel) {
+    ASSERT_EQ(runPrt("scene sphere -o " + path("sphere.glb"), dir).exitCode, 0);
+    ASSERT_EQ(runPrt("bake " + path("sphere.glb") + " -o " + path("bake.glb") +
+                         " --resolution 64 --order 4 --samples 16 --quiet",
+                     dir)
+                  .exitCode,
+              0);
+    CliRun run = runPrt("adapt " + path("bake.glb") + " -o " + path("texels.glb") + " --max-error 0.02 --env " +
+                            path("sky.exr"),
+                        dir);
+    ASSERT_EQ(run.exitCode, 0) << run.stderrText;
+    EXPECT_NE(run.stderrText.find("leaves out the layers"), std::string::npos) << run.stderrText;
+    prt::Bundle adapted = prt::readBundle(path("texels.glb"));
+    for (const prt::Layer& layer : adapted.layers) EXPECT_FALSE(layer.params.contains("uri")) << layer.name;
+    for (const char* bundle : {"bake.glb", "texels.glb"})
+        ASSERT_EQ(runPrt(std::string("relight ") + path(bundle) + " --texels --env " + path("sky.exr") + " -o " +
+                             path(bundle) + ".exr --quiet",
+                         dir)
+                      .exitCode,
+                  0);
+    prt::Image bake = prt::readImage(path("bake.glb") + ".exr"), texels = prt::readImage(path("texels.glb") + ".exr");
+    ASSERT_EQ(bake.rgb.size(), texels.rgb.size());
+    double error = 0.0, energy = 0.0;
+    for (size_t i = 0; i < bake.rgb.size(); ++i) {
+        error += (texels.rgb[i] - bake.rgb[i]) * (texels.rgb[i] - bake.rgb[i]);
+        energy += bake.rgb[i] * bake.rgb[i];
+    }
+    EXPECT_LE(std::sqrt(error / energy), 0.0201);
+}
+
 TEST_F(AdaptCli, RefusesBadOptionsWithNoOutput) {
     const std::string base = "adapt " + path("full.glb") + " -o " + path("out.glb") + " --env " + path("sky.exr");
     struct Case {

@@ -3,6 +3,7 @@
 #include "bake.h"
 
 #include "core.h"
+#include "runtime.h"
 #include "scene.h"
 
 #include <gtest/gtest.h>
@@ -127,7 +128,7 @@ TEST(BakeStage, PlaneUnderAHighPlaneWritesReferencedTexturesAndAFlatNormalMap) {
         EXPECT_NEAR(normals[3 * t + 1], 127.5, 0.5);
         EXPECT_EQ(normals[3 * t + 2], 255);
     }
-    EXPECT_EQ(folder.files(), 5u); // low, high, bundle, EXR, normal map
+    EXPECT_EQ(folder.files(), 6u); // low, high, bundle, transfer EXR, surface EXR, normal map
 }
 
 TEST(BakeStage, BoxRoomWithoutUvsGetsAGeneratedAtlasAndU8Layers) {
@@ -184,6 +185,38 @@ TEST(BakeStage, ResultDoesNotDependOnTheThreadCount) {
         hi = std::max(hi, one.transfer[t]);
     }
     EXPECT_GT(hi - lo, 0.01f);
+}
+
+// The bounce layer is what the bounces add: transfer minus it is the shadowed bake of the same seed (fill and
+// stitching are linear), so a hybrid relight can send cone lights through it without counting direct light twice.
+TEST(BakeStage, TransferMinusItsBouncePartIsTheShadowedBake) {
+    Folder folder("bounce_part");
+    BakeOptions options = smallBake(writeMesh(folder, "scene.glb", planeUnderABall(1)), folder / "unused.glb");
+    options.albedo = {0.8f, 0.7f, 0.6f};
+    options.albedoOverride = true;
+    options.seed = 3;
+    options.bounces = 2;
+    BakedAtlas interreflected = bakeAtlas(options);
+    options.bounces = 0;
+    BakedAtlas shadowed = bakeAtlas(options);
+    EXPECT_TRUE(shadowed.bounce.empty());
+    ASSERT_EQ(interreflected.bounce.size(), shadowed.transfer.size());
+    double largest = 0.0, bounced = 0.0;
+    for (size_t i = 0; i < shadowed.transfer.size(); ++i) {
+        largest = std::max(largest, std::abs(double(interreflected.transfer[i]) - interreflected.bounce[i] -
+                                             shadowed.transfer[i]));
+        bounced = std::max(bounced, std::abs(double(interreflected.bounce[i])));
+    }
+    EXPECT_LT(largest, 1e-5);
+    EXPECT_GT(bounced, 0.01) << "the ball and the plane light each other";
+    // The surface layer: unit normals everywhere, coverage exactly the covered texels.
+    size_t covered = 0;
+    for (size_t t = 0; t < interreflected.surface.size() / kTexelSurfaceChannels; ++t) {
+        const float* row = &interreflected.surface[t * kTexelSurfaceChannels];
+        EXPECT_NEAR(std::sqrt(row[3] * row[3] + row[4] * row[4] + row[5] * row[5]), 1.0f, 1e-5f);
+        covered += row[9] == 1.0f;
+    }
+    EXPECT_EQ(covered, interreflected.samples.texel.size());
 }
 
 // ---- shards ------------------------------------------------------------------------------------------------------
