@@ -83,6 +83,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     addEnvlightCommand(app);
     addAdaptCommand(app);
     addServeCommand(app);
+    addAutoconfigCommand(app);
 
     try {
         app.parse(int(args.size()), args.data());
