@@ -67,6 +67,8 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
         throw Error(source, "PRT_bundle", "no full-order \"transfer\" layer to adapt (run `prt transfer` to make one)");
     Layer input = std::move(*found);
     bundle.layers.erase(found);
+    // The bounce part of the full-order transfer (hybrid lighting's) no longer matches what is stored: dropped.
+    std::erase_if(bundle.layers, [](const Layer& l) { return l.name == "transfer_bounce"; });
     const size_t V = bundle.mesh.vertexCount();
     int order = input.shape.size() == 3 ? int(std::lround(std::sqrt(double(input.shape[1])))) : 0;
     if (input.domain != "vertex" || input.semantic != "sh_transfer_rgb" || input.shape.size() != 3 ||

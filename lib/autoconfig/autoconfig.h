@@ -31,6 +31,9 @@ struct Config {
     int samples = 0;  // transfer directions per vertex
     int bounces = 0;  // 0: shadowed transfer; > 0: interreflected
     adapt::Format format = adapt::Format::Float; // Float: the transfer stage's own layer; others through `prt adapt`
+    // > 0: adaptive order, `prt adapt --max-error` (rms budget, one map as the prior, no grading): each vertex keeps
+    // the bands the budget gives it, up to `order`. 0: every vertex at `order`.
+    double adaptiveError = 0.0;
 };
 
 // One configuration with its modelled costs and its errors on the pilot and held-out vertices.
@@ -84,16 +87,24 @@ struct Result {
 void splitVertices(const TriMesh& mesh, size_t count, uint64_t seed, std::vector<uint32_t>& pilot,
                    std::vector<uint32_t>& heldOut);
 
-// Bytes of the transfer layers a bundle of V vertices at uniform order L stores in `format` (as adaptBundle
-// writes them: float is the transfer stage's [V][L^2][3] float32 layer; half adds the ragged offsets; u16/u8 the
-// offsets and one float16 scale per vertex and band). CPCA is not modelled (throws prt::Error(kExitUsage)).
-uint64_t bundleLayerBytes(size_t vertexCount, int order, adapt::Format format);
+// Bytes of the transfer layers a bundle of V vertices at uniform order L stores in `format` (the mesh's own bytes,
+// the same for every configuration, left out). Float without bounces is the transfer stage's [V][L^2][3] float32
+// layer; everything else goes through `prt adapt --order L`, which drops the transfer stage's "transfer_bounce"
+// layer (hybrid lighting's, as large again) and writes ragged layers: the offsets, then the values in the format
+// (float32, float16, uint16, uint8), and for u16/u8 one float16 scale per vertex and band. CPCA is not modelled
+// (throws prt::Error(kExitUsage)).
+uint64_t bundleLayerBytes(size_t vertexCount, int order, adapt::Format format, int bounces);
+// The same for ragged (adaptive) layers holding `coefficients` coefficient rows and `bands` bands in all: offsets,
+// the values in the format (float32 for float), and for u16/u8 one float16 scale per band.
+uint64_t raggedLayerBytes(size_t vertexCount, uint64_t coefficients, uint64_t bands, adapt::Format format);
 
 // The rows a bundle in `format` stores for `rows` transfer rows [count][order^2][3] (the first order^2
 // coefficients of a larger run may be passed with stride `strideOrder`), decoded back to float as the runtime
 // reads them: float as is, half rounded to float16, u16/u8 through adapt::quantise / dequantise with per-vertex
-// scales. Result [count][order^2][3].
-std::vector<float> storedRows(const float* rows, size_t count, int strideOrder, int order, adapt::Format format);
+// scales. With `orders` (per row, each <= order) only each row's first orders[i]^2 coefficients are kept, the
+// rest zero, as a ragged bundle stores them. Result [count][order^2][3].
+std::vector<float> storedRows(const float* rows, size_t count, int strideOrder, int order, adapt::Format format,
+                              const std::vector<uint8_t>* orders = nullptr);
 
 // Noise-corrected relative RMSE of radiance against a reference, both [count][3], with the reference's standard
 // error se [count][3] (see the top of this file); 0 where the noise exceeds the measured difference.

@@ -39,6 +39,7 @@ nlohmann::json candidateJson(const Candidate& c) {
                         {"samples", c.config.samples},
                         {"bounces", c.config.bounces},
                         {"format", adapt::formatName(c.config.format)},
+                        {"adaptive_error", c.config.adaptiveError},
                         {"bake_seconds", c.bakeSeconds},
                         {"bundle_bytes", c.bundleBytes},
                         {"pilot_error", c.pilotError}};
@@ -64,7 +65,7 @@ std::string pipelineToml(const Result& result, const Options& options, const std
                   "# Written by `prt autoconfig`: the cheapest bake and smallest bundle whose relative error against\n"
                   "# `prt reference` (%d bounces, albedo %s,%s,%s; reference noise taken out) is under the target.\n"
                   "#   target error           %.6g\n"
-                  "#   chosen                 order %d, %d samples, %d bounces, %s storage\n"
+                  "#   chosen                 order %d, %d samples, %d bounces, %s storage, adaptive budget %.4g\n"
                   "#   predicted (pilot)      %.6g on %zu vertices\n"
                   "#   verified (held out)    %.6g on %zu other vertices\n"
                   "#   reference              %d paths per vertex; relative noise %s\n"
@@ -73,7 +74,7 @@ std::string pipelineToml(const Result& result, const Options& options, const std
                   "# Run it with: prt run THIS_FILE (paths are relative to the directory prt run starts in)\n\n",
                   options.referenceBounces, number(options.albedo[0]).c_str(), number(options.albedo[1]).c_str(),
                   number(options.albedo[2]).c_str(), options.targetError, c.order, c.samples, c.bounces,
-                  adapt::formatName(c.format), result.chosen.pilotError, result.pilot.size(),
+                  adapt::formatName(c.format), c.adaptiveError, result.chosen.pilotError, result.pilot.size(),
                   result.chosen.heldOutError, result.heldOut.size(), result.referenceSamples, noise.c_str(),
                   result.chosen.bakeSeconds, (unsigned long long)result.chosen.bundleBytes, result.candidates.size(),
                   result.pareto.size(), result.tried.size());
@@ -97,7 +98,12 @@ std::string pipelineToml(const Result& result, const Options& options, const std
     t += "albedo = [" + number(options.albedo[0]) + ", " + number(options.albedo[1]) + ", " +
          number(options.albedo[2]) + "]\nseed = " + std::to_string(options.seed) + "\n";
     std::string bundleStage = "transfer";
-    if (c.format != adapt::Format::Float) {
+    if (c.adaptiveError > 0.0) { // the pilot predicted the budget's orders ungraded: max-step = order keeps them
+        bundleStage = "adapt";
+        t += "\n[stages.adapt]\nrun = \"adapt\"\ninputs = { bundle = \"transfer\", env = \"" + envKeys[0] +
+             "\" }\nmax-error = " + number(c.adaptiveError) + "\nformat = " + quoted(adapt::formatName(c.format)) +
+             "\nmax-step = " + std::to_string(std::max(1, c.order)) + "\n";
+    } else if (c.format != adapt::Format::Float || c.bounces > 0) { // also drops the transfer_bounce layer
         bundleStage = "adapt";
         t += "\n[stages.adapt]\nrun = \"adapt\"\ninputs = { bundle = \"transfer\" }\norder = " +
              std::to_string(c.order) + "\nformat = " + quoted(adapt::formatName(c.format)) + "\n";

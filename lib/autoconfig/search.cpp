@@ -19,10 +19,15 @@ namespace prt::autoconfig {
 namespace {
 
 std::string describe(const Config& c) {
-    char text[160];
-    std::snprintf(text, sizeof text, "order %d, %d samples, %d bounces, %s", c.order, c.samples, c.bounces,
-                  adapt::formatName(c.format));
-    return text;
+    char text[200];
+    std::snprintf(text, sizeof text, "order %d, %d samples, %d bounce%s, %s", c.order, c.samples, c.bounces,
+                  c.bounces == 1 ? "" : "s", adapt::formatName(c.format));
+    std::string s = text;
+    if (c.adaptiveError > 0.0) {
+        std::snprintf(text, sizeof text, ", adaptive to %.4g", c.adaptiveError);
+        s += text;
+    }
+    return s;
 }
 
 // Relative noise of a reference: RMS standard error over RMS radiance, over `count` rows from `first`.
@@ -50,7 +55,7 @@ void checkOptions(const TriMesh& mesh, const std::vector<EnvironmentMap>& envs, 
         if (samples < 1 || samples > kMaxTransferSamples) throw usage("--samples", "each must be in 1..65536");
     for (int bounces : o.bounces)
         if (bounces < 0 || bounces > 64) throw usage("--bounces", "each must be in 0..64");
-    for (adapt::Format format : o.formats) bundleLayerBytes(1, 1, format); // refuses cpca
+    for (adapt::Format format : o.formats) bundleLayerBytes(1, 1, format, 0); // refuses cpca
     if (o.referenceBounces < 0) throw usage("--reference-bounces", "must be >= 0");
     if (o.referenceMinSamples < 2 || o.referenceMaxSamples < o.referenceMinSamples)
         throw usage("--max-reference-samples", "needs 2 <= first pass <= maximum");
@@ -208,30 +213,65 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
     // ---- every configuration's error on the pilot vertices --------------------------------------------------
     std::vector<std::vector<float>> lightings;
     for (const EnvironmentMap& env : envs) lightings.push_back(environmentLighting(env, maxOrder, nullptr, sh::Window::None));
-    auto errorOf = [&](const Config& c, const std::vector<float>& rowsAtMax, size_t first, size_t count) {
-        std::vector<float> stored = storedRows(rowsAtMax.data() + first * maxOrder * maxOrder * 3, count, maxOrder,
-                                               c.order, c.format);
+    // Error of a configuration on rows [first, first + count) of the pilot run, and (adaptive) the coefficients and
+    // bands its vertices keep there.
+    struct Prediction {
+        double error = 0.0;
+        uint64_t coefficients = 0, bands = 0;
+        int largestOrder = 0; // the most bands any of the rows keeps
+    };
+    auto predict = [&](const Config& c, const std::vector<float>& rowsAtMax, size_t first, size_t count) {
+        const float* rowsHere = rowsAtMax.data() + first * maxOrder * maxOrder * 3;
+        std::vector<uint8_t> orders(count, uint8_t(c.order));
+        if (c.adaptiveError > 0.0) { // prt adapt's rms budget over these rows, without grading
+            std::vector<float> dense = storedRows(rowsHere, count, maxOrder, c.order, adapt::Format::Float);
+            std::vector<std::vector<float>> prior;
+            for (const std::vector<float>& lighting : lightings)
+                prior.emplace_back(lighting.begin(), lighting.begin() + c.order * c.order * 3);
+            orders = adapt::budgetOrders(
+                adapt::truncationErrorSquared(dense.data(), count, c.order, prior, adapt::Prior::Maps), prior.size(),
+                count, c.order, c.adaptiveError);
+        }
+        std::vector<float> stored = storedRows(rowsHere, count, maxOrder, c.order, c.format, &orders);
         std::vector<float> radiance(count * 3);
-        double worst = 0.0;
+        Prediction p;
+        for (uint8_t n : orders) p.coefficients += uint64_t(n) * n, p.bands += n, p.largestOrder = std::max<int>(p.largestOrder, n);
         for (size_t m = 0; m < envs.size(); ++m) {
             relight(stored.data(), count, c.order * c.order, lightings[m].data(), radiance.data());
-            worst = std::max(worst, noiseCorrectedError(radiance.data(), reference[m].radiance.data() + first * 3,
-                                                        reference[m].standardError.data() + first * 3, count));
+            p.error = std::max(p.error, noiseCorrectedError(radiance.data(), reference[m].radiance.data() + first * 3,
+                                                            reference[m].standardError.data() + first * 3, count));
         }
-        return worst;
+        return p;
     };
     std::vector<size_t> rowsOf; // candidate -> pilotRows index
     for (size_t si = 0; si < samplesAxis.size(); ++si)
         for (size_t bi = 0; bi < bouncesAxis.size(); ++bi)
             for (int order : ordersAxis)
                 for (adapt::Format format : options.formats) {
+                    const size_t run = si * bouncesAxis.size() + bi;
                     Candidate c;
                     c.config = {order, samplesAxis[si], bouncesAxis[bi], format};
                     c.bakeSeconds = bakeSeconds(c.config);
-                    c.bundleBytes = bundleLayerBytes(V, order, format);
-                    c.pilotError = errorOf(c.config, pilotRows[si * bouncesAxis.size() + bi], 0, np);
+                    c.bundleBytes = bundleLayerBytes(V, order, format, bouncesAxis[bi]);
+                    c.pilotError = predict(c.config, pilotRows[run], 0, np).error;
                     result.candidates.push_back(c);
-                    rowsOf.push_back(si * bouncesAxis.size() + bi);
+                    rowsOf.push_back(run);
+                    // Adaptive order spends what is left of the target: truncation adds about in quadrature, so
+                    // budgets up to sqrt((margin E)^2 - e^2). The adapt stage takes one map as its prior.
+                    const double room = std::pow(options.margin * E, 2.0) - c.pilotError * c.pilotError;
+                    if (envs.size() != 1 || order < 2 || !(room > 0.0)) continue;
+                    for (double fraction : {1.0, 0.85, 0.7, 0.5}) {
+                        Candidate a = c;
+                        a.config.adaptiveError = fraction * std::sqrt(room);
+                        Prediction p = predict(a.config, pilotRows[run], 0, np);
+                        a.pilotError = p.error;
+                        a.bundleBytes = raggedLayerBytes(V, (p.coefficients * V + np / 2) / np, (p.bands * V + np / 2) / np,
+                                                         format);
+                        // Keeping every band is the uniform configuration; keeping none of band L is one from L - 1.
+                        if (a.bundleBytes >= c.bundleBytes || p.largestOrder < order) continue;
+                        result.candidates.push_back(a);
+                        rowsOf.push_back(run);
+                    }
                 }
     result.pareto = paretoFront(result.candidates);
 
@@ -266,7 +306,7 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
     bool verified = false;
     for (size_t i : feasible) {
         Candidate& c = result.candidates[i];
-        c.heldOutError = errorOf(c.config, pilotRows[rowsOf[i]], np, nh);
+        c.heldOutError = predict(c.config, pilotRows[rowsOf[i]], np, nh).error;
         result.tried.push_back(i);
         char text[240];
         std::snprintf(text, sizeof text, "autoconfig: %s: predicted %.4g, held out %.4g%s", describe(c.config).c_str(),
