@@ -120,7 +120,8 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
 // The pipeline `prt run` executes for the chosen configuration: the mesh input, the transfer stage (with the
 // albedo and seed the pilot used, so the bake's rows are the pilot's), `prt adapt --order L --format F` for the
 // compact formats, and a relight per map; outputs the bundle at bundlePath and each map's radiance next to it.
-// A comment block records the target, the predicted and verified errors and the reference noise.
+// A comment block records the target, the predicted and verified errors and the reference noise. `name` is
+// made a pipeline name (characters other than letters, digits, '-' and '_' become '-').
 std::string pipelineToml(const Result& result, const Options& options, const std::string& meshPath,
                          const std::vector<std::string>& envPaths, const std::string& bundlePath,
                          const std::string& name);

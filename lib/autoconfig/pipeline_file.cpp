@@ -79,7 +79,7 @@ std::string pipelineToml(const Result& result, const Options& options, const std
                   result.chosen.bakeSeconds, (unsigned long long)result.chosen.bundleBytes, result.candidates.size(),
                   result.pareto.size(), result.tried.size());
     std::string t = head;
-    t += "[pipeline]\nname = " + quoted(name) + "\n";
+    t += "[pipeline]\nname = " + quoted(bareKey(name)) + "\n";
     t += "description = " + quoted("autoconfig to relative error " + number(options.targetError)) + "\n\n";
     t += "[inputs]\nmesh = { mesh = " + quoted(meshPath) + " }\n";
     std::vector<std::string> envKeys;
