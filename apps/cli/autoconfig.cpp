@@ -64,13 +64,14 @@ void runAutoconfig(const AutoconfigArgs& args, const CLI::App& command) {
     autoconfig::Result result = autoconfig::autoconfigure(mesh, envs, names, options);
 
     // The Pareto front on stderr: cost against predicted error.
-    logInfo("autoconfig: Pareto front (modelled bake seconds, transfer-layer bytes, predicted error):");
+    logInfo("autoconfig: Pareto front (modelled bake Mray equivalents and seconds, transfer-layer bytes, predicted error):");
     for (size_t i : result.pareto) {
         const autoconfig::Candidate& c = result.candidates[i];
         char line[200];
-        std::snprintf(line, sizeof line, "  order %d  samples %5d  bounces %d  %-5s  %9.4g s  %10llu B  %.4g",
-                      c.config.order, c.config.samples, c.config.bounces, adapt::formatName(c.config.format),
-                      c.bakeSeconds, (unsigned long long)c.bundleBytes, c.pilotError);
+        std::snprintf(line, sizeof line, "  order %d  samples %5d  bounces %d  %-5s  adaptive %-8.4g  %9.4g M  %8.3g s  "
+                      "%10llu B  %.4g", c.config.order, c.config.samples, c.config.bounces,
+                      adapt::formatName(c.config.format), c.config.adaptiveError, c.bakeCost * 1e-6, c.bakeSeconds,
+                      (unsigned long long)c.bundleBytes, c.pilotError);
         logInfo(line);
     }
     const std::string bundle = args.bundle.empty()

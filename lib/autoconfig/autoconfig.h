@@ -39,7 +39,8 @@ struct Config {
 // One configuration with its modelled costs and its errors on the pilot and held-out vertices.
 struct Candidate {
     Config config;
-    double bakeSeconds = 0.0;   // modelled transfer time on the whole mesh (costModel)
+    double bakeCost = 0.0;      // modelled work of the bake on the whole mesh, in ray equivalents (kCoefficientCost)
+    double bakeSeconds = 0.0;   // the same in seconds at the pilot's measured rate (the report's; not used to choose)
     uint64_t bundleBytes = 0;   // bytes of the transfer layers the bundle stores (bundleLayerBytes)
     double pilotError = 0.0;    // largest over the maps, noise-corrected, on the pilot vertices
     double heldOutError = -1.0; // the same on the held-out vertices; < 0 until verified
@@ -62,6 +63,14 @@ struct Options {
     double margin = 0.9;                       // a configuration is chosen only if its pilot error <= margin x target
     int threads = 0;
 };
+
+// The bake's cost model, in work counts so that the choice is the same on any machine load and thread count: a
+// direction cast costs 1 plus kCoefficientCost per SH coefficient it accumulates, and each bounce costs
+// kGatherCost per coefficient at each front-face hit (the pilot counts the hits per direction). Calibrated on this
+// project's measurements (results.md: order 1 to 12 at 16384 samples 1.44 to 1.86 s, order 3 to 8 at 1024 samples
+// 0.110 to 0.140 s; one bounce 0.011 of the direct pass on the bunny at order 5, 0.104 hits per direction).
+inline constexpr double kCoefficientCost = 0.004;
+inline constexpr double kGatherCost = 0.005;
 
 // The reference noise that makes a target untestable: below kNoiseRefusalRatio times the noise the reference
 // would have at referenceMaxSamples paths the pilot cannot tell a configuration's error from the noise.

@@ -40,6 +40,7 @@ nlohmann::json candidateJson(const Candidate& c) {
                         {"bounces", c.config.bounces},
                         {"format", adapt::formatName(c.config.format)},
                         {"adaptive_error", c.config.adaptiveError},
+                        {"bake_cost", c.bakeCost},
                         {"bake_seconds", c.bakeSeconds},
                         {"bundle_bytes", c.bundleBytes},
                         {"pilot_error", c.pilotError}};
@@ -69,14 +70,14 @@ std::string pipelineToml(const Result& result, const Options& options, const std
                   "#   predicted (pilot)      %.6g on %zu vertices\n"
                   "#   verified (held out)    %.6g on %zu other vertices\n"
                   "#   reference              %d paths per vertex; relative noise %s\n"
-                  "#   modelled cost          bake %.4g s, transfer layers %llu bytes\n"
+                  "#   modelled cost          bake %.4g Mray equivalents, transfer layers %llu bytes\n"
                   "#   searched               %zu configurations, %zu on the Pareto front, %zu verified\n"
                   "# Run it with: prt run THIS_FILE (paths are relative to the directory prt run starts in)\n\n",
                   options.referenceBounces, number(options.albedo[0]).c_str(), number(options.albedo[1]).c_str(),
                   number(options.albedo[2]).c_str(), options.targetError, c.order, c.samples, c.bounces,
                   adapt::formatName(c.format), c.adaptiveError, result.chosen.pilotError, result.pilot.size(),
                   result.chosen.heldOutError, result.heldOut.size(), result.referenceSamples, noise.c_str(),
-                  result.chosen.bakeSeconds, (unsigned long long)result.chosen.bundleBytes, result.candidates.size(),
+                  result.chosen.bakeCost * 1e-6, (unsigned long long)result.chosen.bundleBytes, result.candidates.size(),
                   result.pareto.size(), result.tried.size());
     std::string t = head;
     t += "[pipeline]\nname = " + quoted(bareKey(name)) + "\n";

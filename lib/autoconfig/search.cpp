@@ -65,7 +65,7 @@ void checkOptions(const TriMesh& mesh, const std::vector<EnvironmentMap>& envs, 
         if (!(a >= 0.0 && a <= 1.0)) throw usage("--albedo", "each channel must be in [0, 1]");
 }
 
-// Pareto front of (seconds, bytes, pilot error): indices of the candidates no other is at least as good on all
+// Pareto front of (bake cost, bytes, pilot error): indices of the candidates no other is at least as good on all
 // three and better on one.
 std::vector<size_t> paretoFront(const std::vector<Candidate>& c) {
     std::vector<size_t> front;
@@ -73,16 +73,16 @@ std::vector<size_t> paretoFront(const std::vector<Candidate>& c) {
         bool dominated = false;
         for (size_t j = 0; j < c.size() && !dominated; ++j) {
             if (j == i) continue;
-            bool noWorse = c[j].bakeSeconds <= c[i].bakeSeconds && c[j].bundleBytes <= c[i].bundleBytes &&
+            bool noWorse = c[j].bakeCost <= c[i].bakeCost && c[j].bundleBytes <= c[i].bundleBytes &&
                            c[j].pilotError <= c[i].pilotError;
-            bool better = c[j].bakeSeconds < c[i].bakeSeconds || c[j].bundleBytes < c[i].bundleBytes ||
+            bool better = c[j].bakeCost < c[i].bakeCost || c[j].bundleBytes < c[i].bundleBytes ||
                           c[j].pilotError < c[i].pilotError;
             dominated = noWorse && better;
         }
         if (!dominated) front.push_back(i);
     }
     std::sort(front.begin(), front.end(), [&](size_t a, size_t b) {
-        return c[a].bakeSeconds != c[b].bakeSeconds ? c[a].bakeSeconds < c[b].bakeSeconds : a < b;
+        return c[a].bakeCost != c[b].bakeCost ? c[a].bakeCost < c[b].bakeCost : a < b;
     });
     return front;
 }
@@ -188,26 +188,22 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
         axis->erase(std::unique(axis->begin(), axis->end()), axis->end());
     }
     std::vector<std::vector<float>> pilotRows; // [samples][bounces] -> [n][maxOrder^2][3]
-    double bounceShare = 0.0;                  // one bounce's time over the direct pass's, at maxOrder
+    double hitFraction = 0.0;                  // front-face hits per ray at the pilot vertices (bounces gather there)
+    double secondsPerCost = 0.0;               // measured, for the report's seconds only
     for (int s : samplesAxis)
         for (int b : bouncesAxis) {
             Transfer t = computeTransferAt(mesh, receivers, transferOptions(maxOrder, s, b));
-            // A (b >= 2)-bounce pilot times the whole mesh's direct pass and its first bounce (computeTransferAt).
-            if (b >= 2 && s == samplesAxis.back() && t.stats.bounceSeconds.size() >= 2 && t.stats.bounceSeconds[0] > 0)
-                bounceShare = t.stats.bounceSeconds[1] / t.stats.bounceSeconds[0];
+            if (b > 0 && s == samplesAxis.back()) hitFraction = double(t.stats.hits) / (double(n) * s);
+            if (b == 0 && s == samplesAxis.back())
+                secondsPerCost = t.stats.directSeconds / (double(n) * s * (1.0 + kCoefficientCost * maxOrder * maxOrder));
             pilotRows.push_back(std::move(t.coefficients));
         }
-    // Cost per receiver and direction at the smallest and largest order (the accumulation grows with L^2).
-    auto directCost = [&](int order) {
-        Transfer t = computeTransferAt(mesh, receivers, transferOptions(order, samplesAxis.back(), 0));
-        return std::max(t.stats.directCpuSeconds, t.stats.directSeconds) / (double(n) * samplesAxis.back());
-    };
-    const double costHigh = directCost(maxOrder), costLow = minOrder < maxOrder ? directCost(minOrder) : costHigh;
     result.pilotTransferSeconds = nowSeconds() - t0;
-    auto bakeSeconds = [&](const Config& c) {
-        double l2 = double(c.order) * c.order, lo = double(minOrder) * minOrder, hi = double(maxOrder) * maxOrder;
-        double perRay = hi > lo ? costLow + (costHigh - costLow) * (l2 - lo) / (hi - lo) : costHigh;
-        return double(V) * c.samples * perRay * (1.0 + c.bounces * bounceShare * l2 / hi);
+    // Deterministic work counts, so the choice does not depend on the machine's load or the thread count.
+    auto bakeCost = [&](const Config& c) {
+        const double coefficients = double(c.order) * c.order;
+        return double(V) * c.samples * (1.0 + kCoefficientCost * coefficients +
+                                        c.bounces * hitFraction * kGatherCost * coefficients);
     };
 
     // ---- every configuration's error on the pilot vertices --------------------------------------------------
@@ -251,7 +247,8 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
                     const size_t run = si * bouncesAxis.size() + bi;
                     Candidate c;
                     c.config = {order, samplesAxis[si], bouncesAxis[bi], format};
-                    c.bakeSeconds = bakeSeconds(c.config);
+                    c.bakeCost = bakeCost(c.config);
+                    c.bakeSeconds = c.bakeCost * secondsPerCost;
                     c.bundleBytes = bundleLayerBytes(V, order, format, bouncesAxis[bi]);
                     c.pilotError = predict(c.config, pilotRows[run], 0, np).error;
                     result.candidates.push_back(c);
@@ -290,13 +287,13 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
                     " on the pilot vertices; raise the target or widen --orders / --samples / --bounces",
                     kExitUsage);
     }
-    double secondsMin = INFINITY, bytesMin = INFINITY;
+    double costMin = INFINITY, bytesMin = INFINITY;
     for (size_t i : feasible) {
-        secondsMin = std::min(secondsMin, result.candidates[i].bakeSeconds);
+        costMin = std::min(costMin, result.candidates[i].bakeCost);
         bytesMin = std::min(bytesMin, double(result.candidates[i].bundleBytes));
     }
     auto score = [&](size_t i) {
-        return result.candidates[i].bakeSeconds / secondsMin + double(result.candidates[i].bundleBytes) / bytesMin;
+        return result.candidates[i].bakeCost / costMin + double(result.candidates[i].bundleBytes) / bytesMin;
     };
     std::stable_sort(feasible.begin(), feasible.end(), [&](size_t a, size_t b) {
         double sa = score(a), sb = score(b);

@@ -52,7 +52,7 @@ protected:
     std::string base() const {
         return "autoconfig " + path("sphere.glb") + " --env " + path("sky.exr") +
                " --orders 1,2,3,4 --samples 16,64 --bounces 0,1 --formats float,half,u8 --pilot-vertices 64 "
-               "--albedo 0.8 --threads 2";
+               "--albedo 0.8";
     }
     fs::path dir;
 };
@@ -67,7 +67,7 @@ std::string readText(const std::string& file) {
 
 TEST_F(AutoconfigCli, PicksOrderTwoTheFewestSamplesAndNoBouncesAndItsPipelineMeetsTheTarget) {
     const double target = 0.05;
-    CliRun run = runPrt(base() + " --target-error 0.05 -o " + path("auto.toml") + " --report " + path("report.json") +
+    CliRun run = runPrt(base() + " --threads 2 --target-error 0.05 -o " + path("auto.toml") + " --report " + path("report.json") +
                             " --bundle " + path("out/sphere.prt.glb"),
                         dir);
     ASSERT_EQ(run.exitCode, 0) << run.stderrText;
@@ -97,6 +97,10 @@ TEST_F(AutoconfigCli, PicksOrderTwoTheFewestSamplesAndNoBouncesAndItsPipelineMee
     EXPECT_LE(achieved, target);
     // The comment block states what was predicted and verified.
     std::string toml = readText(path("auto.toml"));
+    // Same inputs and seed, another thread count: the same pipeline, byte for byte (the costs are work counts).
+    ASSERT_EQ(runPrt(base() + " --threads 1 --target-error 0.05 --name auto -o " + path("again.toml") + " --bundle " +
+                         path("out/sphere.prt.glb"), dir).exitCode, 0);
+    EXPECT_EQ(readText(path("again.toml")), toml);
     EXPECT_NE(toml.find("predicted (pilot)"), std::string::npos);
     EXPECT_NE(toml.find("verified (held out)"), std::string::npos);
 }
