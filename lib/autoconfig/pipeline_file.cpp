@@ -86,8 +86,9 @@ std::string pipelineToml(const Result& result, const Options& options, const std
     std::vector<std::string> envKeys;
     std::set<std::string> used = {"mesh"};
     for (size_t m = 0; m < envPaths.size(); ++m) {
-        std::string key = "env-" + bareKey(std::filesystem::path(envPaths[m]).stem().string());
-        while (used.count(key)) key += "-" + std::to_string(m);
+        std::string key = "env-";
+        key += bareKey(std::filesystem::path(envPaths[m]).stem().string());
+        while (used.count(key)) key.append(1, '-').append(std::to_string(m));
         used.insert(key);
         envKeys.push_back(key);
         t += key + " = { env = " + quoted(envPaths[m]) + " }\n";
