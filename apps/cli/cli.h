@@ -37,6 +37,7 @@ void addFivsceneCommand(CLI::App& app);
 void addGlossyCommand(CLI::App& app);
 void addServeCommand(CLI::App& app);
 void addSpecularCommand(CLI::App& app);
+void addAutoconfigCommand(CLI::App& app);
 
 // What a pipeline cache key holds about this prt (`prt --build-info`): its version, build type, compiler, the
 // content hash of its executable, and the versions of the libraries it was compiled against and has loaded.

@@ -84,6 +84,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     addAdaptCommand(app);
     addServeCommand(app);
     addSpecularCommand(app);
+    addAutoconfigCommand(app);
 
     try {
         app.parse(int(args.size()), args.data());

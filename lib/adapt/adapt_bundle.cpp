@@ -85,6 +85,8 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
     const bool texels = input.name == "texel_transfer";
     const std::string domain = texels ? "texel" : "vertex";
     const std::string place = "layer \"" + input.name + "\"";
+    // The bounce part of the full-order transfer (hybrid lighting's) no longer matches what is stored: dropped.
+    std::erase_if(bundle.layers, [&](const Layer& l) { return l.name == (texels ? "texel_transfer_bounce" : "transfer_bounce"); });
     int width = 0, height = 0;
     if (texels) {
         auto side = [&](const char* key) {
@@ -96,7 +98,7 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
         width = side("width"), height = side("height");
     }
     const size_t V = texels ? size_t(width) * height : bundle.mesh.vertexCount();
-    const std::vector<uint32_t> triangles = texels ? gridTriangles(width, height) : triangles;
+    const std::vector<uint32_t> triangles = texels ? gridTriangles(width, height) : bundle.mesh.indices;
     int order = input.shape.size() == 3 ? int(std::lround(std::sqrt(double(input.shape[1])))) : 0;
     if (input.domain != domain || input.semantic != "sh_transfer_rgb" || input.shape.size() != 3 ||
         input.shape[0] != V || input.shape[2] != 3 || order < 1 || order > sh::kMaxOrder ||

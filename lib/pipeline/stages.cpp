@@ -24,6 +24,12 @@ std::string transferParamsRefusal(const nlohmann::json& params) {
     return "";
 }
 
+std::string adaptParamsRefusal(const nlohmann::json& params) {
+    if (params.contains("order") == params.contains("max-error"))
+        return "give exactly one of 'order' (uniform truncation) and 'max-error' (adaptive order)";
+    return "";
+}
+
 // Sharded interreflected transfer with bounces: the direct pass, then one pass per bounce (lib/transfer).
 int transferPasses(const nlohmann::json& params) {
     bool interreflected = params.value("mode", std::string("shadowed")) == "interreflected";
@@ -77,6 +83,23 @@ std::vector<StageSpec> makeCatalogue() {
     transfer.paramsRefusal = transferParamsRefusal;
     transfer.passes = transferPasses;
     stages.push_back(transfer);
+
+    // Adaptive order and compact storage of a transfer bundle (docs/adapt.md); one map at most as its prior, which
+    // `order` (uniform truncation) does without.
+    StageSpec adapt{"adapt", 1, "adaptive SH order and compact storage of a transfer bundle"};
+    adapt.inputs = {{"bundle", FileKind::Bundle, "", ""}, {"env", FileKind::Env, "--env", "", true}};
+    adapt.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
+    adapt.params = {{"order", ParamType::Integer, 1.0, kMaxOrder},
+                    {"max-error", ParamType::Number, 1e-9, 1.0},
+                    {"budget", ParamType::String, 0.0, 0.0, {"rms", "vertex"}},
+                    {"prior", ParamType::String, 0.0, 0.0, {"maps", "worst"}},
+                    {"format", ParamType::String, 0.0, 0.0, {"float", "half", "u16", "u8", "cpca"}},
+                    {"scales", ParamType::String, 0.0, 0.0, {"per-vertex", "per-cluster"}},
+                    {"clusters", ParamType::Integer, 1.0, 65536.0},
+                    {"components", ParamType::Integer, 0.0, 65536.0},
+                    {"max-step", ParamType::Integer, 1.0, kMaxOrder}};
+    adapt.paramsRefusal = adaptParamsRefusal;
+    stages.push_back(adapt);
 
     // Shards are ranges of covered texels ("texel_range" layers). Gutter fill and seam stitching couple the whole
     // atlas, so the merge is `prt bake ... --merge SHARD...`, which joins the rows and finishes as one bake does.

@@ -80,22 +80,26 @@ auto withThreads(int threads, const Work& work) {
     return arena.execute(work);
 }
 
-} // namespace
-
-ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const EnvironmentMap& env,
-                                          const ReferenceOptions& options) {
+// Shades the vertices vertices[0..count) (or 0..count when `vertices` is null) into rows 0..count of the result.
+ReferenceRadiance shadeVertexRows(const TriMesh& mesh, const EnvironmentMap& env, const uint32_t* vertices,
+                                  size_t count, const ReferenceOptions& options) {
     checkInputs(mesh, options);
     if (options.phong && !options.eye)
         throw Error("", "--eye", "a glossy BRDF's per-vertex radiance needs the eye point", kExitUsage);
+    for (size_t i = 0; vertices && i < count; ++i)
+        if (vertices[i] >= mesh.vertexCount())
+            throw Error("", "reference", "vertex " + std::to_string(vertices[i]) + " is not in the mesh's " +
+                        std::to_string(mesh.vertexCount()) + " vertices", kExitUsage);
     EnvironmentSampler environment = makeEnvironmentSampler(env);
     return withThreads(options.threads, [&] {
         SceneTracer scene(mesh, options.albedo);
         ReferenceRadiance result;
-        result.radiance.resize(mesh.vertexCount() * 3);
-        result.standardError.resize(mesh.vertexCount() * 3);
+        result.radiance.resize(count * 3);
+        result.standardError.resize(count * 3);
         auto shadeVertices = [&](size_t begin, size_t end, uint64_t& rays) {
-            for (size_t v = begin; v < end; ++v) {
-                ShadingPoint point = scene.vertexPoint(uint32_t(v));
+            for (size_t row = begin; row < end; ++row) {
+                const uint32_t v = vertices ? vertices[row] : uint32_t(row);
+                ShadingPoint point = scene.vertexPoint(v);
                 float outgoing[3] = {0, 0, 1};
                 if (options.eye) {
                     for (int c = 0; c < 3; ++c) outgoing[c] = (*options.eye)[c] - point.position[c];
@@ -103,13 +107,25 @@ ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const Environment
                                              outgoing[2] * outgoing[2]);
                     for (float& c : outgoing) c /= length;
                 }
-                estimatePoint(scene, environment, point, v, options, &result.radiance[v * 3],
-                              &result.standardError[v * 3], rays, options.eye ? outgoing : nullptr);
+                estimatePoint(scene, environment, point, v, options, &result.radiance[row * 3],
+                              &result.standardError[row * 3], rays, options.eye ? outgoing : nullptr);
             }
         };
-        result.rays = parallelOverPoints("reference", mesh.vertexCount(), shadeVertices);
+        result.rays = parallelOverPoints("reference", count, shadeVertices);
         return result;
     });
+}
+
+} // namespace
+
+ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const EnvironmentMap& env,
+                                          const ReferenceOptions& options) {
+    return shadeVertexRows(mesh, env, nullptr, mesh.vertexCount(), options);
+}
+
+ReferenceRadiance referenceVertexRadianceAt(const TriMesh& mesh, const EnvironmentMap& env,
+                                            const std::vector<uint32_t>& vertices, const ReferenceOptions& options) {
+    return shadeVertexRows(mesh, env, vertices.data(), vertices.size(), options);
 }
 
 ReferenceImage referenceImage(const TriMesh& mesh, const EnvironmentMap& env, const PinholeCamera& camera,

@@ -54,6 +54,12 @@ struct ReferenceRadiance {
 ReferenceRadiance referenceVertexRadiance(const TriMesh& mesh, const EnvironmentMap& env,
                                           const ReferenceOptions& options);
 
+// The same at the listed vertices only (a pilot subset): row i is vertex vertices[i], bit for bit that vertex's
+// row of referenceVertexRadiance (each vertex's paths come from its own random streams). Needs every index below
+// the vertex count (throws prt::Error(kExitUsage) otherwise); repeats are allowed.
+ReferenceRadiance referenceVertexRadianceAt(const TriMesh& mesh, const EnvironmentMap& env,
+                                            const std::vector<uint32_t>& vertices, const ReferenceOptions& options);
+
 // PinholeCamera (lib/raycast) is the camera of referenceImage, shared with `prt render`.
 
 struct ReferenceImage {

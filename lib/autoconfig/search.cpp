@@ -1,0 +1,327 @@
+// The search: pilot reference and transfers on a vertex subset, every configuration's error predicted by relighting
+// the subset, the Pareto front, the cheapest configuration under the target, and its check on held-out vertices.
+#include "autoconfig.h"
+
+#include "core.h"
+#include "raycast.h"
+#include "reference.h"
+#include "runtime.h"
+#include "sh.h"
+#include "transfer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+
+namespace prt::autoconfig {
+
+namespace {
+
+std::string describe(const Config& c) {
+    char text[200];
+    std::snprintf(text, sizeof text, "order %d, %d samples, %d bounce%s, %s", c.order, c.samples, c.bounces,
+                  c.bounces == 1 ? "" : "s", adapt::formatName(c.format));
+    std::string s = text;
+    if (c.adaptiveError > 0.0) {
+        std::snprintf(text, sizeof text, ", adaptive to %.4g", c.adaptiveError);
+        s += text;
+    }
+    return s;
+}
+
+// Relative noise of a reference: RMS standard error over RMS radiance, over `count` rows from `first`.
+double relativeNoise(const ReferenceRadiance& r, size_t first, size_t count) {
+    double noise = 0.0, signal = 0.0;
+    for (size_t i = first * 3; i < (first + count) * 3; ++i) {
+        noise += double(r.standardError[i]) * r.standardError[i];
+        signal += double(r.radiance[i]) * r.radiance[i];
+    }
+    return signal > 0.0 ? std::sqrt(noise / signal) : INFINITY;
+}
+
+void checkOptions(const TriMesh& mesh, const std::vector<EnvironmentMap>& envs, const Options& o) {
+    auto usage = [](const char* place, const std::string& problem) { return Error("", place, problem, kExitUsage); };
+    if (!(o.targetError > 0.0) || !std::isfinite(o.targetError))
+        throw usage("--target-error", "must be > 0 (a relative RMSE, e.g. 0.02 for 2%)");
+    if (envs.empty()) throw usage("--env", "needs at least one environment map to measure the error under");
+    if (mesh.normals.size() != mesh.positions.size())
+        throw Error("", "mesh", "has no vertex normals (prt meshprep adds them)", kExitInput);
+    if (o.orders.empty() || o.samples.empty() || o.bounces.empty() || o.formats.empty())
+        throw usage("--orders", "every axis of the search needs at least one value");
+    for (int order : o.orders)
+        if (order < 1 || order > sh::kMaxOrder) throw usage("--orders", "each order must be in 1..32");
+    for (int samples : o.samples)
+        if (samples < 1 || samples > kMaxTransferSamples) throw usage("--samples", "each must be in 1..65536");
+    for (int bounces : o.bounces)
+        if (bounces < 0 || bounces > 64) throw usage("--bounces", "each must be in 0..64");
+    for (adapt::Format format : o.formats) bundleLayerBytes(1, 1, format, 0); // refuses cpca
+    if (o.referenceBounces < 0) throw usage("--reference-bounces", "must be >= 0");
+    if (o.referenceMinSamples < 2 || o.referenceMaxSamples < o.referenceMinSamples)
+        throw usage("--max-reference-samples", "needs 2 <= first pass <= maximum");
+    if (!(o.margin > 0.0 && o.margin <= 1.0)) throw usage("--margin", "must be in (0, 1]");
+    if (o.pilotVertices < 1) throw usage("--pilot-vertices", "must be >= 1");
+    for (double a : o.albedo)
+        if (!(a >= 0.0 && a <= 1.0)) throw usage("--albedo", "each channel must be in [0, 1]");
+}
+
+// Pareto front of (bake cost, bytes, pilot error): indices of the candidates no other is at least as good on all
+// three and better on one.
+std::vector<size_t> paretoFront(const std::vector<Candidate>& c) {
+    std::vector<size_t> front;
+    for (size_t i = 0; i < c.size(); ++i) {
+        bool dominated = false;
+        for (size_t j = 0; j < c.size() && !dominated; ++j) {
+            if (j == i) continue;
+            bool noWorse = c[j].bakeCost <= c[i].bakeCost && c[j].bundleBytes <= c[i].bundleBytes &&
+                           c[j].pilotError <= c[i].pilotError;
+            bool better = c[j].bakeCost < c[i].bakeCost || c[j].bundleBytes < c[i].bundleBytes ||
+                          c[j].pilotError < c[i].pilotError;
+            dominated = noWorse && better;
+        }
+        if (!dominated) front.push_back(i);
+    }
+    std::sort(front.begin(), front.end(), [&](size_t a, size_t b) {
+        return c[a].bakeCost != c[b].bakeCost ? c[a].bakeCost < c[b].bakeCost : a < b;
+    });
+    return front;
+}
+
+} // namespace
+
+Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& envs,
+                     const std::vector<std::string>& envNames, const Options& options) {
+    const double start = nowSeconds();
+    checkOptions(mesh, envs, options);
+    Result result;
+    splitVertices(mesh, options.pilotVertices, options.seed, result.pilot, result.heldOut);
+    std::vector<uint32_t> rows = result.pilot; // pilot rows first, then the held-out ones
+    rows.insert(rows.end(), result.heldOut.begin(), result.heldOut.end());
+    const size_t n = rows.size(), np = result.pilot.size(), nh = result.heldOut.size();
+    const size_t V = mesh.vertexCount();
+    const double E = options.targetError;
+    auto nameOf = [&](size_t m) { return m < envNames.size() ? envNames[m] : "map " + std::to_string(m); };
+
+    // ---- reference: a first pass measures the noise; paths are added until it is a fraction of the target ----
+    double t0 = nowSeconds();
+    ReferenceOptions ref;
+    ref.bounces = options.referenceBounces;
+    ref.seed = options.seed;
+    ref.albedo = std::array<float, 3>{float(options.albedo[0]), float(options.albedo[1]), float(options.albedo[2])};
+    ref.threads = options.threads;
+    ref.samples = options.referenceMinSamples;
+    std::vector<ReferenceRadiance> reference;
+    double worstNoise = 0.0;
+    size_t worstMap = 0;
+    for (size_t m = 0; m < envs.size(); ++m) {
+        reference.push_back(referenceVertexRadianceAt(mesh, envs[m], rows, ref));
+        double noise = relativeNoise(reference[m], 0, n);
+        if (noise > worstNoise) worstNoise = noise, worstMap = m;
+    }
+    // Noise falls as 1 / sqrt(paths).
+    const double noiseAtMax = worstNoise * std::sqrt(double(ref.samples) / options.referenceMaxSamples);
+    if (E < kNoiseRefusalRatio * noiseAtMax) {
+        double needed = ref.samples * std::pow(kNoiseRefusalRatio * worstNoise / E, 2.0);
+        char text[480];
+        std::snprintf(text, sizeof text,
+                      "%.4g is below %.0fx the reference's own noise: under %s its relative noise (RMS standard "
+                      "error / RMS radiance) is %.4g at %d paths per vertex and would be %.4g at the %d paths "
+                      "--max-reference-samples allows, so no configuration's error could be told from the noise; "
+                      "raise the target or --max-reference-samples to at least %.0f",
+                      E, kNoiseRefusalRatio, nameOf(worstMap).c_str(), worstNoise, ref.samples, noiseAtMax,
+                      options.referenceMaxSamples, std::ceil(needed));
+        throw Error("", "--target-error", text, kExitUsage);
+    }
+    const double wanted = ref.samples * std::pow(worstNoise / (options.noiseFraction * E), 2.0);
+    const int samples = int(std::clamp(std::ceil(wanted), double(ref.samples), double(options.referenceMaxSamples)));
+    if (samples > ref.samples) {
+        ref.samples = samples;
+        for (size_t m = 0; m < envs.size(); ++m) reference[m] = referenceVertexRadianceAt(mesh, envs[m], rows, ref);
+    }
+    result.referenceSamples = ref.samples;
+    for (size_t m = 0; m < envs.size(); ++m) result.referenceNoise.push_back(relativeNoise(reference[m], 0, n));
+    result.referenceSeconds = nowSeconds() - t0;
+    {
+        char text[200];
+        std::snprintf(text, sizeof text, "autoconfig: reference at %d paths on %zu pilot + %zu held-out vertices, "
+                      "largest relative noise %.4g, %.1f s", ref.samples, np, nh,
+                      *std::max_element(result.referenceNoise.begin(), result.referenceNoise.end()),
+                      result.referenceSeconds);
+        logInfo(text);
+    }
+
+    // ---- pilot transfers at the largest order, one per (samples, bounces), at the subset's vertices ----------
+    t0 = nowSeconds();
+    const int maxOrder = *std::max_element(options.orders.begin(), options.orders.end());
+    const int minOrder = *std::min_element(options.orders.begin(), options.orders.end());
+    std::vector<float> positions(n * 3), normals(n * 3), spawn(n * 3);
+    std::vector<uint64_t> keys(rows.begin(), rows.end());
+    const std::vector<float> meshSpawn = spawnNormals(mesh);
+    for (size_t i = 0; i < n; ++i)
+        for (int a = 0; a < 3; ++a) {
+            positions[i * 3 + a] = mesh.positions[size_t(rows[i]) * 3 + a];
+            normals[i * 3 + a] = mesh.normals[size_t(rows[i]) * 3 + a];
+            spawn[i * 3 + a] = meshSpawn[size_t(rows[i]) * 3 + a];
+        }
+    Receivers receivers;
+    receivers.positions = positions.data();
+    receivers.normals = normals.data();
+    receivers.spawnNormals = spawn.data();
+    receivers.keys = keys.data();
+    receivers.count = n;
+    auto transferOptions = [&](int order, int samples, int bounces) {
+        TransferOptions t;
+        t.mode = bounces == 0 ? TransferMode::Shadowed : TransferMode::Interreflected;
+        t.order = order;
+        t.samples = samples;
+        t.bounces = bounces;
+        t.albedo = {float(options.albedo[0]), float(options.albedo[1]), float(options.albedo[2])};
+        t.albedoOverride = true;
+        t.seed = options.seed;
+        t.threads = options.threads;
+        t.progress = false;
+        return t;
+    };
+    std::vector<int> samplesAxis = options.samples, bouncesAxis = options.bounces, ordersAxis = options.orders;
+    for (std::vector<int>* axis : {&samplesAxis, &bouncesAxis, &ordersAxis}) {
+        std::sort(axis->begin(), axis->end());
+        axis->erase(std::unique(axis->begin(), axis->end()), axis->end());
+    }
+    std::vector<std::vector<float>> pilotRows; // [samples][bounces] -> [n][maxOrder^2][3]
+    double hitFraction = 0.0;                  // front-face hits per ray at the pilot vertices (bounces gather there)
+    double secondsPerCost = 0.0;               // measured, for the report's seconds only
+    for (int s : samplesAxis)
+        for (int b : bouncesAxis) {
+            Transfer t = computeTransferAt(mesh, receivers, transferOptions(maxOrder, s, b));
+            if (b > 0 && s == samplesAxis.back()) hitFraction = double(t.stats.hits) / (double(n) * s);
+            if (b == 0 && s == samplesAxis.back())
+                secondsPerCost = t.stats.directSeconds / (double(n) * s * (1.0 + kCoefficientCost * maxOrder * maxOrder));
+            pilotRows.push_back(std::move(t.coefficients));
+        }
+    result.pilotTransferSeconds = nowSeconds() - t0;
+    // Deterministic work counts, so the choice does not depend on the machine's load or the thread count.
+    auto bakeCost = [&](const Config& c) {
+        const double coefficients = double(c.order) * c.order;
+        return double(V) * c.samples * (1.0 + kCoefficientCost * coefficients +
+                                        c.bounces * hitFraction * kGatherCost * coefficients);
+    };
+
+    // ---- every configuration's error on the pilot vertices --------------------------------------------------
+    std::vector<std::vector<float>> lightings;
+    for (const EnvironmentMap& env : envs) lightings.push_back(environmentLighting(env, maxOrder, nullptr, sh::Window::None));
+    // Error of a configuration on rows [first, first + count) of the pilot run, and (adaptive) the coefficients and
+    // bands its vertices keep there.
+    struct Prediction {
+        double error = 0.0;
+        uint64_t coefficients = 0, bands = 0;
+        int largestOrder = 0; // the most bands any of the rows keeps
+    };
+    auto predict = [&](const Config& c, const std::vector<float>& rowsAtMax, size_t first, size_t count) {
+        const float* rowsHere = rowsAtMax.data() + first * maxOrder * maxOrder * 3;
+        std::vector<uint8_t> orders(count, uint8_t(c.order));
+        if (c.adaptiveError > 0.0) { // prt adapt's rms budget over these rows, without grading
+            std::vector<float> dense = storedRows(rowsHere, count, maxOrder, c.order, adapt::Format::Float);
+            std::vector<std::vector<float>> prior;
+            for (const std::vector<float>& lighting : lightings)
+                prior.emplace_back(lighting.begin(), lighting.begin() + c.order * c.order * 3);
+            orders = adapt::budgetOrders(
+                adapt::truncationErrorSquared(dense.data(), count, c.order, prior, adapt::Prior::Maps), prior.size(),
+                count, c.order, c.adaptiveError);
+        }
+        std::vector<float> stored = storedRows(rowsHere, count, maxOrder, c.order, c.format, &orders);
+        std::vector<float> radiance(count * 3);
+        Prediction p;
+        for (uint8_t n : orders) p.coefficients += uint64_t(n) * n, p.bands += n, p.largestOrder = std::max<int>(p.largestOrder, n);
+        for (size_t m = 0; m < envs.size(); ++m) {
+            relight(stored.data(), count, c.order * c.order, lightings[m].data(), radiance.data());
+            p.error = std::max(p.error, noiseCorrectedError(radiance.data(), reference[m].radiance.data() + first * 3,
+                                                            reference[m].standardError.data() + first * 3, count));
+        }
+        return p;
+    };
+    std::vector<size_t> rowsOf; // candidate -> pilotRows index
+    for (size_t si = 0; si < samplesAxis.size(); ++si)
+        for (size_t bi = 0; bi < bouncesAxis.size(); ++bi)
+            for (int order : ordersAxis)
+                for (adapt::Format format : options.formats) {
+                    const size_t run = si * bouncesAxis.size() + bi;
+                    Candidate c;
+                    c.config = {order, samplesAxis[si], bouncesAxis[bi], format};
+                    c.bakeCost = bakeCost(c.config);
+                    c.bakeSeconds = c.bakeCost * secondsPerCost;
+                    c.bundleBytes = bundleLayerBytes(V, order, format, bouncesAxis[bi]);
+                    c.pilotError = predict(c.config, pilotRows[run], 0, np).error;
+                    result.candidates.push_back(c);
+                    rowsOf.push_back(run);
+                    // Adaptive order spends what is left of the target: truncation adds about in quadrature, so
+                    // budgets up to sqrt((margin E)^2 - e^2). The adapt stage takes one map as its prior.
+                    const double room = std::pow(options.margin * E, 2.0) - c.pilotError * c.pilotError;
+                    if (envs.size() != 1 || order < 2 || !(room > 0.0)) continue;
+                    for (double fraction : {1.0, 0.85, 0.7, 0.5}) {
+                        Candidate a = c;
+                        a.config.adaptiveError = fraction * std::sqrt(room);
+                        Prediction p = predict(a.config, pilotRows[run], 0, np);
+                        a.pilotError = p.error;
+                        a.bundleBytes = raggedLayerBytes(V, (p.coefficients * V + np / 2) / np, (p.bands * V + np / 2) / np,
+                                                         format);
+                        // Keeping every band is the uniform configuration; keeping none of band L is one from L - 1.
+                        if (a.bundleBytes >= c.bundleBytes || p.largestOrder < order) continue;
+                        result.candidates.push_back(a);
+                        rowsOf.push_back(run);
+                    }
+                }
+    result.pareto = paretoFront(result.candidates);
+
+    // ---- the choice: cheapest (bake time and bundle bytes, each over its best) under margin x target ---------
+    std::vector<size_t> feasible;
+    for (size_t i = 0; i < result.candidates.size(); ++i)
+        if (result.candidates[i].pilotError <= options.margin * E) feasible.push_back(i);
+    if (feasible.empty()) {
+        size_t best = 0;
+        for (size_t i = 1; i < result.candidates.size(); ++i)
+            if (result.candidates[i].pilotError < result.candidates[best].pilotError) best = i;
+        throw Error("", "--target-error",
+                    "no configuration in the search reaches " + std::to_string(E) + " (with the margin " +
+                    std::to_string(options.margin) + "): the best, " + describe(result.candidates[best].config) +
+                    ", has a predicted error of " + std::to_string(result.candidates[best].pilotError) +
+                    " on the pilot vertices; raise the target or widen --orders / --samples / --bounces",
+                    kExitUsage);
+    }
+    double costMin = INFINITY, bytesMin = INFINITY;
+    for (size_t i : feasible) {
+        costMin = std::min(costMin, result.candidates[i].bakeCost);
+        bytesMin = std::min(bytesMin, double(result.candidates[i].bundleBytes));
+    }
+    auto score = [&](size_t i) {
+        return result.candidates[i].bakeCost / costMin + double(result.candidates[i].bundleBytes) / bytesMin;
+    };
+    std::stable_sort(feasible.begin(), feasible.end(), [&](size_t a, size_t b) {
+        double sa = score(a), sb = score(b);
+        if (sa != sb) return sa < sb;
+        return result.candidates[a].pilotError < result.candidates[b].pilotError;
+    });
+    bool verified = false;
+    for (size_t i : feasible) {
+        Candidate& c = result.candidates[i];
+        c.heldOutError = predict(c.config, pilotRows[rowsOf[i]], np, nh).error;
+        result.tried.push_back(i);
+        char text[240];
+        std::snprintf(text, sizeof text, "autoconfig: %s: predicted %.4g, held out %.4g%s", describe(c.config).c_str(),
+                      c.pilotError, c.heldOutError, c.heldOutError <= E ? "" : ": over the target, next");
+        logInfo(text);
+        if (c.heldOutError <= E) {
+            result.chosen = c;
+            verified = true;
+            break;
+        }
+    }
+    if (!verified)
+        throw Error("", "--target-error",
+                    "every configuration predicted under " + std::to_string(E) +
+                    " failed the held-out check (the pilot vertices are not representative: raise --pilot-vertices)",
+                    kExitUsage);
+    result.seconds = nowSeconds() - start;
+    return result;
+}
+
+} // namespace prt::autoconfig
