@@ -86,7 +86,8 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
     const std::string domain = texels ? "texel" : "vertex";
     const std::string place = "layer \"" + input.name + "\"";
     // The bounce part of the full-order transfer (hybrid lighting's) no longer matches what is stored: dropped.
-    std::erase_if(bundle.layers, [&](const Layer& l) { return l.name == (texels ? "texel_transfer_bounce" : "transfer_bounce"); });
+    const char* bounceLayer = texels ? "texel_transfer_bounce" : "transfer_bounce";
+    std::erase_if(bundle.layers, [&](const Layer& l) { return l.name == bounceLayer; });
     int width = 0, height = 0;
     if (texels) {
         auto side = [&](const char* key) {
