@@ -153,7 +153,6 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
     // ---- pilot transfers at the largest order, one per (samples, bounces), at the subset's vertices ----------
     t0 = nowSeconds();
     const int maxOrder = *std::max_element(options.orders.begin(), options.orders.end());
-    const int minOrder = *std::min_element(options.orders.begin(), options.orders.end());
     std::vector<float> positions(n * 3), normals(n * 3), spawn(n * 3);
     std::vector<uint64_t> keys(rows.begin(), rows.end());
     const std::vector<float> meshSpawn = spawnNormals(mesh);
