@@ -20,6 +20,7 @@ struct AutoconfigArgs {
     double targetError = 0.0, margin = 0.9;
     std::vector<int> orders = {2, 3, 4, 5, 6, 7, 8}, samples = {64, 128, 256, 512, 1024}, bounces = {0, 1, 2, 3};
     std::vector<std::string> formats = {"float", "half", "u16", "u8"};
+    std::vector<int> lights = {0, 4};
     int pilotVertices = 256, referenceBounces = 3, maxReferenceSamples = 65536, threads = 0;
     uint64_t seed = 0;
 };
@@ -38,6 +39,7 @@ void runAutoconfig(const AutoconfigArgs& args, const CLI::App& command) {
     options.targetError = args.targetError;
     options.orders = args.orders;
     options.samples = args.samples;
+    options.lights = args.lights;
     options.bounces = args.bounces;
     options.formats.clear();
     for (const std::string& format : args.formats) options.formats.push_back(adapt::parseFormat(format));
@@ -68,9 +70,10 @@ void runAutoconfig(const AutoconfigArgs& args, const CLI::App& command) {
     for (size_t i : result.pareto) {
         const autoconfig::Candidate& c = result.candidates[i];
         char line[200];
-        std::snprintf(line, sizeof line, "  order %d  samples %5d  bounces %d  %-5s  adaptive %-8.4g  %9.4g M  %8.3g s  "
-                      "%10llu B  %.4g", c.config.order, c.config.samples, c.config.bounces,
-                      adapt::formatName(c.config.format), c.config.adaptiveError, c.bakeCost * 1e-6, c.bakeSeconds,
+        std::snprintf(line, sizeof line, "  order %d  samples %5d  bounces %d  %-5s  adaptive %-8.4g  lights %d  %9.4g M  "
+                      "%8.3g s  %10llu B  %.4g", c.config.order, c.config.samples, c.config.bounces,
+                      adapt::formatName(c.config.format), c.config.adaptiveError, c.config.lights, c.bakeCost * 1e-6,
+                      c.bakeSeconds,
                       (unsigned long long)c.bundleBytes, c.pilotError);
         logInfo(line);
     }
@@ -85,9 +88,9 @@ void runAutoconfig(const AutoconfigArgs& args, const CLI::App& command) {
     const autoconfig::Candidate& c = result.chosen;
     char line[320];
     std::snprintf(line, sizeof line,
-                  "autoconfig: chose order %d, %d samples, %d bounces, %s: predicted %.4g, held out %.4g "
+                  "autoconfig: chose order %d, %d samples, %d bounces, %s, %d lights: predicted %.4g, held out %.4g "
                   "(target %.4g); wrote %s in %.1f s",
-                  c.config.order, c.config.samples, c.config.bounces, adapt::formatName(c.config.format),
+                  c.config.order, c.config.samples, c.config.bounces, adapt::formatName(c.config.format), c.config.lights,
                   c.pilotError, c.heldOutError, args.targetError, args.output.c_str(), nowSeconds() - start);
     logInfo(line);
 
@@ -119,6 +122,9 @@ void addAutoconfigCommand(CLI::App& app) {
     command->add_option("--samples", args->samples, "Transfer samples to search (comma list)")->delimiter(',');
     command->add_option("--bounces", args->bounces, "Bounces to search (comma list; 0 = shadowed)")->delimiter(',');
     command->add_option("--formats", args->formats, "Storage formats to search: float, half, u16, u8")->delimiter(',');
+    command->add_option("--lights", args->lights,
+                        "Extracted cone lights to search, the most per map (comma list; 0: plain SH; default 0,4)")
+        ->delimiter(',');
     command->add_option("--pilot-vertices", args->pilotVertices,
                         "Pilot vertices, and as many held out (default 256, at most half the mesh each)");
     command->add_option("--reference-bounces", args->referenceBounces, "Bounces of the reference (default 3)");

@@ -2,7 +2,7 @@
 // whose relative error against the path-traced reference stays under a target, chosen from cheap pilot runs on a
 // vertex subset and checked on held-out vertices. docs/autoconfig.md has the decisions; results.md the figures.
 //
-// A configuration is (SH order L, transfer samples S, bounces B, storage format). Its error is the relative RMSE
+// A configuration is (SH order L, transfer samples S, bounces B, storage format, extracted lights K). Its error is the relative RMSE
 // `prt compare` reports (RMS over vertices and RGB channels of relit - reference, over the reference's RMS), with
 // the reference's own noise taken out: e^2 = (mean (x - r)^2 - mean se^2) / (mean r^2 - mean se^2), se the
 // reference's per-vertex standard error, because noise adds in quadrature and would otherwise be charged to the
@@ -34,6 +34,10 @@ struct Config {
     // > 0: adaptive order, `prt adapt --max-error` (rms budget, one map as the prior, no grading): each vertex keeps
     // the bands the budget gives it, up to `order`. 0: every vertex at `order`.
     double adaptiveError = 0.0;
+    // > 0: the hybrid relight (docs/envlight.md) with up to this many cone lights per map from `prt envlight
+    // --order L --max-lights K` and their order-L residual; float storage with the transfer's bounce layer, which
+    // the lights' interreflection goes through. 0: plain SH.
+    int lights = 0;
 };
 
 // One configuration with its modelled costs and its errors on the pilot and held-out vertices.
@@ -53,6 +57,8 @@ struct Options {
     std::vector<int> bounces = {0, 1, 2, 3};
     std::vector<adapt::Format> formats = {adapt::Format::Float, adapt::Format::Half, adapt::Format::U16,
                                           adapt::Format::U8};
+    std::vector<int> lights = {0, 4};          // extracted cone lights (max per map); 0: plain SH only
+    int lightSamples = 64;                     // cone visibility rays per vertex and light, as `prt relight`'s
     std::array<double, 3> albedo = {0.8, 0.8, 0.8}; // transfer and reference (overrides per-vertex albedo), as typed
     uint64_t seed = 0;                         // transfer directions, reference paths and the vertex subsets
     size_t pilotVertices = 256;                // and as many held out (at most half the mesh each)

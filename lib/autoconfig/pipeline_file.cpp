@@ -40,6 +40,7 @@ nlohmann::json candidateJson(const Candidate& c) {
                         {"bounces", c.config.bounces},
                         {"format", adapt::formatName(c.config.format)},
                         {"adaptive_error", c.config.adaptiveError},
+                        {"lights", c.config.lights},
                         {"bake_cost", c.bakeCost},
                         {"bake_seconds", c.bakeSeconds},
                         {"bundle_bytes", c.bundleBytes},
@@ -66,7 +67,8 @@ std::string pipelineToml(const Result& result, const Options& options, const std
                   "# Written by `prt autoconfig`: the cheapest bake and smallest bundle whose relative error against\n"
                   "# `prt reference` (%d bounces, albedo %s,%s,%s; reference noise taken out) is under the target.\n"
                   "#   target error           %.6g\n"
-                  "#   chosen                 order %d, %d samples, %d bounces, %s storage, adaptive budget %.4g\n"
+                  "#   chosen                 order %d, %d samples, %d bounces, %s storage, adaptive budget %.4g, "
+                  "lights %d\n"
                   "#   predicted (pilot)      %.6g on %zu vertices\n"
                   "#   verified (held out)    %.6g on %zu other vertices\n"
                   "#   reference              %d paths per vertex; relative noise %s\n"
@@ -75,7 +77,7 @@ std::string pipelineToml(const Result& result, const Options& options, const std
                   "# Run it with: prt run THIS_FILE (paths are relative to the directory prt run starts in)\n\n",
                   options.referenceBounces, number(options.albedo[0]).c_str(), number(options.albedo[1]).c_str(),
                   number(options.albedo[2]).c_str(), options.targetError, c.order, c.samples, c.bounces,
-                  adapt::formatName(c.format), c.adaptiveError, result.chosen.pilotError, result.pilot.size(),
+                  adapt::formatName(c.format), c.adaptiveError, c.lights, result.chosen.pilotError, result.pilot.size(),
                   result.chosen.heldOutError, result.heldOut.size(), result.referenceSamples, noise.c_str(),
                   result.chosen.bakeCost * 1e-6, (unsigned long long)result.chosen.bundleBytes, result.candidates.size(),
                   result.pareto.size(), result.tried.size());
@@ -105,14 +107,23 @@ std::string pipelineToml(const Result& result, const Options& options, const std
         t += "\n[stages.adapt]\nrun = \"adapt\"\ninputs = { bundle = \"transfer\", env = \"" + envKeys[0] +
              "\" }\nmax-error = " + number(c.adaptiveError) + "\nformat = " + quoted(adapt::formatName(c.format)) +
              "\nmax-step = " + std::to_string(std::max(1, c.order)) + "\n";
-    } else if (c.format != adapt::Format::Float || c.bounces > 0) { // also drops the transfer_bounce layer
+    } else if (c.lights == 0 && (c.format != adapt::Format::Float || c.bounces > 0)) { // drops transfer_bounce
         bundleStage = "adapt";
         t += "\n[stages.adapt]\nrun = \"adapt\"\ninputs = { bundle = \"transfer\" }\norder = " +
              std::to_string(c.order) + "\nformat = " + quoted(adapt::formatName(c.format)) + "\n";
     }
-    for (size_t m = 0; m < envKeys.size(); ++m)
-        t += "\n[stages.relight-" + envKeys[m].substr(4) + "]\nrun = \"relight\"\ninputs = { bundle = \"" +
-             bundleStage + "\", env = \"" + envKeys[m] + "\" }\n";
+    for (size_t m = 0; m < envKeys.size(); ++m) {
+        const std::string map = envKeys[m].substr(4);
+        if (c.lights > 0) { // the hybrid: each map's cone lights and residual feed its relight
+            t += "\n[stages.lights-" + map + "]\nrun = \"envlight\"\ninputs = { env = \"" + envKeys[m] +
+                 "\" }\norder = " + std::to_string(c.order) + "\nmax-lights = " + std::to_string(c.lights) + "\n";
+            t += "\n[stages.relight-" + map + "]\nrun = \"relight\"\ninputs = { bundle = \"" + bundleStage +
+                 "\", lights = \"lights-" + map + "\" }\nlight-samples = " + std::to_string(options.lightSamples) + "\n";
+        } else {
+            t += "\n[stages.relight-" + map + "]\nrun = \"relight\"\ninputs = { bundle = \"" + bundleStage +
+                 "\", env = \"" + envKeys[m] + "\" }\n";
+        }
+    }
     std::filesystem::path bundle(bundlePath);
     std::string stem = bundle.filename().string();
     for (const char* suffix : {".glb", ".prt"})

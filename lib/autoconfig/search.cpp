@@ -3,6 +3,7 @@
 #include "autoconfig.h"
 
 #include "core.h"
+#include "envlight.h"
 #include "raycast.h"
 #include "reference.h"
 #include "runtime.h"
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numeric>
 
 namespace prt::autoconfig {
@@ -27,6 +29,7 @@ std::string describe(const Config& c) {
         std::snprintf(text, sizeof text, ", adaptive to %.4g", c.adaptiveError);
         s += text;
     }
+    if (c.lights > 0) s += ", up to " + std::to_string(c.lights) + " cone lights";
     return s;
 }
 
@@ -56,6 +59,9 @@ void checkOptions(const TriMesh& mesh, const std::vector<EnvironmentMap>& envs, 
     for (int bounces : o.bounces)
         if (bounces < 0 || bounces > 64) throw usage("--bounces", "each must be in 0..64");
     for (adapt::Format format : o.formats) bundleLayerBytes(1, 1, format, 0); // refuses cpca
+    for (int lights : o.lights)
+        if (lights < 0 || lights > 64) throw usage("--lights", "each must be in 0..64");
+    if (o.lightSamples < 1 || o.lightSamples > 65536) throw usage("--light-samples", "must be in 1..65536");
     if (o.referenceBounces < 0) throw usage("--reference-bounces", "must be >= 0");
     if (o.referenceMinSamples < 2 || o.referenceMaxSamples < o.referenceMinSamples)
         throw usage("--max-reference-samples", "needs 2 <= first pass <= maximum");
@@ -179,6 +185,7 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
         t.seed = options.seed;
         t.threads = options.threads;
         t.progress = false;
+        t.keepDirect = bounces > 0; // the hybrid's lights bounce through total - direct
         return t;
     };
     std::vector<int> samplesAxis = options.samples, bouncesAxis = options.bounces, ordersAxis = options.orders;
@@ -187,6 +194,7 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
         axis->erase(std::unique(axis->begin(), axis->end()), axis->end());
     }
     std::vector<std::vector<float>> pilotRows; // [samples][bounces] -> [n][maxOrder^2][3]
+    std::vector<std::vector<float>> pilotBounce; // the same for the bounces' part (empty without bounces)
     double hitFraction = 0.0;                  // front-face hits per ray at the pilot vertices (bounces gather there)
     double secondsPerCost = 0.0;               // measured, for the report's seconds only
     for (int s : samplesAxis)
@@ -195,6 +203,8 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
             if (b > 0 && s == samplesAxis.back()) hitFraction = double(t.stats.hits) / (double(n) * s);
             if (b == 0 && s == samplesAxis.back())
                 secondsPerCost = t.stats.directSeconds / (double(n) * s * (1.0 + kCoefficientCost * maxOrder * maxOrder));
+            for (size_t i = 0; i < t.direct.size(); ++i) t.direct[i] = t.coefficients[i] - t.direct[i];
+            pilotBounce.push_back(std::move(t.direct));
             pilotRows.push_back(std::move(t.coefficients));
         }
     result.pilotTransferSeconds = nowSeconds() - t0;
@@ -215,7 +225,65 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
         uint64_t coefficients = 0, bands = 0;
         int largestOrder = 0; // the most bands any of the rows keeps
     };
-    auto predict = [&](const Config& c, const std::vector<float>& rowsAtMax, size_t first, size_t count) {
+    // Extracted lights per (map, order, K), and their cone visibility at every subset row ([n][lights]).
+    struct MapLights {
+        HybridLighting lighting;
+        std::vector<float> visibility;
+    };
+    std::map<std::array<int, 3>, MapLights> mapLights;
+    auto lightsOf = [&](size_t m, int order, int k) -> const MapLights& {
+        auto found = mapLights.find({int(m), order, k});
+        if (found != mapLights.end()) return found->second;
+        envlight::Options o;
+        o.order = order;
+        o.maxLights = k;
+        envlight::Decomposition d = envlight::decompose(envs[m], o);
+        MapLights lights;
+        lights.lighting.order = order;
+        lights.lighting.residual.assign(d.residual.begin(), d.residual.end());
+        lights.lighting.bounceWindow = sh::Window::Hann; // `prt relight`'s default
+        for (const envlight::ConeLight& l : d.lights)
+            lights.lighting.lights.push_back({{float(l.direction[0]), float(l.direction[1]), float(l.direction[2])},
+                                              {float(l.radiance[0]), float(l.radiance[1]), float(l.radiance[2])},
+                                              float(l.angularRadius)});
+        lights.visibility = envlight::coneVisibility(mesh, positions.data(), normals.data(), spawn.data(), n, d.lights,
+                                                     options.lightSamples);
+        return mapLights.emplace(std::array<int, 3>{int(m), order, k}, std::move(lights)).first->second;
+    };
+    // The hybrid's radiance at rows [first, first + count) of run `run` under map m.
+    auto hybridRadiance = [&](const Config& c, size_t run, size_t m, size_t first, size_t count) {
+        const MapLights& lights = lightsOf(m, c.order, c.lights);
+        const size_t stride = size_t(maxOrder) * maxOrder * 3;
+        HybridModel model;
+        model.total.vertexCount = uint32_t(count);
+        model.total.order = c.order;
+        model.total.transfer = storedRows(pilotRows[run].data() + first * stride, count, maxOrder, c.order,
+                                          adapt::Format::Float);
+        if (!pilotBounce[run].empty())
+            model.bounce = storedRows(pilotBounce[run].data() + first * stride, count, maxOrder, c.order,
+                                      adapt::Format::Float);
+        model.normals.assign(normals.begin() + first * 3, normals.begin() + (first + count) * 3);
+        model.albedo.resize(count * 3);
+        for (size_t i = 0; i < count; ++i)
+            for (int a = 0; a < 3; ++a) model.albedo[i * 3 + a] = float(options.albedo[a]);
+        std::vector<float> radiance(count * 3);
+        relightHybrid(model, lights.lighting, lights.visibility.data() + first * lights.lighting.lights.size(), 0,
+                      count, radiance.data());
+        return radiance;
+    };
+    auto predict = [&](const Config& c, size_t run, size_t first, size_t count) {
+        if (c.lights > 0) {
+            Prediction p;
+            p.coefficients = uint64_t(count) * c.order * c.order, p.bands = uint64_t(count) * c.order;
+            p.largestOrder = c.order;
+            for (size_t m = 0; m < envs.size(); ++m) {
+                std::vector<float> radiance = hybridRadiance(c, run, m, first, count);
+                p.error = std::max(p.error, noiseCorrectedError(radiance.data(), reference[m].radiance.data() + first * 3,
+                                                                reference[m].standardError.data() + first * 3, count));
+            }
+            return p;
+        }
+        const std::vector<float>& rowsAtMax = pilotRows[run];
         const float* rowsHere = rowsAtMax.data() + first * maxOrder * maxOrder * 3;
         std::vector<uint8_t> orders(count, uint8_t(c.order));
         if (c.adaptiveError > 0.0) { // prt adapt's rms budget over these rows, without grading
@@ -249,9 +317,24 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
                     c.bakeCost = bakeCost(c.config);
                     c.bakeSeconds = c.bakeCost * secondsPerCost;
                     c.bundleBytes = bundleLayerBytes(V, order, format, bouncesAxis[bi]);
-                    c.pilotError = predict(c.config, pilotRows[run], 0, np).error;
+                    c.pilotError = predict(c.config, run, 0, np).error;
                     result.candidates.push_back(c);
                     rowsOf.push_back(run);
+                    // The hybrid: float storage (the bounce layer stays), lights per map from `prt envlight`.
+                    for (int k : options.lights) {
+                        if (k <= 0 || format != adapt::Format::Float) continue;
+                        Candidate h = c;
+                        h.config.lights = k;
+                        size_t found = 0;
+                        for (size_t m = 0; m < envs.size(); ++m) found += lightsOf(m, order, k).lighting.lights.size();
+                        if (found == 0) continue; // no light in any map: plain SH
+                        h.pilotError = predict(h.config, run, 0, np).error;
+                        // The transfer stage's float32 layers as they are: transfer, and with bounces its bounce
+                        // part; plus each light's 7 floats.
+                        h.bundleBytes = uint64_t(V) * order * order * 12 * (bouncesAxis[bi] > 0 ? 2 : 1) + 28 * found;
+                        result.candidates.push_back(h);
+                        rowsOf.push_back(run);
+                    }
                     // Adaptive order spends what is left of the target: truncation adds about in quadrature, so
                     // budgets up to sqrt((margin E)^2 - e^2). The adapt stage takes one map as its prior.
                     const double room = std::pow(options.margin * E, 2.0) - c.pilotError * c.pilotError;
@@ -259,7 +342,7 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
                     for (double fraction : {1.0, 0.85, 0.7, 0.5}) {
                         Candidate a = c;
                         a.config.adaptiveError = fraction * std::sqrt(room);
-                        Prediction p = predict(a.config, pilotRows[run], 0, np);
+                        Prediction p = predict(a.config, run, 0, np);
                         a.pilotError = p.error;
                         a.bundleBytes = raggedLayerBytes(V, (p.coefficients * V + np / 2) / np, (p.bands * V + np / 2) / np,
                                                          format);
@@ -302,7 +385,7 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
     bool verified = false;
     for (size_t i : feasible) {
         Candidate& c = result.candidates[i];
-        c.heldOutError = predict(c.config, pilotRows[rowsOf[i]], np, nh).error;
+        c.heldOutError = predict(c.config, rowsOf[i], np, nh).error;
         result.tried.push_back(i);
         char text[240];
         std::snprintf(text, sizeof text, "autoconfig: %s: predicted %.4g, held out %.4g%s", describe(c.config).c_str(),

@@ -105,6 +105,47 @@ TEST_F(AutoconfigCli, PicksOrderTwoTheFewestSamplesAndNoBouncesAndItsPipelineMee
     EXPECT_NE(toml.find("verified (held out)"), std::string::npos);
 }
 
+// A small bright sun on a dim constant sky: plain SH at order 1 misses the sun's shape by far (16%), while one cone
+// light plus the order-1 residual is exact on the unoccluded sphere up to the fit. So autoconfig must take the
+// extracted lights at the lowest order, and its pipeline (envlight feeding relight) must meet the target.
+TEST_F(AutoconfigCli, TakesExtractedLightsForASmallSunAndItsPipelineMeetsTheTarget) {
+    prt::Image sky;
+    sky.width = 256;
+    sky.height = 128;
+    const double sun[3] = {0.3, 0.8, 0.52}, length = std::sqrt(0.09 + 0.64 + 0.2704);
+    for (int y = 0; y < sky.height; ++y)
+        for (int x = 0; x < sky.width; ++x) {
+            double d[3];
+            prt::sh::equirectDirection(sky.width, sky.height, x, y, d);
+            bool inSun = (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]) / length > std::cos(5.0 * M_PI / 180.0);
+            sky.rgb.insert(sky.rgb.end(), {0.5f + (inSun ? 40.0f : 0.0f), 0.5f + (inSun ? 36.0f : 0.0f),
+                                           0.6f + (inSun ? 30.0f : 0.0f)});
+        }
+    prt::writeImage(path("sun.exr"), sky);
+    const double target = 0.02;
+    CliRun run = runPrt("autoconfig " + path("sphere.glb") + " --env " + path("sun.exr") +
+                            " --orders 1,2 --samples 16 --bounces 0 --formats float --lights 0,2 --pilot-vertices 64 "
+                            "--target-error 0.02 -o " + path("sun.toml") + " --report " + path("sun.json") +
+                            " --bundle " + path("out/sun.prt.glb"),
+                        dir);
+    ASSERT_EQ(run.exitCode, 0) << run.stderrText;
+    nlohmann::json report = nlohmann::json::parse(readText(path("sun.json")));
+    EXPECT_EQ(report["chosen"]["lights"], 2) << report.dump(1);
+    EXPECT_EQ(report["chosen"]["order"], 1) << report.dump(1);
+    EXPECT_NE(readText(path("sun.toml")).find("run = \"envlight\""), std::string::npos);
+    ASSERT_EQ(runPrt("run " + path("sun.toml") + " --cache-dir " + path("cache"), dir).exitCode, 0);
+    ASSERT_EQ(runPrt("reference " + path("sphere.glb") + " --env " + path("sun.exr") +
+                         " --bounces 0 --albedo 0.8,0.8,0.8 --samples 256 -o " + path("sun-ref.npy"),
+                     dir)
+                  .exitCode,
+              0);
+    ASSERT_EQ(runPrt("compare " + path("out/sun.sun.npy") + " " + path("sun-ref.npy") + " -o " + path("m.json"), dir)
+                  .exitCode,
+              0);
+    nlohmann::json metrics = nlohmann::json::parse(readText(path("m.json")));
+    EXPECT_LE(metrics["relative_rmse"].get<double>(), target + 0.02) << metrics.dump(1); // plus 256-path noise
+}
+
 TEST_F(AutoconfigCli, RefusesTargetsAtOrBelowZeroAndBelowTheReferenceNoiseWithNoOutput) {
     struct Case {
         std::string arguments;
