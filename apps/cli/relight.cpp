@@ -40,6 +40,17 @@ struct RelightOptions {
     SpecularRelightArgs specular; // --brdf: relight_specular.cpp
 };
 
+// Relit rows to `path`: with texels a width x height float EXR atlas, else per-vertex radiance (.npy or .csv).
+// Atomic either way.
+void writeRelit(const std::string& path, bool texels, int width, int height, std::vector<float> radiance) {
+    if (!texels) return writeVertexRadiance(path, radiance);
+    Image image;
+    image.width = width;
+    image.height = height;
+    image.rgb = std::move(radiance);
+    writeImage(path, image);
+}
+
 // What the hybrid relights: rows (vertices, or texels of a bake) and, for the cone visibility, where each row lies
 // and the mesh whose shadows fall on it.
 struct HybridRows {
@@ -161,15 +172,7 @@ void runHybridRelight(const RelightOptions& options, double start) {
                       "(their interreflected light is lost); bake with --bounces"
                     : "relight: the bundle has no \"transfer_bounce\" layer, so the lights light only directly "
                       "(their interreflected light is lost); make it with `prt transfer --mode interreflected`");
-    if (options.texels) {
-        Image image;
-        image.width = rows.width;
-        image.height = rows.height;
-        image.rgb = std::move(radiance);
-        writeImage(options.output, image); // float EXR, atomic
-    } else {
-        writeVertexRadiance(options.output, radiance);
-    }
+    writeRelit(options.output, options.texels, rows.width, rows.height, std::move(radiance));
     logInfo("relight: wrote " + options.output);
     nlohmann::json record = {{"relight_seconds", relightSeconds}, {"visibility_seconds", visibilitySeconds},
                              {"visibility_rays", rays}, {"lights", cones.size()}};
@@ -299,14 +302,8 @@ void runRelight(const RelightOptions& options) {
         // Per-vertex radiance toward the camera's eye, interpolated over each hit triangle as `prt render` does.
         RenderedImage picture = renderVertexRadiance(mesh, radiance, camera);
         writeRenderedPicture(options.output, picture, options.exposure);
-    } else if (options.texels) {
-        Image image;
-        image.width = texelModel.width;
-        image.height = texelModel.height;
-        image.rgb = std::move(radiance);
-        writeImage(options.output, image); // float EXR, atomic
     } else {
-        writeVertexRadiance(options.output, radiance);
+        writeRelit(options.output, options.texels, texelModel.width, texelModel.height, std::move(radiance));
     }
     logInfo("relight: wrote " + options.output);
 
