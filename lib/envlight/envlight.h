@@ -180,11 +180,12 @@ nlohmann::ordered_json lightsDocument(const Decomposition& decomposition, const 
 // ---- rendering the decomposition ------------------------------------------------------------------------------
 // The lighting residual SH + cones as a width x width/2 equirectangular map: each texel the residual at its centre
 // plus each cone's exact coverage of the texel, estimated with `supersample`^2 stratified points. The SH residual
-// can dip below zero where the map had less light than the lights' cones; a path tracer needs radiance >= 0, so
-// negative texels become 0 and *clampedEnergy (when not null) receives the clamped luminance energy over the
-// rendered map's total. Needs width even and >= 4, residual sized order^2 * 3.
+// can dip below zero where the map had less light than the lights' cones; those texels stay negative (light
+// transport is linear, and prt reference samples by |radiance| and keeps the sign), and *negativeEnergy (when not
+// null) receives their luminance energy over the map's total |luminance| energy. Needs width even and >= 4,
+// residual sized order^2 * 3.
 EnvironmentMap renderLighting(const std::vector<ConeLight>& lights, const std::vector<double>& residual, int order,
-                              int width, int supersample, double* clampedEnergy = nullptr);
+                              int width, int supersample, double* negativeEnergy = nullptr);
 
 // ---- visibility -----------------------------------------------------------------------------------------------
 // For each point p_i with unit normal n_i and each light k: the cosine-weighted visible fraction of cone k,

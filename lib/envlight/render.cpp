@@ -10,7 +10,7 @@
 namespace prt::envlight {
 
 EnvironmentMap renderLighting(const std::vector<ConeLight>& lights, const std::vector<double>& residual, int order,
-                              int width, int supersample, double* clampedEnergy) {
+                              int width, int supersample, double* negativeEnergy) {
     if (width < 4 || width % 2 != 0 || supersample < 1 ||
         residual.size() != size_t(sh::coefficientCount(order)) * 3)
         throw Error("", "renderLighting", "bad size", kExitFailure);
@@ -21,7 +21,7 @@ EnvironmentMap renderLighting(const std::vector<ConeLight>& lights, const std::v
     env.radiance.height = height;
     env.radiance.rgb.assign(size_t(width) * height * 3, 0.0f);
     std::vector<double> solidAngle = sh::texelSolidAngles(env), basis(sh::coefficientCount(order));
-    double clamped = 0.0, total = 0.0;
+    double negative = 0.0, total = 0.0;
     const double texelAngle = M_PI / height;
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
@@ -57,14 +57,11 @@ EnvironmentMap renderLighting(const std::vector<ConeLight>& lights, const std::v
             double luminance = kLuminance[0] * value[0] + kLuminance[1] * value[1] + kLuminance[2] * value[2];
             total += std::abs(luminance) * solidAngle[texel];
             for (int c = 0; c < 3; ++c) {
-                if (value[c] < 0.0) {
-                    clamped += -value[c] * kLuminance[c] * solidAngle[texel];
-                    value[c] = 0.0;
-                }
+                if (value[c] < 0.0) negative += -value[c] * kLuminance[c] * solidAngle[texel];
                 env.radiance.rgb[texel * 3 + c] = float(value[c]);
             }
         }
-    if (clampedEnergy) *clampedEnergy = total > 0.0 ? clamped / total : 0.0;
+    if (negativeEnergy) *negativeEnergy = total > 0.0 ? negative / total : 0.0;
     return env;
 }
 

@@ -67,7 +67,11 @@ EnvironmentSampler makeEnvironmentSampler(const EnvironmentMap& env) {
             size_t i = y * width + x;
             const float* rgb = &env.radiance.rgb[i * 3];
             std::copy(rgb, rgb + 3, sampler.texels[i].radiance);
-            weight[i] = (kLuminance[0] * rgb[0] + kLuminance[1] * rgb[1] + kLuminance[2] * rgb[2]) * solidAngle[i];
+            // |radiance| per channel: the same luminance for the maps read from files (never negative), and a
+            // valid density for signed radiance (prt reference --lights), whose estimate keeps the sign.
+            weight[i] = (kLuminance[0] * std::abs(rgb[0]) + kLuminance[1] * std::abs(rgb[1]) +
+                         kLuminance[2] * std::abs(rgb[2])) *
+                        solidAngle[i];
             row += weight[i];
             sampler.columnCdf[i] = row;
         }

@@ -198,6 +198,32 @@ TEST(Reference, ConvexSphereMatchesTheShClosedForm) {
     expectUnbiasedWithinItsStandardError(result, expected, 1e-3);
 }
 
+// Signed radiance (what `prt reference --lights` renders where the SH residual dips below zero): light transport is
+// linear, so the sphere under the SH map minus a constant s returns the closed form minus albedo * s, negative where
+// the map is, within the estimate's own standard error (sampling follows |radiance|).
+TEST(Reference, SignedEnvironmentIsTransportedLinearly) {
+    EnvironmentMap env = shEnvironment(128, EnvLayout::Equirectangular);
+    const float shift = 0.5f;
+    size_t negative = 0;
+    for (float& value : env.radiance.rgb) negative += (value -= shift) < 0.0f;
+    ASSERT_GT(negative, env.radiance.rgb.size() / 10) << "the map must be negative in places";
+    prt::TriMesh sphere = prt::makeSphere(1.0f, 12, 24);
+    prt::ReferenceOptions options;
+    options.samples = 256;
+    options.bounces = 1;
+    options.albedo = std::array<float, 3>{0.8f, 0.8f, 0.8f};
+    prt::ReferenceRadiance result = prt::referenceVertexRadiance(sphere, env, options);
+    std::vector<double> expected(result.radiance.size());
+    const float albedo[3] = {0.8f, 0.8f, 0.8f};
+    size_t negativeVertices = 0;
+    for (size_t v = 0; v < sphere.vertexCount(); ++v) {
+        shClosedForm(&sphere.normals[v * 3], albedo, &expected[v * 3]);
+        for (int c = 0; c < 3; ++c) negativeVertices += (expected[v * 3 + c] -= albedo[c] * shift) < 0.0;
+    }
+    EXPECT_GT(negativeVertices, 0u);
+    expectUnbiasedWithinItsStandardError(result, expected, 1e-3);
+}
+
 TEST(Reference, CubeStripEnvironmentMatchesTheShClosedForm) {
     EnvironmentMap env = shEnvironment(48, EnvLayout::CubeStrip);
     prt::TriMesh sphere = prt::makeSphere(1.0f, 12, 24);
