@@ -175,7 +175,8 @@ std::vector<StageSpec> makeCatalogue() {
     glossy.shardRefusal = glossyShardRefusal;
     stages.push_back(glossy);
 
-    StageSpec reference{"reference", 1, "ground-truth radiance by path tracing"};
+    // 2: the decomposed lighting (lights input) keeps its negative residual instead of clamping it
+    StageSpec reference{"reference", 2, "ground-truth radiance by path tracing"};
     reference.inputs = {{"mesh", FileKind::Mesh, "", ""},
                         {"env", FileKind::Env, "--env", "", true},
                         {"lights", FileKind::Sh, "--lights", "", true}};
