@@ -62,19 +62,23 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
     const int lightOrderUsed = std::min(lightOrder, bands + visibility.order - 1);
     const TriMesh& mesh = bundle.mesh;
     std::vector<float> radiance(mesh.vertexCount() * 3, 0.0f);
-    EnvironmentMap environment = readEnvironmentMap(envPath);
+    RelightModel diffuse;
     if (!glossyOnly) {
         if (!findLayer(bundle, "transfer"))
             throw Error(bundlePath, "layers",
                         "has no \"transfer\" layer for the diffuse part: give --glossy-only, or run `prt specular` "
                         "on a bundle from `prt transfer`");
-        RelightModel diffuse = relightModel(bundle, bundlePath);
-        std::vector<float> lighting = environmentLighting(environment, diffuse.order, nullptr, sh::Window::None);
-        relight(diffuse, lighting.data(), 0, diffuse.vertexCount, radiance.data());
+        diffuse = relightModel(bundle, bundlePath);
     }
-
+    EnvironmentMap environment = readEnvironmentMap(envPath);
+    // One projection serves both parts: a lower order's coefficients are the first ones of a higher order's.
     double projectStart = nowSeconds();
-    std::vector<float> lighting = environmentLighting(environment, lightOrderUsed, nullptr, sh::Window::None);
+    const int projectedOrder = std::max(lightOrderUsed, diffuse.order);
+    std::vector<float> projected = environmentLighting(environment, projectedOrder, nullptr, sh::Window::None);
+    auto truncated = [&](int order) {
+        return fitLighting(projected.data(), projectedOrder * projectedOrder, order * order);
+    };
+    std::vector<float> lighting = truncated(lightOrderUsed);
     double tensorStart = nowSeconds();
     sh::TripleProduct tensor = sh::tripleProduct(std::max({lightOrderUsed, visibility.order, bands}));
     double productStart = nowSeconds();
@@ -84,6 +88,7 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
     std::vector<float> glossy(radiance.size());
     specular::glossyRadiance(mesh, visibility, product, eye.data(), glossy.data());
     double end = nowSeconds();
+    if (!glossyOnly) relight(diffuse, truncated(diffuse.order).data(), 0, diffuse.vertexCount, radiance.data());
     for (size_t i = 0; i < radiance.size(); ++i) radiance[i] += glossy[i];
 
     char line[240];
