@@ -76,8 +76,8 @@ HybridRows hybridRows(const RelightOptions& options) {
         throw Error(options.bundle, "layer \"texel_transfer\", params.high",
                     "the bake sampled a high-resolution mesh, whose shadows the texel hybrid's cone visibility would "
                     "need; only bakes of one mesh are supported");
-    rows.mesh = std::move(bundle.mesh);
-    TexelHybridModel texels = loadTexelHybridModel(options.bundle);
+    rows.mesh = std::move(bundle.mesh); // the texel layers do not need it
+    TexelHybridModel texels = texelHybridModel(std::move(bundle), options.bundle);
     rows.model = std::move(texels.rows);
     rows.points = std::move(texels.positions);
     rows.width = texels.width;

@@ -312,6 +312,8 @@ struct TexelHybridModel {
 // written before the texel hybrid lack "texel_surface" and must be baked again), sizes that disagree, texture hashes
 // that differ from the recorded ones, non-finite values.
 TexelHybridModel loadTexelHybridModel(const std::string& bundlePath);
+// The same on a bundle already read from bundlePath (texture uris resolve against it).
+TexelHybridModel texelHybridModel(Bundle bundle, const std::string& bundlePath);
 
 // Throws prt::Error(lightsSource, "order", ...) unless the lighting's order equals the model's.
 void checkHybridOrder(const HybridModel& model, const HybridLighting& lighting, const std::string& lightsSource);

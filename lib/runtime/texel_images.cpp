@@ -9,11 +9,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 
 namespace prt {
 
@@ -127,10 +129,8 @@ std::vector<float> texelLayerRows(const std::string& bundlePath, const Layer& la
     return rows;
 }
 
-} // namespace
-
-TexelRelightModel loadTexelRelightModel(const std::string& bundlePath) {
-    Bundle bundle = readBundle(bundlePath);
+// loadTexelRelightModel on a bundle already read from bundlePath.
+TexelRelightModel texelModelOf(Bundle bundle, const std::string& bundlePath) {
     if (!findLayer(bundle, "texel_transfer") && hasAdaptiveTransfer(bundle)) return adaptiveTexelModel(bundle, bundlePath);
     const Layer* layer = &transferLayer(bundle, "texel_transfer", "texel", bundlePath, "bake");
     if (!layer->params.contains("uri")) return texelRelightModel(std::move(bundle), bundlePath); // texels inline
@@ -144,11 +144,29 @@ TexelRelightModel loadTexelRelightModel(const std::string& bundlePath) {
     return model;
 }
 
+// The layer `name`, moved out of the bundle; empty when absent.
+std::optional<Layer> takeLayer(Bundle& bundle, const char* name) {
+    auto found = std::find_if(bundle.layers.begin(), bundle.layers.end(), [&](const Layer& l) { return l.name == name; });
+    if (found == bundle.layers.end()) return std::nullopt;
+    Layer layer = std::move(*found);
+    bundle.layers.erase(found);
+    return layer;
+}
+
+} // namespace
+
+TexelRelightModel loadTexelRelightModel(const std::string& bundlePath) {
+    return texelModelOf(readBundle(bundlePath), bundlePath);
+}
+
 TexelHybridModel loadTexelHybridModel(const std::string& bundlePath) {
-    Bundle bundle = readBundle(bundlePath);
-    const Layer* surface = findLayer(bundle, "texel_surface");
-    const Layer* bounce = findLayer(bundle, "texel_transfer_bounce");
-    TexelRelightModel total = loadTexelRelightModel(bundlePath);
+    return texelHybridModel(readBundle(bundlePath), bundlePath);
+}
+
+TexelHybridModel texelHybridModel(Bundle bundle, const std::string& bundlePath) {
+    std::optional<Layer> surface = takeLayer(bundle, "texel_surface");
+    const std::optional<Layer> bounce = takeLayer(bundle, "texel_transfer_bounce");
+    TexelRelightModel total = texelModelOf(std::move(bundle), bundlePath);
     TexelHybridModel model;
     model.width = total.width;
     model.height = total.height;
@@ -166,7 +184,7 @@ TexelHybridModel loadTexelHybridModel(const std::string& bundlePath) {
         if (surface->data.size() != texels * kTexelSurfaceChannels)
             throw Error(bundlePath, place, "holds " + std::to_string(surface->data.size()) + " values, not " +
                                                std::to_string(texels * kTexelSurfaceChannels));
-        values = surface->data;
+        values = std::move(surface->data);
     } else {
         std::string path = referencedFile(bundlePath, stringParam(*surface, "uri", bundlePath, place),
                                           surface->params.value("hash", nlohmann::json()), place + ", params.uri");
