@@ -330,8 +330,9 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
                         if (found == 0) continue; // no light in any map: plain SH
                         h.pilotError = predict(h.config, run, 0, np).error;
                         // The transfer stage's float32 layers as they are: transfer, and with bounces its bounce
-                        // part; plus each light's 7 floats.
-                        h.bundleBytes = uint64_t(V) * order * order * 12 * (bouncesAxis[bi] > 0 ? 2 : 1) + 28 * found;
+                        // part of the same size; plus each light's 7 floats.
+                        h.bundleBytes = bundleLayerBytes(V, order, adapt::Format::Float, 0) * (bouncesAxis[bi] > 0 ? 2 : 1) +
+                                        28 * found;
                         result.candidates.push_back(h);
                         rowsOf.push_back(run);
                     }
