@@ -26,6 +26,9 @@ void addMeshprepCommand(CLI::App& app) {
     command->add_flag("--recompute-normals", options->recomputeNormals, "Compute normals even when the file has them");
     command->add_option("--decimate-to", options->decimateTo, "Decimate to this many triangles")->check(CLI::PositiveNumber);
     command->add_option("--scale", options->scale, "Scale positions uniformly by this factor")->capture_default_str();
+    command->add_flag("--flatten", options->flatten,
+                      "Merge a glTF scene into one welded mesh (by default a glTF input is kept as the asset: its node "
+                      "tree, instances, materials and textures, with normals added where missing)");
     command->callback([options] {
         options->toolVersion = PRT_VERSION;
         runMeshprep(*options);

@@ -4,6 +4,7 @@
 #include "bundle.h"
 #include "compare.h"
 #include "core.h"
+#include "material.h"
 #include "image.h"
 #include "raycast.h"
 #include "envlight.h"
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 namespace prt::cli {
 
@@ -129,6 +131,17 @@ void runReference(const ReferenceCommandOptions& options) {
     Bundle bundle = readBundle(options.mesh);
     const TriMesh& mesh = bundle.mesh;
     if (mesh.normals.empty()) throw Error(options.mesh, "", "mesh has no vertex normals (prt meshprep adds them)");
+    // A scene is traced with its materials, as transfer sees it.
+    std::optional<Surface> surface;
+    if (bundle.asset) {
+        if (reference.albedo)
+            throw Error("", "--albedo", "a scene (" + options.mesh + ") takes its albedo from its materials", kExitUsage);
+        if (direct)
+            throw Error("", "--brute-force", "the direct sum (--brute-force, --unshadowed, --occluder) does not read "
+                                             "materials yet; path-trace the scene", kExitUsage);
+        surface = decodeSurface(bundle, options.mesh);
+        reference.surface = &*surface;
+    }
     for (size_t j = 0; j < occluders.size(); ++j) occluders[j].mesh = readBundle(options.occluders[j]).mesh;
     if (options.env.empty() == options.lights.empty())
         throw Error("", "--env", "give --env or --lights (exactly one)", kExitUsage);
@@ -154,7 +167,10 @@ void runReference(const ReferenceCommandOptions& options) {
         reportCost(cost);
         return;
     }
-    std::string albedoSource = reference.albedo ? "constant" : mesh.albedo.empty() ? "white" : "per vertex";
+    std::string albedoSource = surface           ? "of the scene's materials"
+                               : reference.albedo ? "constant"
+                               : mesh.albedo.empty() ? "white"
+                                                     : "per vertex";
     logInfo("reference: " + options.mesh + " (" + std::to_string(mesh.vertexCount()) + " vertices) under " +
             (options.lights.empty() ? options.env : options.lights) + ", " + std::to_string(options.samples) + " samples, " + std::to_string(options.bounces) +
             " bounces, albedo " + albedoSource + ", " + std::to_string(reference.threads) + " threads");

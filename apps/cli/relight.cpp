@@ -6,6 +6,7 @@
 #include "compare.h"
 #include "core.h"
 #include "envlight.h"
+#include "material.h"
 #include "raycast.h"
 #include "render.h"
 #include "runtime.h"
@@ -37,8 +38,36 @@ struct RelightOptions {
     std::string imageSize; // "W,H": a picture through --camera instead of per-vertex radiance
     std::string camera;    // "EYE,TARGET,UP,FOVY", as `prt render` and `prt reference --image`
     float exposure = 0.0f;
+    bool irradiance = false; // rows of irradiance E instead of outgoing radiance
+    std::string positions;   // also write each row's world-space position, [V,3] .npy
     SpecularRelightArgs specular; // --brdf: relight_specular.cpp
 };
+
+// Per vertex [V][3], what outgoing radiance is divided by to give irradiance E = pi * radiance / albedo:
+// `albedo` (the transfer layer's params.albedo) when uniform, else `meshAlbedo` per vertex (1 when empty); 1 / pi
+// alone for a scene's irradiance transfer, whose model then leaves its albedo out. Throws prt::Error where an
+// albedo of 0 leaves E unknown.
+std::vector<float> irradianceDivisors(const nlohmann::json& albedo, const std::vector<float>& meshAlbedo,
+                                      RelightModel& model, const std::string& source) {
+    const float pi = 3.14159265358979323846f;
+    std::vector<float> divisors(size_t(model.vertexCount) * 3, 1.0f / pi);
+    if (model.albedoExcluded) {
+        model.albedo.clear();
+        return divisors;
+    }
+    const bool uniform = albedo.is_array() && albedo.size() == 3;
+    for (size_t v = 0; v < model.vertexCount; ++v)
+        for (int c = 0; c < 3; ++c) {
+            float rho = uniform && albedo[c].is_number() ? albedo[c].get<float>()
+                        : meshAlbedo.empty()               ? 1.0f
+                                                           : meshAlbedo[3 * v + c];
+            if (!(rho > 0.0f))
+                throw Error(source, "vertex " + std::to_string(v),
+                            "has albedo 0, so its irradiance is unknown (--irradiance)", kExitInput);
+            divisors[3 * v + c] = rho / pi;
+        }
+    return divisors;
+}
 
 // Relit rows to `path`: with texels a width x height float EXR atlas, else per-vertex radiance (.npy or .csv).
 // Atomic either way.
@@ -212,6 +241,12 @@ void runRelight(const RelightOptions& options) {
                     kExitUsage);
     else if (!options.texels && outputExtension != "npy" && outputExtension != "csv")
         throw Error(options.output, "-o", "output must end in .npy or .csv", kExitUsage);
+    if ((options.irradiance || !options.positions.empty()) &&
+        (options.texels || imageMode || !options.lights.empty() || !options.eye.empty()))
+        throw Error("", options.irradiance ? "--irradiance" : "--positions",
+                    "applies to per-vertex rows of diffuse transfer (not --texels, --image, --lights or --eye)", kExitUsage);
+    if (!options.positions.empty() && fileExtension(options.positions) != "npy")
+        throw Error(options.positions, "--positions", "must end in .npy", kExitUsage);
     if (!options.lights.empty()) return runHybridRelight(options, start);
     if (options.env.empty() && options.shJson.empty()) throw Error("", "--env", "give --env, --sh or --lights", kExitUsage);
     if (!options.env.empty() && !options.shJson.empty()) throw Error("", "--env", "give --env or --sh, not both", kExitUsage);
@@ -223,7 +258,9 @@ void runRelight(const RelightOptions& options) {
     TexelRelightModel texelModel;
     std::optional<GlossyModel> glossy;
     RelightModel model;
-    TriMesh mesh; // --image: the mesh the picture is rendered from
+    TriMesh mesh; // --image: the mesh the picture is rendered from; --positions: its positions
+    std::vector<float> irradiance; // --irradiance: what radiance is divided by, per row
+    std::optional<Surface> surface; // --image of a scene: its materials
     std::array<float, 3> eye{};
     if (!options.eye.empty()) eye = parsePoint(options.eye, "--eye");
     if (imageMode) eye = {camera.eye[0], camera.eye[1], camera.eye[2]};
@@ -245,9 +282,21 @@ void runRelight(const RelightOptions& options) {
             throw Error("", "--rotate-y", "does not combine with glossy lobes (--eye, or --image of a glossy bundle)",
                         kExitUsage);
         if (imageMode) mesh = bundle.mesh;
+        if (imageMode && bundle.asset) {
+            if (glossy) throw Error(options.bundle, "layers", "glossy lobes of a scene are not supported", kExitInput);
+            surface = decodeSurface(bundle, options.bundle);
+            surface->mesh = &mesh;
+        }
         model = relightModel(std::move(bundle), options.bundle);
+        if (surface) model.albedo.clear(); // the picture multiplies by the materials per pixel
     } else {
-        model = loadRelightModel(options.bundle);
+        Bundle bundle = readBundle(options.bundle);
+        if (!options.positions.empty()) mesh.positions = bundle.mesh.positions;
+        const Layer* transfer = findLayer(bundle, "transfer");
+        nlohmann::json albedo = transfer ? transfer->params.value("albedo", nlohmann::json()) : nlohmann::json();
+        std::vector<float> meshAlbedo = options.irradiance ? bundle.mesh.albedo : std::vector<float>();
+        model = relightModel(std::move(bundle), options.bundle);
+        if (options.irradiance) irradiance = irradianceDivisors(albedo, meshAlbedo, model, options.bundle);
     }
     const int coefficients = sh::coefficientCount(model.order);
     double R[9];
@@ -298,9 +347,11 @@ void runRelight(const RelightOptions& options) {
         logInfo(line);
     }
 
+    for (size_t i = 0; i < irradiance.size(); ++i) radiance[i] /= irradiance[i];
+    if (!options.positions.empty()) writeVertexRadiance(options.positions, mesh.positions);
     if (imageMode) {
         // Per-vertex radiance toward the camera's eye, interpolated over each hit triangle as `prt render` does.
-        RenderedImage picture = renderVertexRadiance(mesh, radiance, camera);
+        RenderedImage picture = renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
         writeRenderedPicture(options.output, picture, options.exposure);
     } else {
         writeRelit(options.output, options.texels, texelModel.width, texelModel.height, std::move(radiance));
@@ -356,6 +407,12 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--exposure", options->exposure,
                         "With --image and a .png: stops; x = radiance * 2^exposure, then x / (1 + x), then sRGB")
         ->capture_default_str();
+    command->add_flag("--irradiance", options->irradiance,
+                      "Rows of irradiance E (W/m^2 per unit radiance of the map) instead of outgoing radiance: for a "
+                      "scene, pi times its irradiance transfer; else pi * radiance / albedo");
+    command->add_option("--positions", options->positions,
+                        "Also write each row's world-space position as [V,3] float32 .npy (rows: a scene's receivers in "
+                        "node order, then their vertices), so other tools can match rows by position");
     addSpecularRelightOptions(command, options->specular);
     command->callback([options] { runRelight(*options); });
 }

@@ -5,11 +5,13 @@
 #include "compare.h"
 #include "core.h"
 #include "image.h"
+#include "material.h"
 #include "raycast.h"
 #include "render.h"
 #include "runtime.h"
 
 #include <memory>
+#include <optional>
 
 namespace prt::cli {
 
@@ -40,9 +42,21 @@ void runRender(const RenderOptions& options) {
     // The runtime relights exactly as `prt relight` does; only the picture is new.
     Bundle bundle = readBundle(options.bundle);
     TriMesh mesh = bundle.mesh;
+    // A scene is relit without its albedo and multiplied by its materials per pixel.
+    std::optional<Surface> surface;
+    if (bundle.asset && !options.texels) {
+        surface = decodeSurface(bundle, options.bundle);
+        surface->mesh = &mesh;
+    }
     TexelRelightModel atlas;
     if (options.texels) atlas = loadTexelRelightModel(options.bundle);
     RelightModel model = options.texels ? std::move(atlas.rows) : relightModel(std::move(bundle), options.bundle);
+    if (surface) {
+        if (!model.albedoExcluded)
+            throw Error(options.bundle, "layer \"transfer\"", "a scene's transfer must exclude the albedo (params.albedo "
+                                                               "\"excluded\"); run `prt transfer` on the scene again");
+        model.albedo.clear();
+    }
     if (options.order < 0 || options.order > model.order)
         throw Error("", "--order", "must lie in 1.." + std::to_string(model.order) + " (the transfer's order)",
                     kExitUsage);
@@ -64,7 +78,7 @@ void runRender(const RenderOptions& options) {
         relit.rgb = std::move(radiance);
         image = renderTexelRadiance(mesh, relit, camera);
     } else {
-        image = renderVertexRadiance(mesh, radiance, camera);
+        image = renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
     }
     writeRenderedPicture(options.output, image, options.exposure);
     logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +

@@ -4,6 +4,7 @@
 
 #include "bundle.h"
 #include "core.h"
+#include "material.h"
 #include "sh.h"
 #include "transfer.h"
 
@@ -11,6 +12,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #ifndef PRT_VERSION
 #define PRT_VERSION "0.0.0"
@@ -35,6 +37,7 @@ struct TransferArgs {
     int pass = -1;
     std::string previous, exitant, hits;
     std::vector<std::string> gather;
+    bool noInstancing = false;
 };
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
@@ -75,8 +78,11 @@ struct Rows {
     float rayOffset = 0.0f;
 };
 
-Bundle transferBundle(const TransferArgs& args, const TransferOptions& options, TriMesh mesh, Rows rows,
+// `input` is the bundle the stage read: its mesh and, for a scene, its asset move on into the result (after every
+// use of options.surface, which borrows input.mesh); its layers do not.
+Bundle transferBundle(const TransferArgs& args, const TransferOptions& options, Bundle& input, Rows rows,
                       int shardIndex, int shardCount, const std::string& meshHash) {
+    const TriMesh& mesh = input.mesh;
     bool perVertexAlbedo = !mesh.albedo.empty() && !options.albedoOverride;
     Layer layer;
     layer.name = "transfer";
@@ -84,8 +90,9 @@ Bundle transferBundle(const TransferArgs& args, const TransferOptions& options, 
     uint64_t coefficients = uint64_t(options.order) * options.order;
     layer.shape = {rows.end - rows.begin, coefficients, 3};
     layer.data = std::move(rows.total);
-    nlohmann::json albedo = "per-vertex";
-    if (!perVertexAlbedo)
+    // A scene's transfer excludes the receiver's albedo (irradiance transfer, docs/bundle.md "Scene bundles").
+    nlohmann::json albedo = options.surface ? nlohmann::json("excluded") : nlohmann::json("per-vertex");
+    if (!perVertexAlbedo && !options.surface)
         albedo = args.albedo.empty() ? std::array<double, 3>{1.0, 1.0, 1.0} : parseAlbedo(args.albedo);
     layer.params = {{"mode", args.mode},
                     {"order", options.order},
@@ -112,10 +119,22 @@ Bundle transferBundle(const TransferArgs& args, const TransferOptions& options, 
         bounceLayer.params["part"] = "bounces 1..B: transfer minus its direct (shadowed) pass";
     }
 
-    Bundle output;
-    output.mesh = std::move(mesh);
+    // What a scene's rows are multiplied by for outgoing radiance: the diffuse albedo at each vertex.
+    Layer albedoLayer;
+    if (options.surface && shardCount <= 1) {
+        albedoLayer.name = "diffuse_albedo";
+        albedoLayer.domain = "vertex";
+        albedoLayer.semantic = "diffuse_albedo_rgb";
+        albedoLayer.shape = {mesh.vertexCount(), 3};
+        albedoLayer.data = vertexDiffuseAlbedo(*options.surface);
+        albedoLayer.params = {{"rule", "base colour factor * texture at the vertex's texcoord * COLOR_0 * (1 - metallic)"}};
+    }
+
+    Bundle output = std::move(input);
+    output.layers.clear();
     output.layers.push_back(std::move(layer));
     if (!bounceLayer.name.empty()) output.layers.push_back(std::move(bounceLayer));
+    if (!albedoLayer.name.empty()) output.layers.push_back(std::move(albedoLayer));
     output.producer = {{"tool", "prt"}, {"version", PRT_VERSION}, {"stage", "transfer"}};
     output.inputs = {{"mesh", meshHash}};
     output.convention = conventionRecord();
@@ -160,6 +179,21 @@ auto namingInput(const std::string& input, F&& work) {
     }
 }
 
+// A scene's materials, decoded, for the rows of `input`; none for a bundle of prt's own meshes. A scene takes its
+// albedo from its materials, so --albedo is refused there.
+std::optional<Surface> sceneSurface(const Bundle& input, const TransferArgs& args) {
+    if (!input.asset) return std::nullopt;
+    if (!args.albedo.empty())
+        throw usage("--albedo", "a scene (" + args.input + ") takes its albedo from its materials; --albedo is for "
+                                "bundles without them");
+    Surface surface = decodeSurface(input, args.input);
+    surface.instancing = !args.noInstancing;
+    return surface;
+}
+
+void runTransferPassOn(const TransferArgs& args, const TransferOptions& options, Bundle& input, int shardIndex,
+                       int shardCount, double start);
+
 // One job of sharded interreflected transfer: pass 0 (direct, hit records to OUTPUT.hits), pass 1..B (a bounce;
 // the last writes the shard bundle `prt merge` joins), or --gather (a pass's exitant array).
 void runTransferPass(const TransferArgs& args, const TransferOptions& options, int shardIndex, int shardCount,
@@ -167,6 +201,15 @@ void runTransferPass(const TransferArgs& args, const TransferOptions& options, i
     Bundle input = readBundle(args.input);
     TriMesh& mesh = input.mesh;
     if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
+    std::optional<Surface> surface = sceneSurface(input, args);
+    TransferOptions sceneOptions = options;
+    sceneOptions.surface = surface ? &*surface : nullptr;
+    runTransferPassOn(args, sceneOptions, input, shardIndex, shardCount, start);
+}
+
+void runTransferPassOn(const TransferArgs& args, const TransferOptions& options, Bundle& input, int shardIndex,
+                       int shardCount, double start) {
+    TriMesh& mesh = input.mesh;
     const std::string meshHash = hashFile(args.input);
     if (!args.gather.empty()) {
         ShardRun run = makeShardRun(mesh, options, meshHash, 0, int(args.gather.size()));
@@ -198,7 +241,7 @@ void runTransferPass(const TransferArgs& args, const TransferOptions& options, i
         } else {
             Rows layerRows{std::move(rows.total), &rows.direct, rows.rowBegin, rows.rowEnd, rows.rays,
                            rows.backFaceHits, rows.rayOffset};
-            writeBundle(args.output, transferBundle(args, options, std::move(mesh), std::move(layerRows), shardIndex,
+            writeBundle(args.output, transferBundle(args, options, input, std::move(layerRows), shardIndex,
                                                     shardCount, meshHash));
         }
     } catch (...) {
@@ -240,6 +283,8 @@ void runTransfer(const TransferArgs& args) {
     Bundle input = readBundle(args.input);
     TriMesh& mesh = input.mesh;
     if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
+    std::optional<Surface> surface = sceneSurface(input, args);
+    options.surface = surface ? &*surface : nullptr;
     size_t vertexCount = mesh.vertexCount();
     RowRange range = shardRows(vertexCount, shardIndex, shardCount);
     options.vertexBegin = range.begin;
@@ -255,7 +300,7 @@ void runTransfer(const TransferArgs& args) {
     warnBackFaces(stats);
     Rows rows{std::move(transfer.coefficients), options.keepDirect ? &transfer.direct : nullptr, transfer.vertexBegin, transfer.vertexEnd,
               stats.rays, stats.backFaceHits, stats.rayOffset};
-    writeBundle(args.output, transferBundle(args, options, std::move(mesh), std::move(rows), shardIndex, shardCount,
+    writeBundle(args.output, transferBundle(args, options, input, std::move(rows), shardIndex, shardCount,
                                             hashFile(args.input)));
     logInfo("transfer: wrote " + args.output);
     reportStats(stats, start);
@@ -294,6 +339,9 @@ void addTransferCommand(CLI::App& app) {
     command->add_option("--gather", args->gather,
                         "ROWS...: join one pass's shard rows (every shard, any order) into that pass's exitant "
                         "array, -o OUT, for the next bounce");
+    command->add_flag("--no-instancing", args->noInstancing,
+                      "A scene: build every placed mesh into the ray-tracing BVH as its own triangles instead of Embree "
+                      "instances of meshes that several nodes place (same rows to float rounding; for memory figures)");
     command->callback([args] { runTransfer(*args); });
 }
 

@@ -3,10 +3,13 @@
 // Every stage reads and writes meshes through this header, so the triangle mesh type lives here too.
 #pragma once
 
+#include "asset.h"
+
 #include <nlohmann/json.hpp>
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -71,6 +74,10 @@ struct Bundle {
     std::vector<BundleObject> objects; // objects 1..N (version 2)
     std::vector<Instance> instances;   // (version 2); empty means every object once, untranslated
     std::vector<Layer> layers;
+    // A scene bundle (version 3, asset.h): the glTF asset it carries intact, of which `mesh` is the flattened
+    // world-space receiver mesh; null for a bundle of prt's own meshes (objects and instances above). Shared and
+    // immutable, so stages pass it from the bundle they read to the one they write.
+    std::shared_ptr<const SceneAsset> asset;
     nlohmann::json producer = nlohmann::json::object(); // {"tool":"prt","version":..,"stage":..}
     nlohmann::json inputs = nlohmann::json::object();   // {"mesh": "xxh128:..", "env": ..}
     nlohmann::json convention = nlohmann::json::object();
@@ -80,7 +87,7 @@ struct Bundle {
 const TriMesh& objectMesh(const Bundle& bundle, uint32_t object);
 
 // The version prt writes; readBundle reads this one and every earlier one (docs/bundle.md, "Versioning").
-inline constexpr int kBundleVersion = 2;
+inline constexpr int kBundleVersion = 3;
 inline constexpr int kOldestBundleVersion = 1;
 inline constexpr const char* kBundleExtension = "PRT_bundle";
 
@@ -113,6 +120,27 @@ nlohmann::json conventionRecord();
 // validation reports them); an index outside its own primitive reads as 0xFFFFFFFF so merging cannot hide it.
 // Every accessor is bounds-checked against its buffer, so a malformed file cannot cause an out-of-bounds read.
 Bundle readBundle(const std::string& path);
+
+// ---- scene assets (version 3; asset.h) --------------------------------------------------------------------------
+
+// A scene bundle (no layers) of a glTF model built in memory, e.g. from another format (lib/mesh reads OBJ with
+// MTL this way): read and checked exactly as readBundle reads a glTF file named `file`.
+Bundle sceneFromModel(tinygltf::Model model, const std::string& file);
+
+// The object-space vertices and triangles of a primitive of a scene's asset.
+struct PrimitiveTriangles {
+    int mesh = -1, primitive = -1;
+    TriMesh triangles; // accessor order; normals, when filled by the caller, one per vertex
+};
+
+// Every primitive the scene's receivers use that has no NORMAL attribute, each once however many nodes place it.
+// Needs bundle.asset. Throws as readBundle for malformed accessors.
+std::vector<PrimitiveTriangles> primitivesWithoutNormals(const Bundle& bundle, const std::string& file);
+
+// The scene with a NORMAL accessor (float VEC3) added to each listed primitive, holding its triangles' normals
+// (object space, one per vertex), and re-flattened, so that bundle.mesh carries them in world space. Everything
+// else of the asset and of `bundle` is kept. Needs bundle.asset and normals sized to each primitive's vertices.
+Bundle withPrimitiveNormals(const Bundle& bundle, const std::vector<PrimitiveTriangles>& normals, const std::string& file);
 
 // IEEE 754 binary16 conversions, as float16 layers store values: round to nearest even, overflow to infinity
 // (writeBundle refuses non-finite values), subnormals kept. Exact for every half value both ways.

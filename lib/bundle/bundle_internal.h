@@ -32,6 +32,26 @@ std::string extensionChecksum(const std::vector<unsigned char>& buffer, nlohmann
 // reach outside their buffers, unsupported accessor kinds, malformed node trees and files without triangles.
 TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file);
 
+// The scene of a loaded glTF model (asset.h): the flattened world-space mesh as readGltfMesh merges it, but with
+// the diffuse albedo rule of scenes (base colour times 1 - metallic), and in `scene` its receivers, materials,
+// textures, images, texcoord sets and colours. scene.source is left to the caller. Throws as readGltfMesh, and
+// Error(file, place) for a material, texture, sampler or image that is malformed, out of range or of an
+// unsupported kind, and for a required extension prt cannot honour.
+TriMesh readGltfScene(const tinygltf::Model& model, const std::string& file, SceneAsset& scene);
+
+// The asset's materials, textures, samplers and images into `scene` (materials then the default one), checked;
+// refuses required extensions prt cannot honour (checkRequiredExtensions).
+void readMaterials(const tinygltf::Model& model, const std::string& file, SceneAsset& scene);
+void checkRequiredExtensions(const tinygltf::Model& model, const std::string& file);
+
+// `model` made self-contained for writing as one .glb: every buffer merged into buffer 0 (each at an 8-byte
+// aligned offset, views rebased), every image moved into a buffer view of its encoded bytes (uri cleared), the
+// PRT_bundle extension removed. Nothing else changes.
+std::shared_ptr<const tinygltf::Model> selfContainedModel(tinygltf::Model model);
+
+// One primitive's vertices (accessor order) and triangles, untransformed (object space).
+TriMesh readGltfPrimitive(const tinygltf::Model& model, int meshIndex, int primitiveIndex, const std::string& file);
+
 // The triangles of glTF mesh `meshIndex` alone, untransformed: a version 2 bundle's object. Throws as readGltfMesh.
 TriMesh readGltfMeshAt(const tinygltf::Model& model, int meshIndex, const std::string& file);
 

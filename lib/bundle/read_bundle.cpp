@@ -17,8 +17,12 @@ using nlohmann::json;
 
 static_assert(std::endian::native == std::endian::little, "GLB buffers are little-endian");
 
-// prt reads geometry only; leaving images undecoded saves time and never fails a load over a texture.
-static bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+// Images stay encoded (PNG, JPEG) as the file holds them: a scene bundle writes them back unchanged, and only the
+// stages that need texels decode them (lib/material, with their sizes bounded before decoding).
+static bool keepEncodedImage(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                             const unsigned char* bytes, int size, void*) {
+    image->image.assign(bytes, bytes + std::max(size, 0));
+    image->as_is = true;
     return true;
 }
 
@@ -90,7 +94,7 @@ static tinygltf::Model loadModel(const std::string& path) {
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks({externalFileExists, externalExpand, readExternalFile, refuseWrite, &files});
     loader.SetStoreOriginalJSONForExtrasAndExtensions(true);
-    loader.SetImageLoader(skipImage, nullptr);
+    loader.SetImageLoader(keepEncodedImage, nullptr);
     tinygltf::Model model;
     std::string error, warning;
     bool loaded = false;
@@ -289,6 +293,54 @@ static void readRecords(const json& extension, const tinygltf::Model& model, con
     }
 }
 
+// A scene (plain glTF, or a version 3 bundle with a `scene` record): the flattened mesh and the asset's records
+// into `bundle`. A bundle's record must describe the receivers the node tree gives, row for row.
+static std::shared_ptr<SceneAsset> readSceneAsset(const tinygltf::Model& model, const std::string& path, const json* record,
+                                                  Bundle& bundle) {
+    auto asset = std::make_shared<SceneAsset>();
+    bundle.mesh = detail::readGltfScene(model, path, *asset);
+    if (!record) return asset;
+    const std::string place = std::string(kBundleExtension) + ".scene";
+    if (!record->is_object() || !record->contains("receivers") || !(*record)["receivers"].is_array())
+        throw Error(path, place, "is not an object with a receivers array");
+    const json& receivers = (*record)["receivers"];
+    if (receivers.size() != asset->receivers.size())
+        throw Error(path, place + ".receivers", "lists " + std::to_string(receivers.size()) + " receivers, the node tree gives " +
+                                                    std::to_string(asset->receivers.size()));
+    for (size_t i = 0; i < receivers.size(); ++i) {
+        const json& r = receivers[i];
+        const SceneReceiver& walked = asset->receivers[i];
+        auto is = [&](const char* key, int64_t value) {
+            return r.is_object() && r.contains(key) && r[key].is_number_integer() && r[key].get<int64_t>() == value;
+        };
+        if (!is("node", walked.node) || !is("mesh", walked.mesh) || !is("primitive", walked.primitive) ||
+            !is("first_row", walked.firstVertex) || !is("rows", walked.vertexCount))
+            throw Error(path, place + ".receivers[" + std::to_string(i) + "]",
+                        "does not match the node tree's receiver " + std::to_string(i) + " (node " + std::to_string(walked.node) +
+                            ", mesh " + std::to_string(walked.mesh) + ", primitive " + std::to_string(walked.primitive) + ")");
+    }
+    return asset;
+}
+
+// A scene bundle's layers are views at the end of buffer 0, after everything of the asset (writeBundle appends
+// them): dropping those views and truncating the buffer gives back the asset alone, so that rewriting a bundle
+// never carries old layers along. A file laid out otherwise keeps its views (the bytes are then dead weight).
+static void dropLayerViews(tinygltf::Model& model, const json& extension) {
+    std::set<size_t> layerViews;
+    for (const json& layer : extension.value("layers", json::array()))
+        if (layer.is_object() && layer.contains("bufferView") && layer["bufferView"].is_number_unsigned())
+            layerViews.insert(layer["bufferView"].get<size_t>());
+    if (layerViews.empty() || model.buffers.size() != 1) return;
+    size_t first = *layerViews.begin();
+    if (*layerViews.rbegin() != model.bufferViews.size() - 1 || layerViews.size() != model.bufferViews.size() - first) return;
+    size_t cut = model.bufferViews[first].byteOffset, assetEnd = 0;
+    for (size_t v = 0; v < first; ++v)
+        assetEnd = std::max<size_t>(assetEnd, model.bufferViews[v].byteOffset + model.bufferViews[v].byteLength);
+    if (assetEnd > cut || cut > model.buffers[0].data.size()) return;
+    model.bufferViews.resize(first);
+    model.buffers[0].data.resize(cut);
+}
+
 Bundle readBundle(const std::string& path) {
     tinygltf::Model model = loadModel(path);
     // tinygltf drops an extension whose value is not an object; the original JSON still names it, and a file that
@@ -298,15 +350,37 @@ Bundle readBundle(const std::string& path) {
     Bundle bundle;
     try {
         json extension = hasExtension ? verifiedExtension(model, path) : json();
-        // Version 1 and plain glTF: the scene's triangles, merged. Version 2: each object from its own mesh.
-        if (hasExtension && extension["version"].get<int>() >= 2 && extension.contains("objects"))
+        int version = hasExtension ? extension["version"].get<int>() : 0;
+        // Plain glTF and version 3 scenes: the asset and its flattened mesh. Version 1: the scene's triangles,
+        // merged. Version 2 (and 3 without a scene): each object from its own mesh.
+        std::shared_ptr<SceneAsset> asset;
+        if (hasExtension && version >= 3 && extension.contains("scene")) {
+            json record = extension["scene"];
+            asset = readSceneAsset(model, path, &record, bundle);
+        } else if (!hasExtension) {
+            asset = readSceneAsset(model, path, nullptr, bundle);
+        } else if (version >= 2 && extension.contains("objects")) {
             readObjects(extension, model, path, bundle);
-        else
+        } else {
             bundle.mesh = detail::readGltfMesh(model, path);
+        }
         if (hasExtension) readRecords(extension, model, path, bundle);
+        if (asset) {
+            if (hasExtension) dropLayerViews(model, extension);
+            asset->source = detail::selfContainedModel(std::move(model));
+            bundle.asset = std::move(asset);
+        }
     } catch (const json::exception& e) {
         throw Error(path, kBundleExtension, std::string("malformed extension JSON: ") + e.what());
     }
+    return bundle;
+}
+
+Bundle sceneFromModel(tinygltf::Model model, const std::string& file) {
+    Bundle bundle;
+    std::shared_ptr<SceneAsset> asset = readSceneAsset(model, file, nullptr, bundle);
+    asset->source = detail::selfContainedModel(std::move(model));
+    bundle.asset = std::move(asset);
     return bundle;
 }
 

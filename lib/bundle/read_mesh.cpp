@@ -115,6 +115,21 @@ size_t appendFloats(const tinygltf::Model& model, int index, int width, std::vec
     return elements.count;
 }
 
+// COLOR_0 (VEC3 or VEC4, float or normalized integers) as RGBA, alpha 1 for VEC3. Returns the element count.
+size_t appendColors(const tinygltf::Model& model, int index, std::vector<float>& rgba, const std::string& file,
+                    const std::string& place) {
+    Elements elements = locate(model, index, file, place);
+    if (elements.type != TINYGLTF_TYPE_VEC3 && elements.type != TINYGLTF_TYPE_VEC4)
+        throw Error(file, place, "COLOR_0 must be VEC3 or VEC4");
+    int width = elements.type == TINYGLTF_TYPE_VEC4 ? 4 : 3;
+    std::vector<float> values;
+    appendFloats(model, index, width, values, file, place);
+    rgba.reserve(rgba.size() + 4 * elements.count);
+    for (size_t i = 0; i < elements.count; ++i)
+        for (int c = 0; c < 4; ++c) rgba.push_back(c < width ? values[width * i + c] : 1.0f);
+    return elements.count;
+}
+
 std::vector<uint32_t> readIndices(const tinygltf::Model& model, int index, const std::string& file, const std::string& place) {
     Elements elements = locate(model, index, file, place);
     bool integer = elements.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
@@ -131,9 +146,12 @@ struct MeshBuilder {
     const tinygltf::Model& model;
     const std::string& file;
     TriMesh mesh;
+    SceneAsset* scene = nullptr; // when set: a receiver per primitive, texcoord sets, colours, material rule below
     bool allNormals = true;
     bool allTexcoords = true;
     bool anyAlbedo = false;
+    bool anyTexcoords[2] = {false, false};
+    bool anyColor = false;
     size_t skippedPrimitives = 0;
     uint64_t primitiveInstances = 0;
 };
@@ -241,22 +259,49 @@ void addPrimitive(MeshBuilder& builder, const tinygltf::Primitive& primitive, co
         appendFloats(model, attribute("TEXCOORD_0"), 2, mesh.texcoords, builder.file, place + ".TEXCOORD_0") != count)
         throw Error(builder.file, place + ".TEXCOORD_0", "count differs from POSITION's");
 
-    // Albedo is gathered for every primitive and dropped at the end if it is 1 everywhere.
+    // Albedo is gathered for every primitive and dropped at the end if it is 1 everywhere. A scene takes the
+    // material's diffuse albedo, base colour times (1 - metallic) (asset.h); a merged mesh its base colour alone.
     std::array<double, 3> factor = {1.0, 1.0, 1.0};
-    if (primitive.material >= 0) {
-        if (size_t(primitive.material) >= model.materials.size()) throw Error(builder.file, place, "material does not exist");
+    if (primitive.material >= 0 && size_t(primitive.material) >= model.materials.size())
+        throw Error(builder.file, place + ".material", "material " + std::to_string(primitive.material) + " does not exist");
+    if (builder.scene) {
+        const MaterialRecord& material =
+            builder.scene->materials[primitive.material >= 0 ? size_t(primitive.material) : builder.scene->materials.size() - 1];
+        for (int c = 0; c < 3; ++c) factor[c] = double(material.baseColorFactor[c]) * (1.0 - double(material.metallic));
+    } else if (primitive.material >= 0) {
         const std::vector<double>& baseColor = model.materials[primitive.material].pbrMetallicRoughness.baseColorFactor;
         if (baseColor.size() >= 3) factor = {baseColor[0], baseColor[1], baseColor[2]};
     }
-    size_t albedoBase = mesh.albedo.size();
     if (attribute("COLOR_0") >= 0) {
-        if (appendFloats(model, attribute("COLOR_0"), 3, mesh.albedo, builder.file, place + ".COLOR_0") != count)
-            throw Error(builder.file, place + ".COLOR_0", "count differs from POSITION's");
-        for (size_t i = albedoBase; i < mesh.albedo.size(); ++i) mesh.albedo[i] = float(mesh.albedo[i] * factor[i % 3]);
+        std::vector<float> rgba;
+        size_t colorCount = appendColors(model, attribute("COLOR_0"), rgba, builder.file, place + ".COLOR_0");
+        if (colorCount != count) throw Error(builder.file, place + ".COLOR_0", "count differs from POSITION's");
+        for (size_t i = 0; i < count; ++i)
+            for (int c = 0; c < 3; ++c) mesh.albedo.push_back(float(rgba[4 * i + c] * factor[c]));
         builder.anyAlbedo = true;
+        if (builder.scene) {
+            std::vector<float>& colors = builder.scene->colors;
+            colors.resize(4 * base, 1.0f); // primitives before without COLOR_0
+            colors.insert(colors.end(), rgba.begin(), rgba.end());
+            builder.anyColor = true;
+        }
     } else {
         for (size_t i = 0; i < count; ++i) mesh.albedo.insert(mesh.albedo.end(), {float(factor[0]), float(factor[1]), float(factor[2])});
         builder.anyAlbedo = builder.anyAlbedo || factor != std::array<double, 3>{1.0, 1.0, 1.0};
+    }
+    if (builder.scene) {
+        for (int set = 0; set < 2; ++set) {
+            const char* name = set == 0 ? "TEXCOORD_0" : "TEXCOORD_1";
+            std::vector<float>& uv = builder.scene->texcoords[set];
+            uv.resize(2 * base, 0.0f);
+            if (attribute(name) >= 0) {
+                if (appendFloats(model, attribute(name), 2, uv, builder.file, place + "." + name) != count)
+                    throw Error(builder.file, place + "." + name, "count differs from POSITION's");
+                builder.anyTexcoords[set] = true;
+            } else {
+                uv.resize(2 * (base + count), 0.0f);
+            }
+        }
     }
 
     std::vector<uint32_t> indices;
@@ -271,16 +316,37 @@ void addPrimitive(MeshBuilder& builder, const tinygltf::Primitive& primitive, co
     // A mirroring transform turns counter-clockwise triangles clockwise.
     if (determinant < 0)
         for (size_t t = 0; t < indices.size(); t += 3) std::swap(indices[t + 1], indices[t + 2]);
+    if (builder.scene) {
+        SceneAsset& scene = *builder.scene;
+        SceneReceiver receiver;
+        receiver.material = primitive.material >= 0 ? primitive.material : int(scene.materials.size()) - 1;
+        receiver.firstVertex = uint32_t(base);
+        receiver.vertexCount = uint32_t(count);
+        receiver.firstTriangle = uint32_t(mesh.indices.size() / 3);
+        receiver.triangleCount = uint32_t(indices.size() / 3);
+        receiver.world = world;
+        receiver.mirrored = determinant < 0;
+        scene.triangleReceiver.resize(scene.triangleReceiver.size() + receiver.triangleCount, uint32_t(scene.receivers.size()));
+        scene.receivers.push_back(receiver); // node, mesh and primitive are set by the caller
+    }
     mesh.indices.insert(mesh.indices.end(), indices.begin(), indices.end());
 }
 
-void addMesh(MeshBuilder& builder, int meshIndex, const Matrix& world, const std::string& place) {
+void addMesh(MeshBuilder& builder, int meshIndex, const Matrix& world, const std::string& place, int node = -1) {
     if (meshIndex < 0 || size_t(meshIndex) >= builder.model.meshes.size())
         throw Error(builder.file, place, "mesh " + std::to_string(meshIndex) + " does not exist");
     const tinygltf::Mesh& mesh = builder.model.meshes[meshIndex];
-    for (size_t p = 0; p < mesh.primitives.size(); ++p)
+    for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+        size_t receivers = builder.scene ? builder.scene->receivers.size() : 0;
         addPrimitive(builder, mesh.primitives[p], world,
                      "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(p) + "]");
+        if (builder.scene && builder.scene->receivers.size() > receivers) {
+            SceneReceiver& receiver = builder.scene->receivers.back();
+            receiver.node = node;
+            receiver.mesh = meshIndex;
+            receiver.primitive = int(p);
+        }
+    }
 }
 
 // The node forest of `sceneIndex`, walked without recursion. glTF requires a forest: no node has two parents
@@ -326,7 +392,7 @@ void addScene(MeshBuilder& builder, int sceneIndex) {
         visited[item.node] = 1;
         const tinygltf::Node& node = model.nodes[item.node];
         Matrix world = multiply(item.parentWorld, localMatrix(node));
-        if (node.mesh >= 0) addMesh(builder, node.mesh, world, nodePlace(size_t(item.node)));
+        if (node.mesh >= 0) addMesh(builder, node.mesh, world, nodePlace(size_t(item.node)), item.node);
         for (auto child = node.children.rbegin(); child != node.children.rend(); ++child) stack.push_back({*child, world});
     }
     for (size_t n = 0; n < nodeCount; ++n)
@@ -363,19 +429,51 @@ static void requireGltf2(const tinygltf::Model& model, const std::string& file) 
                                            "(convert the file, for example with the Khronos glTF 1.0 to 2.0 converter)");
 }
 
-TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
-    requireGltf2(model, file);
+// Walks the default scene (every mesh once, untransformed, when the file has no scene) into the builder.
+static void addDefaultScene(MeshBuilder& builder) {
+    const tinygltf::Model& model = builder.model;
+    requireGltf2(model, builder.file);
     if (model.nodes.size() > kMaxNodes)
-        throw Error(file, "nodes", std::to_string(model.nodes.size()) + " nodes, more than the " + std::to_string(kMaxNodes) +
-                                       " prt reads");
-    MeshBuilder builder{model, file, TriMesh{}};
+        throw Error(builder.file, "nodes", std::to_string(model.nodes.size()) + " nodes, more than the " +
+                                               std::to_string(kMaxNodes) + " prt reads");
     if (model.scenes.empty()) {
         for (size_t m = 0; m < model.meshes.size(); ++m) addMesh(builder, int(m), kIdentity, "meshes");
     } else {
         int sceneIndex = model.defaultScene >= 0 && size_t(model.defaultScene) < model.scenes.size() ? model.defaultScene : 0;
         addScene(builder, sceneIndex);
     }
-    return finishMesh(builder, "no triangles: no TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive is reachable from the scene");
+}
+
+static const char* kNoSceneTriangles =
+    "no triangles: no TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive is reachable from the scene";
+
+TriMesh readGltfMesh(const tinygltf::Model& model, const std::string& file) {
+    MeshBuilder builder{model, file, TriMesh{}};
+    addDefaultScene(builder);
+    return finishMesh(builder, kNoSceneTriangles);
+}
+
+TriMesh readGltfScene(const tinygltf::Model& model, const std::string& file, SceneAsset& scene) {
+    readMaterials(model, file, scene);
+    MeshBuilder builder{model, file, TriMesh{}, &scene};
+    addDefaultScene(builder);
+    TriMesh mesh = finishMesh(builder, kNoSceneTriangles);
+    const size_t vertices = mesh.vertexCount();
+    for (int set = 0; set < 2; ++set)
+        if (!builder.anyTexcoords[set]) scene.texcoords[set].clear();
+    if (builder.anyColor) scene.colors.resize(4 * vertices, 1.0f);
+    else scene.colors.clear();
+    return mesh;
+}
+
+TriMesh readGltfPrimitive(const tinygltf::Model& model, int meshIndex, int primitiveIndex, const std::string& file) {
+    const std::string place = "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(primitiveIndex) + "]";
+    if (meshIndex < 0 || size_t(meshIndex) >= model.meshes.size() || primitiveIndex < 0 ||
+        size_t(primitiveIndex) >= model.meshes[size_t(meshIndex)].primitives.size())
+        throw Error(file, place, "does not exist");
+    MeshBuilder builder{model, file, TriMesh{}};
+    addPrimitive(builder, model.meshes[size_t(meshIndex)].primitives[size_t(primitiveIndex)], kIdentity, place);
+    return std::move(builder.mesh);
 }
 
 TriMesh readGltfMeshAt(const tinygltf::Model& model, int meshIndex, const std::string& file) {

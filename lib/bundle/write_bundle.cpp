@@ -55,11 +55,23 @@ static std::string objectName(const Bundle& bundle, uint32_t object) {
 
 static void checkObjects(const std::string& path, const Bundle& bundle, int version) {
     auto refuse = [&](const std::string& place, const std::string& problem) { throw Error(path, place, problem, kExitFailure); };
-    if (version != 1 && version != kBundleVersion)
-        refuse("", "cannot write bundle version " + std::to_string(version) + "; this build writes 1 and " +
-                       std::to_string(kBundleVersion));
+    if (version < kOldestBundleVersion || version > kBundleVersion)
+        refuse("", "cannot write bundle version " + std::to_string(version) + "; this build writes " +
+                       std::to_string(kOldestBundleVersion) + " to " + std::to_string(kBundleVersion));
     if (version == 1 && (!bundle.objects.empty() || !bundle.instances.empty()))
         refuse("", "version 1 holds one mesh: objects and instances need version 2");
+    if (bundle.asset) {
+        if (version < 3) refuse("", "a scene bundle (a glTF asset with its transfer) needs version 3");
+        if (!bundle.objects.empty() || !bundle.instances.empty())
+            refuse("", "a scene bundle places its meshes by its own node tree: it takes no objects or instances");
+        const SceneAsset& asset = *bundle.asset;
+        if (!asset.source || asset.source->buffers.size() != 1 || !asset.source->buffers[0].uri.empty())
+            refuse("", "the scene asset is not self-contained (selfContainedModel)");
+        uint64_t vertices = 0;
+        for (const SceneReceiver& receiver : asset.receivers) vertices += receiver.vertexCount;
+        if (vertices != bundle.mesh.vertexCount() || asset.triangleReceiver.size() != bundle.mesh.triangleCount())
+            refuse("mesh", "is not the flattened mesh of the scene asset");
+    }
     checkMesh(path, "mesh", bundle.mesh);
     std::set<std::string> names = {objectName(bundle, 0)};
     for (size_t k = 0; k < bundle.objects.size(); ++k) {
@@ -243,11 +255,8 @@ static json layerRecord(tinygltf::Model& model, const Layer& layer) {
     return record;
 }
 
-void writeBundle(const std::string& path, const Bundle& bundle, int version) {
-    checkObjects(path, bundle, version);
-    checkLayers(path, bundle, version);
-
-    tinygltf::Model model;
+// Bundles of prt's own meshes (versions 1 and 2 layout): object k is mesh k and node k.
+static void addPrtMeshes(tinygltf::Model& model, const Bundle& bundle, int version, json& extension) {
     model.asset.version = "2.0";
     model.asset.generator = "prt";
     model.buffers.resize(1);
@@ -260,12 +269,39 @@ void writeBundle(const std::string& path, const Bundle& bundle, int version) {
         objects.push_back({{"name", bundle.objects[k].name}, {"role", bundle.objects[k].role}, {"mesh", k + 1}, {"node", k + 1}});
     }
     json instances = addScene(model, bundle);
-
-    json extension = {{"version", version}, {"producer", bundle.producer}, {"inputs", bundle.inputs},
-                      {"convention", bundle.convention}, {"layers", json::array()}};
     if (version >= 2) {
         extension["objects"] = objects;
         extension["instances"] = instances;
+    }
+}
+
+// The `scene` record of a scene bundle's extension: its receivers in row order (docs/bundle.md "Scene bundles").
+static json sceneRecord(const SceneAsset& asset, const TriMesh& mesh) {
+    json receivers = json::array();
+    for (const SceneReceiver& r : asset.receivers)
+        receivers.push_back({{"node", r.node}, {"mesh", r.mesh}, {"primitive", r.primitive}, {"material", r.material},
+                             {"first_row", r.firstVertex}, {"rows", r.vertexCount}, {"first_triangle", r.firstTriangle},
+                             {"triangles", r.triangleCount}, {"mirrored", r.mirrored}});
+    return {{"rows", mesh.vertexCount()},
+            {"triangles", mesh.triangleCount()},
+            {"row_order", "receivers in node order (default scene, depth first, children in order), then primitive "
+                          "order; each receiver's vertices in accessor order"},
+            {"receivers", receivers}};
+}
+
+void writeBundle(const std::string& path, const Bundle& bundle, int version) {
+    checkObjects(path, bundle, version);
+    checkLayers(path, bundle, version);
+
+    tinygltf::Model model;
+    json extension = {{"version", version}, {"producer", bundle.producer}, {"inputs", bundle.inputs},
+                      {"convention", bundle.convention}, {"layers", json::array()}};
+    if (bundle.asset) {
+        // The asset as it came, with the layers appended to its buffer.
+        model = *bundle.asset->source;
+        extension["scene"] = sceneRecord(*bundle.asset, bundle.mesh);
+    } else {
+        addPrtMeshes(model, bundle, version, extension);
     }
     for (const Layer& layer : bundle.layers) extension["layers"].push_back(layerRecord(model, layer));
     extension = detail::storableJson(extension, path, kBundleExtension);
@@ -286,6 +322,7 @@ void writeBundle(const std::string& path, const Bundle& bundle, int version) {
         if (!written || !out) throw Error(path, "", "write failed", kExitOutput);
     });
 }
+
 
 json conventionRecord() {
     return {{"reference", "docs/conventions.md"},

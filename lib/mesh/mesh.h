@@ -156,6 +156,7 @@ struct MeshprepOptions {
     size_t decimateTo = 0;         // target triangle count; 0: no decimation
     double scale = 1.0;            // uniform scale applied to positions before anything else
     std::string toolVersion;       // recorded as the bundle's producer version
+    bool flatten = false;          // a glTF scene: merge it into one mesh (the steps above) instead of keeping it
 };
 
 struct PreparedMesh {
@@ -173,7 +174,28 @@ struct PreparedMesh {
 // Throws Error naming the input file for any bad input (see loadMesh and validateMesh).
 PreparedMesh prepareMesh(const MeshprepOptions& options);
 
-// The `prt meshprep` stage: prepareMesh, then writes the bundle and the report (if asked) so that any error
+// Scenes. A glTF or GLB input is kept as the asset it is (a version 3 scene bundle, asset.h), unless
+// options.flatten: every receiver is validated (indices inside its own vertices, finite values, colours in
+// [0, 1]), primitives without NORMAL get angle-weighted normals (computeNormals, in their own space, stored as a
+// new NORMAL accessor), and nothing is welded, removed or reordered, so rows stay the asset's vertices.
+struct PreparedScene {
+    Bundle bundle;         // the scene, no layers
+    nlohmann::json report; // input, scene counts, counts, bounds, boundary, vertex_order
+};
+// Whether `path` is an OBJ that names an MTL file (mtllib): meshprep then reads it as a scene (readObjScene).
+bool objHasMaterials(const std::string& path);
+// An OBJ with its MTL as a scene bundle (no layers): one mesh, one primitive per material (its distinct corners as
+// vertices, texcoords flipped to glTF's v down), Kd as base colour factor, map_Kd as base colour texture, not
+// metallic. The OBJ is checked as loadMesh checks it first; the MTL and the textures must lie inside the OBJ's
+// folder (backslashes read as separators). Throws Error naming the file and the place otherwise.
+Bundle readObjScene(const std::string& path);
+
+// Needs `scene`, options.input read by readBundle, to be a scene (scene.asset). Throws Error(kExitUsage) for the
+// options that reshape a mesh (--decimate-to, --scale, --recompute-normals, --weld-ignore-attributes), naming
+// --flatten; Error(input, place) for bad input, textures that do not decode included.
+PreparedScene prepareScene(const MeshprepOptions& options, Bundle scene);
+
+// The `prt meshprep` stage: prepareMesh (or prepareScene), then writes the bundle and the report (if asked) so that any error
 // leaves neither file behind, logs a summary and reports its cost.
 // Needs: options.output ending in .glb. Throws Error (kExitUsage for bad options).
 void runMeshprep(const MeshprepOptions& options);

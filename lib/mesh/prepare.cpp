@@ -115,13 +115,26 @@ void runMeshprep(const MeshprepOptions& options) {
     if (fileExtension(options.output) != "glb") throw Error(options.output, "-o", "output must be a .glb file", kExitUsage);
     const double start = nowSeconds();
 
-    PreparedMesh prepared = prepareMesh(options);
-    const nlohmann::json& report = prepared.report;
     Bundle bundle;
-    bundle.mesh = std::move(prepared.mesh);
-    bundle.producer = {{"tool", "prt"}, {"version", options.toolVersion}, {"stage", "meshprep"}};
-    bundle.inputs = {{"mesh", report["input"]["hash"]}};
-    bundle.convention = conventionRecord();
+    nlohmann::json report;
+    // A glTF input that is a scene (not a bundle of prt's own meshes), or an OBJ with materials, is kept as the
+    // asset, unless --flatten.
+    const std::string format = fileExtension(options.input);
+    if (!options.flatten && (format == "gltf" || format == "glb")) bundle = readBundle(options.input);
+    if (!options.flatten && objHasMaterials(options.input)) bundle = readObjScene(options.input);
+    if (bundle.asset) {
+        PreparedScene prepared = prepareScene(options, std::move(bundle));
+        bundle = std::move(prepared.bundle);
+        report = std::move(prepared.report);
+    } else {
+        PreparedMesh prepared = prepareMesh(options);
+        report = std::move(prepared.report);
+        bundle = Bundle();
+        bundle.mesh = std::move(prepared.mesh);
+        bundle.producer = {{"tool", "prt"}, {"version", options.toolVersion}, {"stage", "meshprep"}};
+        bundle.inputs = {{"mesh", report["input"]["hash"]}};
+        bundle.convention = conventionRecord();
+    }
     if (options.report.empty()) {
         writeBundle(options.output, bundle);
     } else {
@@ -133,14 +146,24 @@ void runMeshprep(const MeshprepOptions& options) {
     }
 
     const nlohmann::json& counts = report["counts"];
-    const nlohmann::json& fixed = report["fixed"];
-    logInfo("meshprep: " + options.input + ": " + counts["vertices_in"].dump() + " vertices, " + counts["faces_in"].dump() +
+    if (report.contains("scene")) {
+        const nlohmann::json& scene = report["scene"];
+        logInfo("meshprep: " + options.input + ": scene of " + scene["receivers"].dump() + " receivers (" +
+                scene["meshes"].dump() + " meshes, " + scene["instanced_receivers"].dump() + " instanced), " +
+                scene["materials"].dump() + " materials (" + scene["textured_materials"].dump() + " textured, " +
+                scene["cutout_materials"].dump() + " cut-out), " + counts["vertices_out"].dump() + " vertices, " +
+                counts["faces_out"].dump() + " triangles; normals computed for " +
+                scene["normals_computed_for_primitives"].dump() + " primitives; wrote " + options.output);
+    } else {
+        const nlohmann::json& fixed = report["fixed"];
+        logInfo("meshprep: " + options.input + ": " + counts["vertices_in"].dump() + " vertices, " + counts["faces_in"].dump() +
             " faces -> " + counts["vertices_out"].dump() + " vertices, " + counts["faces_out"].dump() + " triangles; welded " +
             fixed["welded_vertices"].dump() + " vertices, removed " + fixed["degenerate_faces_removed"].dump() +
             " degenerate and " + fixed["duplicate_faces_removed"].dump() + " duplicate faces; " +
             report["boundary"]["edges"].dump() + " boundary edges in " + report["boundary"]["loops"].dump() + " loops, " +
             report["non_manifold_edges"].dump() + " non-manifold edges; normals " + fixed["normals"].get<std::string>() +
             "; wrote " + options.output);
+    }
 
     StageCost cost;
     cost.stage = "meshprep";

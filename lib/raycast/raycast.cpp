@@ -2,6 +2,7 @@
 #include "raycast.h"
 
 #include "core.h"
+#include "material.h"
 
 #include <algorithm>
 #include <array>
@@ -19,7 +20,162 @@ void throwIfEmbreeFailed(RTCDevice device, const char* step) {
                     kExitFailure);
 }
 
-EmbreeScene::EmbreeScene(const TriMesh& mesh) {
+namespace {
+
+// Embree filter for cut-out materials: a hit where the surface is absent is no hit, so the ray goes on.
+void cutoutFilter(const RTCFilterFunctionNArguments* args) {
+    const EmbreeScene::FilterData& data = *static_cast<const EmbreeScene::FilterData*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        uint32_t triangle = data.scene->flatTriangle(RTCHitN_instID(args->hit, args->N, i, 0),
+                                                     RTCHitN_geomID(args->hit, args->N, i),
+                                                     RTCHitN_primID(args->hit, args->N, i));
+        if (!presentAt(*data.surface, triangle, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i)))
+            args->valid[i] = 0;
+    }
+}
+
+// A triangle geometry of `triangles` (flattened triangle indices) with the vertices they use, committed and
+// attached to `scene`. Embree-owned buffers: Embree reads vertex buffers 16 bytes at a time, past a tight float3
+// array's end.
+void attachTriangles(RTCDevice device, RTCScene scene, const TriMesh& mesh, const uint32_t* triangles, size_t count,
+                     uint32_t firstVertex, uint32_t vertexCount, EmbreeScene::FilterData* filter) {
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_HIGH);
+    auto* vertices = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertexCount));
+    auto* indices = static_cast<uint32_t*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), count));
+    if (!vertices || !indices) {
+        rtcReleaseGeometry(geometry);
+        throwIfEmbreeFailed(device, "buffers");
+        throw Error("", "embree buffers", "cannot allocate", kExitFailure);
+    }
+    std::copy_n(mesh.positions.begin() + 3 * size_t(firstVertex), 3 * size_t(vertexCount), vertices);
+    for (size_t t = 0; t < count; ++t)
+        for (int k = 0; k < 3; ++k) indices[3 * t + k] = mesh.indices[3 * size_t(triangles ? triangles[t] : t) + k] - firstVertex;
+    if (filter) {
+        rtcSetGeometryUserData(geometry, filter);
+        rtcSetGeometryIntersectFilterFunction(geometry, cutoutFilter);
+        rtcSetGeometryOccludedFilterFunction(geometry, cutoutFilter);
+    }
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(scene, geometry);
+    rtcReleaseGeometry(geometry);
+}
+
+using Matrix = std::array<double, 16>; // column-major, glTF's
+
+Matrix inverseAffine(const Matrix& m) {
+    // The linear part's inverse by cofactors, then the translation.
+    const double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
+    const double A = e * i - f * h, B = -(d * i - f * g), C = d * h - e * g;
+    const double det = a * A + b * B + c * C;
+    Matrix inv{};
+    const double r[3][3] = {{A / det, -(b * i - c * h) / det, (b * f - c * e) / det},
+                            {B / det, (a * i - c * g) / det, -(a * f - c * d) / det},
+                            {C / det, -(a * h - b * g) / det, (a * e - b * d) / det}};
+    for (int row = 0; row < 3; ++row)
+        for (int column = 0; column < 3; ++column) inv[column * 4 + row] = r[row][column];
+    for (int row = 0; row < 3; ++row)
+        inv[12 + row] = -(r[row][0] * m[12] + r[row][1] * m[13] + r[row][2] * m[14]);
+    inv[15] = 1.0;
+    return inv;
+}
+
+Matrix multiply(const Matrix& x, const Matrix& y) {
+    Matrix out{};
+    for (int column = 0; column < 4; ++column)
+        for (int row = 0; row < 4; ++row)
+            for (int k = 0; k < 4; ++k) out[column * 4 + row] += x[k * 4 + row] * y[column * 4 + k];
+    return out;
+}
+
+// The scene of a flattened glTF scene with repeated meshes as instances (raycast.h). Returns false, building
+// nothing, when no mesh is placed twice.
+bool buildInstanced(EmbreeScene& embree, const TriMesh& mesh, const SceneAsset& asset, EmbreeScene::FilterData* filter) {
+    struct Placement {
+        uint32_t firstReceiver, receivers; // the consecutive receivers one node gives one mesh
+    };
+    std::vector<Placement> placements;
+    std::vector<std::vector<uint32_t>> placementsOfMesh;
+    for (uint32_t r = 0; r < asset.receivers.size(); ++r) {
+        const SceneReceiver& receiver = asset.receivers[r];
+        if (r > 0 && asset.receivers[r - 1].node == receiver.node && asset.receivers[r - 1].mesh == receiver.mesh) {
+            ++placements.back().receivers;
+            continue;
+        }
+        placements.push_back({r, 1});
+        if (placementsOfMesh.size() <= size_t(receiver.mesh)) placementsOfMesh.resize(size_t(receiver.mesh) + 1);
+        placementsOfMesh[size_t(receiver.mesh)].push_back(uint32_t(placements.size() - 1));
+    }
+    bool repeated = false;
+    for (const std::vector<uint32_t>& list : placementsOfMesh) repeated = repeated || list.size() > 1;
+    if (!repeated) return false;
+
+    for (const SceneReceiver& receiver : asset.receivers) embree.receiverTriangles.push_back(receiver.firstTriangle);
+    auto receiverTriangles = [&](uint32_t r) {
+        const SceneReceiver& receiver = asset.receivers[r];
+        std::vector<uint32_t> triangles(receiver.triangleCount);
+        for (uint32_t t = 0; t < receiver.triangleCount; ++t) triangles[t] = receiver.firstTriangle + t;
+        return triangles;
+    };
+    for (const std::vector<uint32_t>& list : placementsOfMesh) {
+        if (list.empty()) continue;
+        const Placement& first = placements[list[0]];
+        // A prototype's geometry p is its placement's receiver p, so every receiver needs triangles of its own.
+        bool instanceable = list.size() > 1;
+        for (uint32_t r = first.firstReceiver; r < first.firstReceiver + first.receivers; ++r)
+            instanceable = instanceable && asset.receivers[r].triangleCount > 0;
+        if (!instanceable) {
+            // Placed once (or not instanceable): each receiver is a world-space geometry of the top-level scene.
+            for (uint32_t k : list) {
+                const Placement& placement = placements[k];
+                for (uint32_t r = placement.firstReceiver; r < placement.firstReceiver + placement.receivers; ++r) {
+                    const SceneReceiver& receiver = asset.receivers[r];
+                    if (receiver.triangleCount == 0) continue;
+                    std::vector<uint32_t> triangles = receiverTriangles(r);
+                    attachTriangles(embree.device, embree.scene, mesh, triangles.data(), triangles.size(),
+                                    receiver.firstVertex, receiver.vertexCount, filter);
+                    embree.topReceiver.push_back(r);
+                }
+            }
+            continue;
+        }
+        // The prototype: the first placement's receivers in its world space, geometry p = its receiver p.
+        RTCScene prototype = rtcNewScene(embree.device);
+        embree.prototypes.push_back(prototype);
+        rtcSetSceneFlags(prototype, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneBuildQuality(prototype, RTC_BUILD_QUALITY_HIGH);
+        for (uint32_t r = first.firstReceiver; r < first.firstReceiver + first.receivers; ++r) {
+            const SceneReceiver& receiver = asset.receivers[r];
+            std::vector<uint32_t> triangles = receiverTriangles(r);
+            attachTriangles(embree.device, prototype, mesh, triangles.data(), triangles.size(), receiver.firstVertex,
+                            receiver.vertexCount, filter);
+        }
+        rtcCommitScene(prototype);
+        const Matrix toFirst = inverseAffine(asset.receivers[first.firstReceiver].world);
+        for (uint32_t k : list) {
+            const Placement& placement = placements[k];
+            Matrix transform = multiply(asset.receivers[placement.firstReceiver].world, toFirst);
+            float columns[12];
+            for (int column = 0; column < 4; ++column)
+                for (int row = 0; row < 3; ++row) columns[column * 3 + row] = float(transform[column * 4 + row]);
+            RTCGeometry instance = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(instance, prototype);
+            rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, columns);
+            rtcCommitGeometry(instance);
+            rtcAttachGeometry(embree.scene, instance);
+            rtcReleaseGeometry(instance);
+            embree.topReceiver.push_back(placement.firstReceiver);
+        }
+    }
+    return true;
+}
+
+} // namespace
+
+EmbreeScene::EmbreeScene(const TriMesh& mesh, const Surface* surface) {
     device = rtcNewDevice(nullptr);
     if (!device)
         throw Error("", "embree device",
@@ -28,29 +184,17 @@ EmbreeScene::EmbreeScene(const TriMesh& mesh) {
         scene = rtcNewScene(device);
         rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
         rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-        if (mesh.triangleCount() > 0) {
-            RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_HIGH);
-            // Embree-owned buffers: Embree reads vertex buffers 16 bytes at a time, past a tight float3 array's end.
-            auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-                geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertexCount()));
-            auto* triangles = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-                geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangleCount()));
-            if (!vertices || !triangles) {
-                rtcReleaseGeometry(geometry);
-                throwIfEmbreeFailed(device, "buffers");
-                throw Error("", "embree buffers", "cannot allocate", kExitFailure);
-            }
-            std::copy(mesh.positions.begin(), mesh.positions.end(), vertices);
-            std::copy(mesh.indices.begin(), mesh.indices.end(), triangles);
-            rtcCommitGeometry(geometry);
-            rtcAttachGeometry(scene, geometry);
-            rtcReleaseGeometry(geometry);
-        }
+        filterData = {surface, this};
+        FilterData* filter = surface && surface->cutouts ? &filterData : nullptr;
+        bool instances = surface && surface->instancing && surface->asset &&
+                         buildInstanced(*this, mesh, *surface->asset, filter);
+        if (!instances && mesh.triangleCount() > 0)
+            attachTriangles(device, scene, mesh, nullptr, mesh.triangleCount(), 0, uint32_t(mesh.vertexCount()), filter);
         rtcCommitScene(scene);
         throwIfEmbreeFailed(device, "scene build");
     } catch (...) {
         if (scene) rtcReleaseScene(scene);
+        for (RTCScene prototype : prototypes) rtcReleaseScene(prototype);
         rtcReleaseDevice(device);
         throw;
     }
@@ -58,6 +202,7 @@ EmbreeScene::EmbreeScene(const TriMesh& mesh) {
 
 EmbreeScene::~EmbreeScene() {
     rtcReleaseScene(scene);
+    for (RTCScene prototype : prototypes) rtcReleaseScene(prototype);
     rtcReleaseDevice(device);
 }
 

@@ -17,15 +17,57 @@ namespace prt {
 // both released on destruction. Part of the spawn rule below, so there is no non-robust variant.
 // Needs indices in range (lib/mesh validation guarantees them).
 // Throws prt::Error(kExitFailure) when Embree fails, naming the step.
+// With a scene's `surface` (lib/material) whose materials have cut-outs, hits where the surface is absent
+// (presentAt false) are ignored by every query, nearest-hit and occlusion alike, through Embree filter functions;
+// the surface must outlive the scene.
+// Instancing: with a surface whose `instancing` is set, a glTF mesh that several nodes place is built once, as an
+// Embree scene of its primitives in its first placement's world space, and every other placement is an Embree
+// instance of it (transform: the placement's world matrix times the first's inverse), so the BVH holds each such
+// mesh's triangles once. Receivers placed once share one triangle geometry. Hits then name a geometry of an
+// instance: flatTriangle() maps every hit to its triangle of the flattened mesh, which all callers index with, and
+// callers take facing from that triangle's world positions (Embree's Ng is in the instanced object's space).
+// Barycentrics are those of the flattened triangle. Without instancing, flatTriangle(hit) is hit.primID.
+struct Surface;
 struct EmbreeScene {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
 
-    explicit EmbreeScene(const TriMesh& mesh);
+    explicit EmbreeScene(const TriMesh& mesh, const Surface* surface = nullptr);
     ~EmbreeScene();
     EmbreeScene(const EmbreeScene&) = delete;
     EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+    // Whether some geometry is an instance (then Ng of a hit is not in world space).
+    bool instanced() const { return !prototypes.empty(); }
+    uint32_t flatTriangle(unsigned instID, unsigned geomID, unsigned primID) const {
+        if (topReceiver.empty()) return primID;
+        uint32_t receiver = instID == RTC_INVALID_GEOMETRY_ID ? topReceiver[geomID] : topReceiver[instID] + geomID;
+        return receiverTriangles[receiver] + primID;
+    }
+    uint32_t flatTriangle(const RTCHit& hit) const { return flatTriangle(hit.instID[0], hit.geomID, hit.primID); }
+
+    // The mapping behind flatTriangle (empty without instancing): per top-level geometry, the receiver it holds
+    // (a receiver placed once) or the first receiver of the placement it instances (an instance, whose prototype
+    // holds the placement's receivers in order as its geometries); per receiver, its first flattened triangle.
+    std::vector<uint32_t> topReceiver;
+    std::vector<uint32_t> receiverTriangles;
+    std::vector<RTCScene> prototypes;
+    struct FilterData {
+        const Surface* surface;
+        const EmbreeScene* scene;
+    } filterData{nullptr, nullptr};
 };
+
+// The unnormalised geometric normal (p1 - p0) x (p2 - p0) of `triangle`, on its counter-clockwise front side.
+inline void triangleNormal(const TriMesh& mesh, uint32_t triangle, float n[3]) {
+    const uint32_t* corner = &mesh.indices[3 * size_t(triangle)];
+    const float *p0 = &mesh.positions[3 * size_t(corner[0])], *p1 = &mesh.positions[3 * size_t(corner[1])],
+                *p2 = &mesh.positions[3 * size_t(corner[2])];
+    const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
 
 // Throws prt::Error(kExitFailure) naming `step` when `device` holds an error.
 void throwIfEmbreeFailed(RTCDevice device, const char* step);

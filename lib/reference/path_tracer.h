@@ -78,7 +78,10 @@ enum class HitKind { Miss, BackFace, FrontFace };
 class SceneTracer {
 public:
     // Needs mesh.normals per vertex; keeps references to `mesh`, which must outlive the tracer.
-    SceneTracer(const TriMesh& mesh, const std::optional<std::array<float, 3>>& constantAlbedo);
+    // With a scene's `surface` (borrowed, outliving the tracer) albedo comes from its materials and rays pass
+    // through its cut-outs.
+    SceneTracer(const TriMesh& mesh, const std::optional<std::array<float, 3>>& constantAlbedo,
+                const Surface* surface = nullptr);
 
     ShadingPoint vertexPoint(uint32_t vertex) const;
     // Casts origin + t d, t > 0. On a front-face hit fills `point`.
@@ -93,6 +96,8 @@ private:
 
     const TriMesh& mesh_;
     std::optional<std::array<float, 3>> constantAlbedo_;
+    const Surface* surface_ = nullptr;
+    std::vector<float> vertexAlbedo_; // with a surface: vertexDiffuseAlbedo
     EmbreeScene embree_;
     float rayOffset_ = 0.0f;
 };

@@ -25,6 +25,8 @@ void checkInputs(const TriMesh& mesh, const ReferenceOptions& options) {
     if (mesh.normals.size() != mesh.positions.size()) throw Error("", "mesh", "has no vertex normals");
     if (!mesh.albedo.empty() && mesh.albedo.size() != mesh.positions.size())
         throw Error("", "mesh", "albedo is not rgb per vertex");
+    if (options.surface && options.albedo)
+        throw Error("", "--albedo", "a scene takes its albedo from its materials", kExitUsage);
     if (options.phong && !(options.phong->exponent > 0.0 && std::isfinite(options.phong->exponent)))
         throw Error("", "--brdf", "the Phong exponent must be > 0", kExitUsage);
     if (options.phong && !(options.phong->ks >= 0.0 && options.phong->ks <= 1.0))
@@ -92,7 +94,7 @@ ReferenceRadiance shadeVertexRows(const TriMesh& mesh, const EnvironmentMap& env
                         std::to_string(mesh.vertexCount()) + " vertices", kExitUsage);
     EnvironmentSampler environment = makeEnvironmentSampler(env);
     return withThreads(options.threads, [&] {
-        SceneTracer scene(mesh, options.albedo);
+        SceneTracer scene(mesh, options.albedo, options.surface);
         ReferenceRadiance result;
         result.radiance.resize(count * 3);
         result.standardError.resize(count * 3);
@@ -135,7 +137,7 @@ ReferenceImage referenceImage(const TriMesh& mesh, const EnvironmentMap& env, co
 
     EnvironmentSampler environment = makeEnvironmentSampler(env);
     return withThreads(options.threads, [&] {
-        SceneTracer scene(mesh, options.albedo);
+        SceneTracer scene(mesh, options.albedo, options.surface);
         ReferenceImage result;
         for (Image* image : {&result.radiance, &result.standardError}) {
             image->width = camera.width;

@@ -20,6 +20,8 @@
 
 namespace prt {
 
+struct Surface; // lib/material
+
 // The normalised Phong lobe on top of the diffuse albedo (docs/conventions.md, "Glossy BRDF"):
 // f = albedo / pi + ks (n + 2) / (2 pi) max(0, r . wi)^n, r the mirror of the outgoing direction about the
 // shading normal, the lobe zero when the outgoing direction is below the surface.
@@ -34,6 +36,10 @@ struct ReferenceOptions {
     uint64_t seed = 0;
     // Diffuse albedo: this constant if set, else the mesh's per-vertex albedo if it has one, else white.
     std::optional<std::array<float, 3>> albedo;
+    // A scene's materials (lib/material; the mesh must be its flattened mesh), borrowed: every path vertex takes
+    // the diffuse albedo of the material at its point (vertices: vertexDiffuseAlbedo), and rays pass through
+    // cut-outs, exactly as transfer sees the scene. Not with `albedo`.
+    const Surface* surface = nullptr;
     int threads = 0; // worker threads; 0 = all hardware threads. Results do not depend on it.
     // Glossy surfaces: the Phong lobe at every path vertex. Vertex mode then needs `eye`: each vertex's radiance
     // is the radiance it sends toward that point (view-dependent); images use the camera ray.

@@ -2,6 +2,7 @@
 #include "path_tracer.h"
 
 #include "core.h"
+#include "material.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,13 +26,21 @@ RTCRay makeRay(const float origin[3], const float d[3]) {
 
 } // namespace
 
-SceneTracer::SceneTracer(const TriMesh& mesh, const std::optional<std::array<float, 3>>& constantAlbedo)
+SceneTracer::SceneTracer(const TriMesh& mesh, const std::optional<std::array<float, 3>>& constantAlbedo,
+                         const Surface* surface)
     // EmbreeScene is robust: no rays slip between adjacent triangles, so closed cavities never leak light.
-    : mesh_(mesh), constantAlbedo_(constantAlbedo), embree_(mesh),
-      rayOffset_(prt::rayOffset(mesh)) {}
+    : mesh_(mesh), constantAlbedo_(constantAlbedo), surface_(surface), embree_(mesh, surface),
+      rayOffset_(prt::rayOffset(mesh)) {
+    if (surface_) vertexAlbedo_ = vertexDiffuseAlbedo(*surface_);
+}
 
 void SceneTracer::albedoAt(const uint32_t* triangle, float u, float v, float out[3]) const {
-    if (constantAlbedo_) {
+    if (surface_ && triangle[0] == triangle[1] && triangle[1] == triangle[2]) {
+        std::copy_n(&vertexAlbedo_[3 * size_t(triangle[0])], 3, out); // a vertex (vertexPoint)
+    } else if (surface_) {
+        std::array<float, 3> albedo = diffuseAlbedoAt(*surface_, size_t(triangle - mesh_.indices.data()) / 3, u, v);
+        std::copy(albedo.begin(), albedo.end(), out);
+    } else if (constantAlbedo_) {
         std::copy(constantAlbedo_->begin(), constantAlbedo_->end(), out);
     } else if (mesh_.albedo.empty()) {
         std::fill(out, out + 3, 1.0f);
@@ -66,16 +75,14 @@ HitKind SceneTracer::intersect(const float origin[3], const float d[3], ShadingP
     rtcIntersect1(embree_.scene, &context, &rayHit);
     if (rayHit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return HitKind::Miss;
 
-    const uint32_t* triangle = &mesh_.indices[size_t(rayHit.hit.primID) * 3];
+    const uint32_t triangleIndex = embree_.flatTriangle(rayHit.hit);
+    const uint32_t* triangle = &mesh_.indices[size_t(triangleIndex) * 3];
     const float* p0 = &mesh_.positions[triangle[0] * 3];
     const float* p1 = &mesh_.positions[triangle[1] * 3];
     const float* p2 = &mesh_.positions[triangle[2] * 3];
     // The winding gives the front side (counter-clockwise seen from it, docs/conventions.md).
-    float e1[3], e2[3], faceNormal[3];
-    for (int c = 0; c < 3; ++c) e1[c] = p1[c] - p0[c], e2[c] = p2[c] - p0[c];
-    faceNormal[0] = e1[1] * e2[2] - e1[2] * e2[1];
-    faceNormal[1] = e1[2] * e2[0] - e1[0] * e2[2];
-    faceNormal[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    float faceNormal[3];
+    triangleNormal(mesh_, triangleIndex, faceNormal);
     if (faceNormal[0] * d[0] + faceNormal[1] * d[1] + faceNormal[2] * d[2] > 0.0f) return HitKind::BackFace;
 
     float u = rayHit.hit.u, v = rayHit.hit.v, w = 1.0f - u - v;

@@ -3,6 +3,7 @@
 
 #include "compare.h"
 #include "core.h"
+#include "material.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -25,9 +26,9 @@ struct PrimaryHit {
 // Casts one ray per pixel (rows in parallel; each pixel is independent, so the image does not depend on the
 // thread count) and lets `shade` colour every front-face hit.
 RenderedImage castPrimaryRays(const TriMesh& mesh, const PinholeCamera& camera,
-                              const std::function<void(const PrimaryHit&, float*)>& shade) {
+                              const std::function<void(const PrimaryHit&, float*)>& shade, const Surface* surface = nullptr) {
     const PinholeRays rays = pinholeRays(camera);
-    EmbreeScene embree(mesh);
+    EmbreeScene embree(mesh, surface);
     RenderedImage result;
     result.radiance.width = camera.width;
     result.radiance.height = camera.height;
@@ -54,17 +55,12 @@ RenderedImage castPrimaryRays(const TriMesh& mesh, const PinholeCamera& camera,
                 if (rayHit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
                 result.coverage[pixel] = 1.0f;
                 PrimaryHit hit;
-                hit.triangle = rayHit.hit.primID;
+                hit.triangle = embree.flatTriangle(rayHit.hit);
                 hit.u = rayHit.hit.u;
                 hit.v = rayHit.hit.v;
                 // Counter-clockwise fronts (docs/bundle.md): the face normal is (p1 - p0) x (p2 - p0).
-                const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
-                const float *p0 = &mesh.positions[corner[0] * 3], *p1 = &mesh.positions[corner[1] * 3],
-                            *p2 = &mesh.positions[corner[2] * 3];
-                float e1[3], e2[3];
-                for (int c = 0; c < 3; ++c) e1[c] = p1[c] - p0[c], e2[c] = p2[c] - p0[c];
-                float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                              e1[0] * e2[1] - e1[1] * e2[0]};
+                float n[3];
+                triangleNormal(mesh, hit.triangle, n);
                 if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0.0f) continue; // a back face stays black
                 hit.kind = PrimaryHit::Front;
                 shade(hit, &result.radiance.rgb[pixel * 3]);
@@ -80,17 +76,24 @@ RenderedImage castPrimaryRays(const TriMesh& mesh, const PinholeCamera& camera,
 
 } // namespace
 
-RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera) {
+RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera,
+                                   const Surface* surface) {
     if (radiance.size() != mesh.vertexCount() * 3)
         throw Error("", "render", std::to_string(radiance.size() / 3) + " radiance rows for " +
                                       std::to_string(mesh.vertexCount()) + " vertices");
-    return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
-        const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
-        float w = 1.0f - hit.u - hit.v;
-        for (int c = 0; c < 3; ++c)
-            out[c] = w * radiance[corner[0] * 3 + c] + hit.u * radiance[corner[1] * 3 + c] +
-                     hit.v * radiance[corner[2] * 3 + c];
-    });
+    return castPrimaryRays(
+        mesh, camera,
+        [&](const PrimaryHit& hit, float* out) {
+            const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
+            float w = 1.0f - hit.u - hit.v;
+            for (int c = 0; c < 3; ++c)
+                out[c] = w * radiance[corner[0] * 3 + c] + hit.u * radiance[corner[1] * 3 + c] +
+                         hit.v * radiance[corner[2] * 3 + c];
+            if (!surface) return;
+            std::array<float, 3> albedo = diffuseAlbedoAt(*surface, hit.triangle, hit.u, hit.v);
+            for (int c = 0; c < 3; ++c) out[c] *= albedo[c];
+        },
+        surface);
 }
 
 RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera) {

@@ -24,7 +24,12 @@ struct RenderedImage {
 // Renders per-vertex radiance ([vertexCount][3], the mesh's vertex order, e.g. what the runtime relights).
 // Needs radiance sized mesh.vertexCount() * 3 and a camera pinholeRays accepts. Throws prt::Error otherwise
 // (kExitInput for a wrong radiance size, kExitUsage for a bad camera, kExitFailure for Embree).
-RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera);
+// With a scene's `surface` (lib/material; mesh must be its flattened mesh), `radiance` is what a white surface
+// reflects (a scene's irradiance transfer relit without its albedo, E / pi) and each pixel multiplies it by the
+// material's diffuse albedo at the hit (texture, factor, COLOR_0, 1 - metallic), as an engine does with a
+// lightmap; primary rays pass through cut-outs. Back faces stay black, double-sided or not, as in the reference.
+RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera,
+                                   const Surface* surface = nullptr);
 
 // Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0.
 // Needs mesh.uvs for every vertex, atlas.rgb sized width * height * 3. Throws prt::Error otherwise.

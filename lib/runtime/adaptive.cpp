@@ -208,9 +208,15 @@ bool hasAdaptiveTransfer(const Bundle& bundle) {
 RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source) {
     if (bundle.mesh.vertexCount() > std::numeric_limits<uint32_t>::max())
         throw Error(source, "mesh", "too many vertices");
-    if (findLayer(bundle, "transfer_ragged")) return raggedModel(bundle, source);
-    if (findLayer(bundle, "transfer_cpca_basis")) return cpcaModel(bundle, source);
-    throw Error(source, "PRT_bundle", "no adaptive transfer layers (transfer_ragged or transfer_cpca_basis)");
+    const Layer* data = findLayer(bundle, "transfer_ragged");
+    if (!data) data = findLayer(bundle, "transfer_cpca_basis");
+    if (!data) throw Error(source, "PRT_bundle", "no adaptive transfer layers (transfer_ragged or transfer_cpca_basis)");
+    // The adapted layer's params.transfer holds the full-order layer's params, albedo rule included.
+    Layer input;
+    if (data->params.contains("transfer") && data->params["transfer"].is_object()) input.params = data->params["transfer"];
+    RelightModel model = data->name == "transfer_ragged" ? raggedModel(bundle, source) : cpcaModel(bundle, source);
+    readExcludedAlbedo(bundle, input, source, model);
+    return model;
 }
 
 void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance) {
@@ -219,7 +225,10 @@ void relightAdaptive(const RelightModel& model, const float* lighting, size_t be
         const uint32_t count = offsets[v + 1] - offsets[v];
         size_t run = v + 1;
         while (run < end && offsets[run + 1] - offsets[run] == count) ++run;
-        relight(model.transfer.data() + size_t(offsets[v]) * 3, run - v, int(count), lighting, radiance + (v - begin) * 3);
+        float* out = radiance + (v - begin) * 3;
+        relight(model.transfer.data() + size_t(offsets[v]) * 3, run - v, int(count), lighting, out);
+        if (!model.albedo.empty())
+            for (size_t i = 0; i < (run - v) * 3; ++i) out[i] *= model.albedo[v * 3 + i];
         v = run;
     }
 }

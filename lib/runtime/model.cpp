@@ -75,7 +75,26 @@ RelightModel relightModel(Bundle bundle, const std::string& source) {
     model.vertexCount = uint32_t(shape[0]);
     model.order = order;
     model.transfer = std::move(layer->data);
+    readExcludedAlbedo(bundle, *layer, source, model);
     return model;
+}
+
+void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::string& source, RelightModel& model) {
+    const nlohmann::json albedo = transfer.params.value("albedo", nlohmann::json());
+    if (!(albedo.is_string() && albedo.get<std::string>() == "excluded")) return;
+    model.albedoExcluded = true;
+    const Layer* layer = findLayer(bundle, "diffuse_albedo");
+    const std::string place = "layer \"diffuse_albedo\"";
+    if (!layer)
+        throw Error(source, "PRT_bundle", "transfer excludes the albedo but the bundle has no \"diffuse_albedo\" layer");
+    if (layer->domain != "vertex" || layer->semantic != "diffuse_albedo_rgb" || layer->shape.size() != 2 ||
+        layer->shape[0] != model.vertexCount || layer->shape[1] != 3 || layer->data.size() != size_t(model.vertexCount) * 3)
+        throw Error(source, place, "is not a vertex layer diffuse_albedo_rgb of shape [" + std::to_string(model.vertexCount) +
+                                       ", 3]");
+    for (size_t i = 0; i < layer->data.size(); ++i)
+        if (!(layer->data[i] >= 0.0f && layer->data[i] <= 1.0f))
+            throw Error(source, place + ", vertex " + std::to_string(i / 3), "albedo is not in [0, 1]");
+    model.albedo = layer->data;
 }
 
 RelightModel loadRelightModel(const std::string& bundlePath) {

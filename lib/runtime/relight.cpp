@@ -66,8 +66,10 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
     auto relightBlocks = [&] {
         for (size_t block; (block = nextBlock.fetch_add(1)) < blocks;) {
             size_t first = begin + block * kBlock, last = std::min(end, first + kBlock);
-            relight(model.transfer.data() + first * rowValues, last - first, coefficients, lighting,
-                    radiance + (first - begin) * 3);
+            float* out = radiance + (first - begin) * 3;
+            relight(model.transfer.data() + first * rowValues, last - first, coefficients, lighting, out);
+            if (!model.albedo.empty())
+                for (size_t i = 0; i < (last - first) * 3; ++i) out[i] *= model.albedo[first * 3 + i];
         }
     };
     size_t workers = std::min<size_t>(blocks, std::max(1u, std::thread::hardware_concurrency()));

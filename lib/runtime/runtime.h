@@ -31,6 +31,12 @@ struct RelightModel {
     // Adaptive models (`prt adapt`, below): when not empty, vertex v has its own order n_v <= order and its
     // n_v^2 coefficients are rows offsets[v] .. offsets[v+1] - 1 of transfer ([offsets[vertexCount]][3]).
     std::vector<uint32_t> offsets;
+    // A scene's transfer is irradiance transfer (params.albedo "excluded", docs/bundle.md "Scene bundles"): the
+    // rows give what a white surface reflects, E / pi. Then albedo holds each vertex's diffuse albedo ([vertexCount]
+    // [3], layer "diffuse_albedo") and relight() multiplies by it, so it returns outgoing radiance for every bundle;
+    // clear it to get E / pi (an engine multiplies by its base colour per pixel instead).
+    bool albedoExcluded = false;
+    std::vector<float> albedo;
 };
 
 // Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying), or, in a bundle without
@@ -95,7 +101,8 @@ std::vector<float> rotateLighting(const float* lighting, int order, const double
 void relight(const float* transfer, size_t vertexCount, int coefficientCount, const float* lighting,
              float* radiance);
 
-// Relights vertices [begin, end) of `model` across the hardware's std::threads (blocks of 4096), bit-identical to the kernel on that range.
+// Relights vertices [begin, end) of `model` across the hardware's std::threads (blocks of 4096), bit-identical to
+// the kernel on that range, times model.albedo per vertex when that is not empty.
 // Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
 // radiance sized (end - begin) * 3: row 0 of radiance is vertex `begin`. Throws prt::Error for a range outside
 // the model.

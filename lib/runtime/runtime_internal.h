@@ -33,4 +33,8 @@ TexelLayerShape texelLayerShape(const Layer& layer, const std::string& source);
 // Needs hasAdaptiveTransfer(bundle).
 TexelRelightModel adaptiveTexelModel(Bundle& bundle, const std::string& source);
 
+// Fills model.albedoExcluded and model.albedo from a transfer layer whose params.albedo is "excluded" (a scene's
+// irradiance transfer) and the bundle's "diffuse_albedo" layer, checked: [vertexCount, 3], values in [0, 1].
+void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::string& source, RelightModel& model);
+
 } // namespace prt

@@ -36,7 +36,9 @@ struct Context {
     std::vector<float> cosines;       // [sample]
     std::vector<double> lambert;      // [coefficient]: A_l / pi, the unshadowed transfer's band factor
 
+    // The albedo folded into a receiver's rows: 1 for a scene's irradiance transfer (options.surface).
     std::array<float, 3> albedo(size_t receiver) const {
+        if (options.surface) return {1.0f, 1.0f, 1.0f};
         if (!receivers.albedo || options.albedoOverride) return options.albedo;
         const float* a = &receivers.albedo[3 * receiver];
         return {a[0], a[1], a[2]};
@@ -52,6 +54,7 @@ Context makeContext(const TriMesh& mesh, const TransferOptions& options, const R
 
 // Bounces run on one channel (unit-albedo rows) when one albedo covers the mesh, else on RGB rows.
 inline int bounceChannels(const TriMesh& mesh, const TransferOptions& options) {
+    if (options.surface) return 3; // albedo at every hit point
     return mesh.albedo.empty() || options.albedoOverride ? 1 : 3;
 }
 
@@ -77,7 +80,9 @@ void runDirectPass(const Context& context, float* out, float* unitOut, std::vect
 // 2/N; the result goes to `next` (when not null) and is added to `total` ([order^2][3] rows, one per receiver).
 // Rows of `next` and `total` are the context's receivers (block b of hitBlocks is receivers
 // [b * kBlockVertices, ...)); rows of `previous` are mesh vertices, all of them.
-// With `channels` 3 the rows are RGB and the scale includes the vertex's albedo. With `channels` 1 (one albedo
+// With `channels` 3 the rows are RGB and the scale includes the vertex's albedo; with options.surface each hit's
+// interpolated row is multiplied by the material's diffuse albedo at the hit instead (the rows are irradiance
+// transfer, so that is the light the hit point reflects). With `channels` 1 (one albedo
 // for the whole mesh) the rows are unit-albedo G_b, a third of the bytes to gather, and `total` receives
 // albedo^(number+1) * G_b per channel, since bounce b of uniform albedo rho is rho^(b+1) G_b.
 // `previous` is only read, so each vertex's gather order (its hits in sample order) fixes every bit; the

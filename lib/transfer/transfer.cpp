@@ -3,6 +3,7 @@
 #include "transfer.h"
 
 #include "core.h"
+#include "material.h"
 #include "passes.h"
 #include "rays.h"
 #include "sh.h"
@@ -54,6 +55,9 @@ void checkOptions(const TriMesh& mesh, const TransferOptions& options) {
         throw usage("bounces", "need mode interreflected");
     for (float a : options.albedo)
         if (!(a >= 0.0f && a <= 1.0f)) throw usage("albedo", "components must lie in [0, 1]");
+    if (options.surface && options.albedoOverride) throw usage("albedo", "a scene's materials give the albedo");
+    if (options.surface && options.surface->mesh->triangleCount() != mesh.triangleCount())
+        throw usage("surface", "belongs to another mesh");
     if (!mesh.albedo.empty() && !options.albedoOverride)
         for (size_t i = 0; i < mesh.albedo.size(); ++i)
             if (!(mesh.albedo[i] >= 0.0f && mesh.albedo[i] <= 1.0f))
@@ -135,13 +139,17 @@ bool traceVertex(const Context& context, const EmbreeScene& scene, const rays::F
             rayHit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
             rtcIntersect1(scene.scene, &intersectContext, &rayHit);
             blocked = rayHit.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-            // Embree's triangle Ng is (v1 - v0) x (v2 - v0), on the counter-clockwise front side.
+            // Embree's triangle Ng is (v1 - v0) x (v2 - v0), on the counter-clockwise front side; an instance's is in
+            // its object's space, so the flattened triangle's own is taken there.
             const RTCHit& hit = rayHit.hit;
-            float facing = hit.Ng_x * rayHit.ray.dir_x + hit.Ng_y * rayHit.ray.dir_y + hit.Ng_z * rayHit.ray.dir_z;
+            const uint32_t triangle = blocked ? scene.flatTriangle(hit) : 0;
+            float ng[3] = {hit.Ng_x, hit.Ng_y, hit.Ng_z};
+            if (blocked && scene.instanced()) triangleNormal(context.mesh, triangle, ng);
+            float facing = ng[0] * rayHit.ray.dir_x + ng[1] * rayHit.ray.dir_y + ng[2] * rayHit.ray.dir_z;
             if (blocked && facing > 0.0f) {
                 ++backFaceHits;
             } else if (blocked) {
-                hits->triangle.push_back(hit.primID);
+                hits->triangle.push_back(triangle);
                 hits->barycentric.push_back(quantiseBarycentric(hit.u) | quantiseBarycentric(hit.v) << 16);
                 hits->sample.push_back(uint16_t(k));
             }
@@ -243,6 +251,14 @@ void bounceVertex(const Context& context, const BounceTerms& terms, const HitBlo
         float wb = cosine * float(hits.barycentric[h] & 0xFFFFu) * (1.0f / 65535.0f);
         float wc = cosine * float(hits.barycentric[h] >> 16) * (1.0f / 65535.0f);
         float wa = cosine - wb - wc;
+        if (context.options.surface) {
+            // The hit reflects its irradiance times its own albedo (rowFloats = order^2 * 3).
+            std::array<float, 3> rho = diffuseAlbedoAt(*context.options.surface, hits.triangle[h],
+                                                       float(hits.barycentric[h] & 0xFFFFu) * (1.0f / 65535.0f),
+                                                       float(hits.barycentric[h] >> 16) * (1.0f / 65535.0f));
+            for (size_t x = 0; x < rowFloats; ++x) sum[x] += rho[x % 3] * (wa * a[x] + wb * b[x] + wc * c[x]);
+            continue;
+        }
         for (size_t x = 0; x < rowFloats; ++x) sum[x] += wa * a[x] + wb * b[x] + wc * c[x];
     }
     float* totalRow = total + v * context.stride;
@@ -327,7 +343,7 @@ void runDirectPass(const Context& context, float* out, float* unitOut, std::vect
     DirectCounts counts;
     double start = nowSeconds();
     {
-        EmbreeScene scene(context.mesh);
+        EmbreeScene scene(context.mesh, context.options.surface);
         stats.buildSeconds = nowSeconds() - start;
         start = nowSeconds();
         std::clock_t cpuStart = std::clock();
@@ -448,7 +464,7 @@ Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, 
             return;
         }
         double start = nowSeconds();
-        EmbreeScene scene(geometry);
+        EmbreeScene scene(geometry, options.surface);
         stats.buildSeconds = nowSeconds() - start;
         start = nowSeconds();
         std::clock_t cpuStart = std::clock();

@@ -52,6 +52,8 @@ inline constexpr const char* kTransferDirectionSet =
     "hammersley-uniform-hemisphere: cos(theta)=(k+0.5)/N, phi=2pi*radinv2(k), per-vertex rotation about the "
     "normal by hash(seed,vertex); shadowed = exact unshadowed - occluded estimate";
 
+struct Surface; // lib/material: a scene's materials at surface points
+
 struct TransferOptions {
     TransferMode mode = TransferMode::Shadowed;
     int order = 3;       // bands, 1..sh::kMaxOrder
@@ -65,6 +67,12 @@ struct TransferOptions {
     size_t vertexEnd = SIZE_MAX;
     bool progress = true;
     bool keepDirect = false; // interreflected with bounces: also return the direct pass's rows (Transfer::direct)
+    // A scene's materials (lib/material), borrowed: rays pass through cut-outs, every bounce takes the diffuse
+    // albedo of the material at its hit point (texture, factor, COLOR_0, 1 - metallic), and the rows are
+    // irradiance transfer: the receiver's own albedo is excluded (radiance_out = albedo(receiver) * sum_j T L),
+    // so a runtime multiplies by the albedo per vertex or per pixel. Null: per-vertex or uniform albedo as above.
+    // Not with albedoOverride. The mesh must be the surface's flattened mesh.
+    const Surface* surface = nullptr;
 };
 
 struct TransferStats {

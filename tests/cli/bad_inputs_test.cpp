@@ -5,6 +5,7 @@
 #include "bundle_internal.h"
 #include "core.h"
 #include "gltf_data_uri.h"
+#include "scene_gltf.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -216,6 +217,63 @@ std::vector<Case> catalogue() {
              gltfText([](json& g) { g["meshes"][0]["primitives"][0]["attributes"] = {{"NORMAL", 0}}; }), "POSITION"),
         mesh("gltf", "vertex cap lowered below the mesh", "gltf", gltfText(nullptr), "claims 4 vertices, above the limit of 3",
              {{"PRT_MAX_ELEMENTS", "3"}}),
+        // ---- glTF scenes: materials, textures, samplers, images, required extensions ----
+        mesh("gltf-scene", "PNG header claiming 100000 x 100000", "gltf", gltfText([](json& g) {
+                 std::string png = prt::test::pngBytes(1, 1, {1, 2, 3, 255}, 100000, 100000);
+                 g["meshes"][0]["primitives"][0]["material"] = 0;
+                 g["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
+                 g["textures"] = {{{"source", 0}}};
+                 g["images"] = {{{"uri", prt::test::pngDataUri(png)}}};
+             }), "claims 100000 x 100000 texels"),
+        mesh("gltf-scene", "texture index out of range", "gltf", gltfText([](json& g) {
+                 g["meshes"][0]["primitives"][0]["material"] = 0;
+                 g["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 7}}}}}}};
+             }), "texture 7 does not exist"),
+        mesh("gltf-scene", "sampler with a bad enum", "gltf", gltfText([](json& g) {
+                 g["samplers"] = {{{"magFilter", 9999}}};
+             }), "9999 is not a glTF magnification filter"),
+        mesh("gltf-scene", "missing image file", "gltf", gltfText([](json& g) {
+                 g["meshes"][0]["primitives"][0]["material"] = 0;
+                 g["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
+                 g["textures"] = {{{"source", 0}}};
+                 g["images"] = {{{"uri", "absent.png"}}};
+             }), "absent.png"),
+        mesh("gltf-scene", "image URI outside the folder", "gltf", gltfText([](json& g) {
+                 g["meshes"][0]["primitives"][0]["material"] = 0;
+                 g["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
+                 g["textures"] = {{{"source", 0}}};
+                 g["images"] = {{{"uri", "../../../etc/hostname"}}};
+             }), "glTF"),
+        mesh("gltf-scene", "image that is not an image", "gltf", gltfText([](json& g) {
+                 g["meshes"][0]["primitives"][0]["material"] = 0;
+                 g["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
+                 g["textures"] = {{{"source", 0}}};
+                 g["images"] = {{{"uri", prt::test::pngDataUri("\x89PNG but not really")}}};
+             }), "images[0]"),
+        mesh("gltf-scene", "Draco required", "gltf", gltfText([](json& g) {
+                 g["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+                 g["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+             }), "requires KHR_draco_mesh_compression, which prt cannot honour"),
+        mesh("gltf-scene", "metallic factor above 1", "gltf", gltfText([](json& g) {
+                 g["meshes"][0]["primitives"][0]["material"] = 0;
+                 g["materials"] = {{{"pbrMetallicRoughness", {{"metallicFactor", 3.0}}}}};
+             }), "metallicFactor"),
+        mesh("gltf-scene", "texCoord 2", "gltf", gltfText([](json& g) {
+                 g["meshes"][0]["primitives"][0]["material"] = 0;
+                 g["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 2}}}}}}};
+                 g["textures"] = {{{"source", 0}}};
+                 g["images"] = {{{"uri", prt::test::pngDataUri(prt::test::pngBytes(1, 1, {1, 2, 3, 255}))}}};
+             }), "TEXCOORD_0 and TEXCOORD_1"),
+        // ---- OBJ with MTL ----
+        Case{"obj-mtl", "MTL outside the folder", {{"m.obj", text("mtllib ../../x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")}},
+             "meshprep {in}/m.obj -o {out}/m.glb", 3, "outside the OBJ file's folder"},
+        Case{"obj-mtl", "texture outside the folder",
+             {{"m.obj", text("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n")},
+              {"m.mtl", text("newmtl a\nKd 1 0 0\nmap_Kd ..\\..\\secret.jpg\n")}},
+             "meshprep {in}/m.obj -o {out}/m.glb", 3, "outside the OBJ file's folder"},
+        Case{"obj-mtl", "missing texture", {{"m.obj", text("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n")},
+                                            {"m.mtl", text("newmtl a\nmap_Kd absent.jpg\n")}},
+             "meshprep {in}/m.obj -o {out}/m.glb", 3, "absent.jpg"},
         // ---- GLB ----
         mesh("glb", "header only", "glb", text("glTF" + bytesOf({2, 12})), "glTF"),
         mesh("glb", "declared length past the file", "glb", text("glTF" + bytesOf({2, 4096, 0})), "truncated"),
