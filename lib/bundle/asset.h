@@ -77,6 +77,10 @@ struct SceneAsset {
     // The asset as read, with every buffer merged into buffer 0 and every image in a buffer view, so that it
     // writes as one self-contained .glb; writeBundle adds the PRT layers to a copy.
     std::shared_ptr<const tinygltf::Model> source;
+    // The asset's glTF JSON as the file wrote it: what writeBundle writes back, object for object, so that nothing
+    // tinygltf would normalise (defaults it adds, members it reads into other types) changes. Empty for an asset
+    // built in memory (an OBJ), which is written as tinygltf serialises `source`.
+    std::string sourceJson;
     std::vector<SceneReceiver> receivers;
     std::vector<MaterialRecord> materials; // the asset's, in order, then the default material (white, metallic 0)
     std::vector<TextureRecord> textures;

@@ -103,6 +103,7 @@ Bundle withPrimitiveNormals(const Bundle& bundle, const std::vector<PrimitiveTri
     out.convention = bundle.convention;
     out.layers = bundle.layers;
     auto asset = std::make_shared<SceneAsset>();
+    asset->sourceJson = bundle.asset->sourceJson;
     out.mesh = detail::readGltfScene(model, file, *asset);
     asset->source = detail::selfContainedModel(std::move(model));
     out.asset = std::move(asset);

@@ -74,7 +74,8 @@ static bool refuseWrite(std::string* err, const std::string&, const std::vector<
     return false;
 }
 
-static tinygltf::Model loadModel(const std::string& path) {
+// `jsonText` receives the file's glTF JSON as written (a .glb's JSON chunk), which a scene keeps (asset.h).
+static tinygltf::Model loadModel(const std::string& path, std::string& jsonText) {
     std::string bytes = readFileBytes(path);
     if (bytes.empty()) throw Error(path, "", "empty file");
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error(path, "", "larger than 4 GiB, the glTF limit");
@@ -104,6 +105,13 @@ static tinygltf::Model loadModel(const std::string& path) {
                         : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), unsigned(bytes.size()), folder);
     } catch (const std::exception& e) { // tinygltf parses untrusted bytes; whatever it throws is about the file
         error = e.what();
+    }
+    if (loaded && binary) {
+        uint32_t jsonLength = 0;
+        if (bytes.size() >= 20) std::memcpy(&jsonLength, bytes.data() + 12, 4);
+        jsonText = bytes.substr(20, std::min<size_t>(jsonLength, bytes.size() - std::min<size_t>(20, bytes.size())));
+    } else if (loaded) {
+        jsonText = bytes;
     }
     if (!loaded) {
         while (!error.empty() && std::isspace((unsigned char)error.back())) error.pop_back();
@@ -342,7 +350,8 @@ static void dropLayerViews(tinygltf::Model& model, const json& extension) {
 }
 
 Bundle readBundle(const std::string& path) {
-    tinygltf::Model model = loadModel(path);
+    std::string jsonText;
+    tinygltf::Model model = loadModel(path, jsonText);
     // tinygltf drops an extension whose value is not an object; the original JSON still names it, and a file that
     // claims to be a bundle is read as one (and refused), never silently as a plain mesh.
     bool hasExtension = model.extensions.count(kBundleExtension) > 0 ||
@@ -366,6 +375,7 @@ Bundle readBundle(const std::string& path) {
         }
         if (hasExtension) readRecords(extension, model, path, bundle);
         if (asset) {
+            asset->sourceJson = std::move(jsonText);
             if (hasExtension) dropLayerViews(model, extension);
             asset->source = detail::selfContainedModel(std::move(model));
             bundle.asset = std::move(asset);

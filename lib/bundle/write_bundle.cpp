@@ -10,6 +10,7 @@
 #include <fstream>
 #include <limits>
 #include <set>
+#include <sstream>
 
 namespace prt {
 
@@ -289,6 +290,61 @@ static json sceneRecord(const SceneAsset& asset, const TriMesh& mesh) {
             {"receivers", receivers}};
 }
 
+// The JSON of a scene bundle: what tinygltf wrote for what prt changes (the one buffer, the buffer views, the
+// accessors and NORMAL attributes meshprep added, images moved into views, the PRT_bundle extension) and the
+// asset's own JSON for everything else, object for object, so that nothing tinygltf normalises on the way
+// (defaults it writes out, zfar 0 for an infinite camera, ...) changes the asset.
+static json sceneJson(const json& written, const std::string& sourceJson) {
+    json out = json::parse(sourceJson);
+    const json kNone = json::array();
+    for (const char* key : {"buffers", "bufferViews"}) out[key] = written.value(key, kNone);
+    json accessors = written.value("accessors", kNone);
+    for (size_t i = 0; i < accessors.size() && i < out.value("accessors", kNone).size(); ++i)
+        accessors[i] = out["accessors"][i];
+    out["accessors"] = accessors;
+    if (out.contains("images"))
+        for (size_t i = 0; i < out["images"].size(); ++i) {
+            json& image = out["images"][i];
+            image.erase("uri");
+            image["bufferView"] = written["images"][i]["bufferView"];
+            image["mimeType"] = written["images"][i]["mimeType"];
+        }
+    if (out.contains("meshes"))
+        for (size_t m = 0; m < out["meshes"].size(); ++m)
+            for (size_t p = 0; p < out["meshes"][m]["primitives"].size(); ++p)
+                out["meshes"][m]["primitives"][p]["attributes"] = written["meshes"][m]["primitives"][p]["attributes"];
+    json used = json::array();
+    for (const json& name : out.value("extensionsUsed", kNone))
+        if (name != kBundleExtension) used.push_back(name);
+    used.push_back(kBundleExtension);
+    out["extensionsUsed"] = used;
+    if (out.contains("extensionsRequired")) {
+        json required = json::array();
+        for (const json& name : out["extensionsRequired"])
+            if (name != kBundleExtension) required.push_back(name);
+        out["extensionsRequired"] = required;
+        if (required.empty()) out.erase("extensionsRequired");
+    }
+    if (!out.contains("extensions") || !out["extensions"].is_object()) out["extensions"] = json::object();
+    out["extensions"][kBundleExtension] = written["extensions"][kBundleExtension];
+    return out;
+}
+
+// A .glb of `text` (the JSON) and `binary` (buffer 0), as glTF 2.0 lays it out.
+static void writeGlb(std::ostream& out, std::string text, const std::vector<unsigned char>& binary) {
+    text.resize((text.size() + 3) / 4 * 4, ' ');
+    const uint32_t binaryLength = uint32_t((binary.size() + 3) / 4 * 4);
+    const uint32_t header[3] = {0x46546C67u, 2u, uint32_t(12 + 8 + text.size() + 8 + binaryLength)};
+    const uint32_t jsonChunk[2] = {uint32_t(text.size()), 0x4E4F534Au}, binaryChunk[2] = {binaryLength, 0x004E4942u};
+    out.write(reinterpret_cast<const char*>(header), sizeof header);
+    out.write(reinterpret_cast<const char*>(jsonChunk), sizeof jsonChunk);
+    out.write(text.data(), std::streamsize(text.size()));
+    out.write(reinterpret_cast<const char*>(binaryChunk), sizeof binaryChunk);
+    out.write(reinterpret_cast<const char*>(binary.data()), std::streamsize(binary.size()));
+    const char zeros[3] = {0, 0, 0};
+    out.write(zeros, std::streamsize(binaryLength - binary.size()));
+}
+
 void writeBundle(const std::string& path, const Bundle& bundle, int version) {
     checkObjects(path, bundle, version);
     checkLayers(path, bundle, version);
@@ -317,7 +373,18 @@ void writeBundle(const std::string& path, const Bundle& bundle, int version) {
         std::ofstream out(tmpPath, std::ios::binary);
         if (!out) throw Error(path, "", std::string("cannot create: ") + std::strerror(errno), kExitOutput);
         tinygltf::TinyGLTF writer;
-        bool written = writer.WriteGltfSceneToStream(&model, out, false, true);
+        bool written = true;
+        if (bundle.asset && !bundle.asset->sourceJson.empty()) {
+            std::ostringstream glb;
+            written = writer.WriteGltfSceneToStream(&model, glb, false, true);
+            std::string bytes = glb.str();
+            uint32_t jsonLength = 0;
+            if (written && bytes.size() >= 20) std::memcpy(&jsonLength, bytes.data() + 12, 4);
+            if (written) writeGlb(out, sceneJson(json::parse(bytes.substr(20, jsonLength)), bundle.asset->sourceJson).dump(),
+                                  model.buffers[0].data);
+        } else {
+            written = writer.WriteGltfSceneToStream(&model, out, false, true);
+        }
         out.close();
         if (!written || !out) throw Error(path, "", "write failed", kExitOutput);
     });

@@ -23,7 +23,10 @@ SurfaceImage decodeImage(const ImageRecord& record, const std::string& file, con
     // OpenImageIO picks its reader by the name's extension, then reads the bytes through the proxy.
     const char* name = record.mimeType == "image/png" ? "texture.png" : "texture.jpg";
     OIIO::Filesystem::IOMemReader reader(const_cast<unsigned char*>(record.bytes.data()), record.bytes.size());
-    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(name, nullptr, &reader);
+    // glTF colours are not premultiplied: keep OpenImageIO from associating alpha with them.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(name, &config, &reader);
     if (!input) refuse("is not a readable " + record.mimeType + " image (" + OIIO::geterror().substr(0, 200) + ")");
     const OIIO::ImageSpec& spec = input->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.nchannels > 4)

@@ -172,6 +172,12 @@ Bundle readObjScene(const std::string& path) {
         for (const Corner& c : corners) {
             allNormals = allNormals && c.n >= 0 && 3 * size_t(c.n) + 2 < attrib.normals.size();
             allTexcoords = allTexcoords && c.t >= 0 && 2 * size_t(c.t) + 1 < attrib.texcoords.size();
+            // A zero or non-finite authored normal (exporters write `vn 0 0 0`) drops the set: meshprep computes it.
+            if (allNormals) {
+                const float* n = &attrib.normals[3 * size_t(c.n)];
+                float length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                allNormals = std::isfinite(length) && length > 1e-6f;
+            }
         }
         for (const Corner& c : corners) {
             if (c.v < 0 || 3 * size_t(c.v) + 2 >= attrib.vertices.size())
@@ -179,8 +185,11 @@ Bundle readObjScene(const std::string& path) {
             auto [found, added] = vertexOf.emplace(c, uint32_t(positions.size() / 3));
             if (added) {
                 for (int a = 0; a < 3; ++a) positions.push_back(attrib.vertices[3 * size_t(c.v) + a]);
-                if (allNormals)
-                    for (int a = 0; a < 3; ++a) normals.push_back(attrib.normals[3 * size_t(c.n) + a]);
+                if (allNormals) {
+                    const float* n = &attrib.normals[3 * size_t(c.n)];
+                    float length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                    for (int a = 0; a < 3; ++a) normals.push_back(n[a] / length); // glTF requires unit normals
+                }
                 if (allTexcoords) { // OBJ's v runs up, glTF's down
                     texcoords.push_back(attrib.texcoords[2 * size_t(c.t)]);
                     texcoords.push_back(1.0f - attrib.texcoords[2 * size_t(c.t) + 1]);

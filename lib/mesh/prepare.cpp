@@ -149,7 +149,7 @@ void runMeshprep(const MeshprepOptions& options) {
     if (report.contains("scene")) {
         const nlohmann::json& scene = report["scene"];
         logInfo("meshprep: " + options.input + ": scene of " + scene["receivers"].dump() + " receivers (" +
-                scene["meshes"].dump() + " meshes, " + scene["instanced_receivers"].dump() + " instanced), " +
+                scene["meshes"].dump() + " meshes, " + scene["instances"].dump() + " instances), " +
                 scene["materials"].dump() + " materials (" + scene["textured_materials"].dump() + " textured, " +
                 scene["cutout_materials"].dump() + " cut-out), " + counts["vertices_out"].dump() + " vertices, " +
                 counts["faces_out"].dump() + " triangles; normals computed for " +

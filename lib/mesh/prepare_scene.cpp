@@ -83,9 +83,12 @@ PreparedScene prepareScene(const MeshprepOptions& options, Bundle bundle) {
 
     const SceneAsset& asset = *bundle.asset;
     const TriMesh& mesh = bundle.mesh;
+    // Instances: placements (a node placing a mesh) of a mesh that an earlier node placed already.
     std::set<int> meshes;
+    std::set<std::pair<int, int>> placements;
     size_t instanced = 0;
-    for (const SceneReceiver& receiver : asset.receivers) instanced += !meshes.insert(receiver.mesh).second;
+    for (const SceneReceiver& receiver : asset.receivers)
+        if (placements.insert({receiver.node, receiver.mesh}).second) instanced += !meshes.insert(receiver.mesh).second;
     size_t textured = 0, cutout = 0;
     for (const MaterialRecord& material : asset.materials) {
         textured += material.baseColorTexture >= 0;
@@ -99,7 +102,7 @@ PreparedScene prepareScene(const MeshprepOptions& options, Bundle bundle) {
         {"scene",
          {{"receivers", asset.receivers.size()},
           {"meshes", meshes.size()},
-          {"instanced_receivers", instanced},
+          {"instances", instanced},
           {"materials", asset.materials.size() - 1},
           {"textured_materials", textured},
           {"cutout_materials", cutout},

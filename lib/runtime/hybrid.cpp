@@ -145,8 +145,10 @@ HybridModel hybridModel(Bundle bundle, const std::string& source) {
         model.albedo.resize(rows * 3);
         for (size_t v = 0; v < rows; ++v)
             for (int c = 0; c < 3; ++c) model.albedo[v * 3 + c] = albedo[c].get<float>();
+    } else if (model.total.albedoExcluded) {
+        model.albedo = model.total.albedo; // a scene: its "diffuse_albedo" layer, which relight() multiplies by
     } else {
-        throw Error(source, "layer \"transfer\"", "params.albedo is neither \"per-vertex\" nor [r, g, b]");
+        throw Error(source, "layer \"transfer\"", "params.albedo is neither \"per-vertex\", \"excluded\" nor [r, g, b]");
     }
     model.bounce = std::move(bounce);
     return model;
@@ -174,6 +176,9 @@ void relightHybrid(const HybridModel& model, const HybridLighting& lighting, con
         std::vector<float> lit = coneLightsProjection(lighting.lights, model.total.order), bounced(count * 3);
         sh::applyWindow(lighting.bounceWindow, model.total.order, lit.data(), 3);
         relight(model.bounce.data() + begin * rowValues, count, coefficients, lit.data(), bounced.data());
+        // A scene's bounce layer is irradiance transfer too: times the receiver's albedo.
+        if (model.total.albedoExcluded)
+            for (size_t i = 0; i < count * 3; ++i) bounced[i] *= model.albedo[begin * 3 + i];
         for (size_t i = 0; i < count * 3; ++i) radiance[i] += bounced[i];
     }
     for (size_t v = begin; v < end; ++v) {

@@ -302,6 +302,6 @@ TEST(BundleVersion2, ForgedObjectReferencesAreRefusedOnRead) {
     forge([](json& e) { e["objects"][2]["name"] = "floor"; }, "name is empty or not unique");
     forge([](json& e) { e["layers"][2]["componentType"] = "uint16"; }, "bufferView holds 3 bytes, shape needs 3 uint16");
     forge([](json& e) { e["layers"][3]["componentType"] = "float64"; }, "componentType must be one of");
-    forge([](json& e) { e["version"] = 3; }, "version 3 is not supported; this build reads versions 1 to 2");
+    forge([](json& e) { e["version"] = 4; }, "version 4 is not supported; this build reads versions 1 to 3");
     forge([](json& e) { e["instances"][1]["translation"] = {1, 2}; }, "is not three numbers");
 }

@@ -1,5 +1,6 @@
 // Materials at surface points (lib/material): texture sampling with glTF's wrap modes and filters, sRGB decoding,
 // KHR_texture_transform, the diffuse albedo rule (factor * texture * COLOR_0 * (1 - metallic)) and cut-outs.
+#include "core.h"
 #include "material.h"
 #include "scene.h"
 #include "scene_gltf.h"
