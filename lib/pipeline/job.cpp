@@ -354,7 +354,7 @@ std::string storedFile(const PipelineStage& stage, const std::map<std::string, s
     return file;
 }
 
-// Joins the stored shards of `stage`'s last pass into `dir`, by mergeShards or by the stage itself
+// Joins the stored shards of `stage`'s last pass into `dir`, by mergeShardFiles or by the stage itself
 // (spec.mergeFlag); returns the merge's cost.
 nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, const StageInputs& inputs,
                          const RunOptions& options, int shardCount, const std::string& label) {
@@ -362,7 +362,6 @@ nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, con
     std::map<std::string, std::string> hashes = inputHashes(inputs);
     const PortSpec& port = stage.spec->outputs.front(); // shardable stages write one bundle
     int last = stagePasses(stage, shardCount) - 1;
-    std::vector<Bundle> shards;
     std::vector<std::string> files;
     for (int i = 0; i < shardCount; ++i)
         files.push_back(storedFile(stage, hashes, options, i, shardCount, last, port.name, label, true));
@@ -372,8 +371,7 @@ nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, con
         extras.listFiles = files;
         return runStageIn(dir, stage, inputs, options, kMergeJob, shardCount, label, extras);
     }
-    for (const std::string& file : files) shards.push_back(readBundle(file));
-    writeBundle(dir + "/" + port.name + "." + port.extension, mergeShards(shards, files));
+    writeBundle(dir + "/" + port.name + "." + port.extension, mergeShardFiles(files));
     writeBytesAtomic(dir + "/stage.log", "merged " + std::to_string(shardCount) + " shards\n");
     return {{"seconds", nowSeconds() - start}, {"rays", 0}, {"peak_memory_bytes", peakMemoryBytes()}};
 }

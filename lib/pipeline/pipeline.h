@@ -177,6 +177,9 @@ void sweepStore(const std::string& store);
 // and other params in every shard, and row ranges that tile [0, vertex_count) exactly once; throws prt::Error
 // naming the offending shard file otherwise.
 Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::string>& files);
+// mergeShards over shard files, read one at a time: besides the first shard's bundle and the joined rows, at most
+// one other shard is held at once (its mesh and whole layers are compared with the first's and dropped).
+Bundle mergeShardFiles(const std::vector<std::string>& files);
 
 // ---- running --------------------------------------------------------------------------------------------------
 
