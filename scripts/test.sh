@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The README's test command (after scripts/bootstrap.sh): the whole suite on the release build, then the
+# The README's test command (after scripts/bootstrap.sh): installs what only the tests need, builds the rest of
+# build/ (all targets) and runs the whole suite on that release build, then the
 # sanitizer tree build-asan (clang 14, AddressSanitizer + UndefinedBehaviorSanitizer, libFuzzer coverage) with
 # the reader and ray-casting tests under the sanitizers and a short fuzz smoke per harness.
 # Sanitizer subset (to stay within CI's budget on 2 cores): test_core, test_bundle, test_mesh, test_image,
@@ -7,6 +8,31 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${PRT_JOBS:-2}
+
+# What only the tests need (scripts/bootstrap.sh installed what prt needs): clang 14 and its sanitizer runtimes
+# for build-asan, an OpenCL platform for the glossy fits (PoCL), a private Slurm for the Slurm executor's test,
+# Chromium for the viewer's test, Python for the figure scripts, the OpenImageIO tools.
+packages=(
+  clang-14 libclang-rt-14-dev pocl-opencl-icd slurm-wlm munge chromium
+  python3-numpy python3-matplotlib python3-openimageio openimageio-tools
+)
+missing=()
+for p in "${packages[@]}"; do dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p"); done
+if [ ${#missing[@]} -gt 0 ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+# The browser viewer's npm packages (three, playwright-core) at the versions of viewer/package-lock.json; its test
+# drives Debian's chromium above, never a downloaded browser.
+[ -d viewer/node_modules/three ] && [ -d viewer/node_modules/playwright-core ] || (cd viewer && npm ci --no-audit --no-fund)
+# npm packages the tests use (package-lock.json pins them): the Khronos glTF validator.
+[ -d tests/bundle/gltf_validator/node_modules/gltf-validator ] ||
+  npm ci --prefix tests/bundle/gltf_validator --no-audit --no-fund --loglevel=error
+
+# Everything bootstrap.sh left out: the stage programs, the tests, the benchmarks.
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build
 ctest --test-dir build --output-on-failure -j"$jobs"
 
 sanitized=(test_core test_bundle test_mesh test_image test_raycast)

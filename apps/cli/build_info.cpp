@@ -1,12 +1,14 @@
 // `prt --build-info` and `prt --resolved-options STAGE ...`: what a pipeline cache key needs to know about this
 // prt, printed as JSON, so that a key changes whenever the bytes a stage writes could.
+#include "build_info.h"
 #include "cli.h"
 
 #include "core.h"
+#include "pipeline.h"
 
 #include <CLI/Version.hpp>
 #include <OpenEXR/OpenEXRConfig.h>
-#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/oiioversion.h>
 #include <OpenMesh/Core/System/config.h>
 #include <embree3/rtcore.h>
 #include <nlohmann/json.hpp>
@@ -29,34 +31,54 @@ namespace prt::cli {
 
 namespace {
 
-// The real file names (and sizes) of the shared libraries mapped into this process: their names carry the full version
-// (libembree3.so.3.13.5, libOpenImageIO.so.2.4.7.1, libm.so.6 of a given glibc is named by its package), so an
-// upgraded library changes the list even when prt itself was not rebuilt.
-std::vector<std::string> loadedLibraries() {
+// The libraries mapped into this process before main: those the executable links, whatever it loads later
+// (plugins, OpenCL drivers). Their paths as the loader found them.
+std::vector<std::string> linkedLibraryPaths() {
     std::ifstream maps("/proc/self/maps");
-    std::set<std::string> names;
+    std::set<std::string> paths;
     std::string line;
     while (std::getline(maps, line)) {
         size_t slash = line.find('/');
         if (slash == std::string::npos || line.find(".so", slash) == std::string::npos) continue;
-        std::error_code error;
-        std::filesystem::path real = std::filesystem::canonical(line.substr(slash), error);
-        std::string name = (error ? std::filesystem::path(line.substr(slash)) : real).filename().string();
-        std::error_code sizeError;
-        uintmax_t bytes = std::filesystem::file_size(error ? std::filesystem::path(line.substr(slash)) : real, sizeError);
-        names.insert(name + (sizeError ? "" : " " + std::to_string(bytes) + " bytes"));
+        paths.insert(line.substr(slash));
     }
-    return {names.begin(), names.end()};
+    return {paths.begin(), paths.end()};
 }
+const std::vector<std::string> kLinkedLibraryPaths = linkedLibraryPaths();
 
-// Taken before main: the libraries the executable links, whatever it loads later (plugins, OpenCL drivers), so
-// that asking in-process and asking a fresh prt give the same answer.
-const std::vector<std::string> kLinkedLibraries = loadedLibraries();
+// "libembree3.so.3.13.5 1234 bytes": the real file name behind `path` and its size. The names carry the full
+// version (libembree3.so.3.13.5, libOpenImageIO.so.2.4.7.1, a glibc's libm.so.6 is named by its package), so an
+// upgraded library changes the entry even when prt itself was not rebuilt.
+std::string libraryIdentity(const std::string& path) {
+    std::error_code error;
+    std::filesystem::path real = std::filesystem::canonical(path, error);
+    std::filesystem::path file = error ? std::filesystem::path(path) : real;
+    std::error_code sizeError;
+    uintmax_t bytes = std::filesystem::file_size(file, sizeError);
+    return file.filename().string() + (sizeError ? "" : " " + std::to_string(bytes) + " bytes");
+}
 
 } // namespace
 
-nlohmann::json buildInfo() {
-    std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+void writeLinkedLibraries(const std::string& path) {
+    writeBytesAtomic(path, nlohmann::json(kLinkedLibraryPaths).dump(1) + "\n");
+}
+
+std::string driverOf(const std::string& program) {
+    std::filesystem::path path(program);
+    return (path.parent_path() / "prt-driver").string();
+}
+
+nlohmann::json buildInfo(const std::string& driver, const std::string& memoFile) {
+    // The driver's linked libraries, as its link step recorded them (apps/CMakeLists.txt): the same answer in
+    // every process that asks, whatever that process links itself.
+    std::string listFile = driver + ".libs";
+    nlohmann::json paths = nlohmann::json::parse(readFileBytes(listFile), nullptr, false);
+    if (!paths.is_array())
+        throw Error(listFile, "", "is not the JSON list of the driver's libraries its build writes: rebuild prt", kExitFailure);
+    std::set<std::string> loaded;
+    for (const nlohmann::json& path : paths)
+        if (path.is_string()) loaded.insert(libraryIdentity(path.get<std::string>()));
     nlohmann::json compiled = {
         {"cli11", CLI11_VERSION},
         {"eigen", std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
@@ -70,12 +92,26 @@ nlohmann::json buildInfo() {
         {"tbb", TBB_VERSION_STRING},
         {"tomlplusplus", std::to_string(TOML_LIB_MAJOR) + "." + std::to_string(TOML_LIB_MINOR) + "." +
                              std::to_string(TOML_LIB_PATCH)}};
-    nlohmann::json running = {{"openimageio", OIIO::openimageio_version()}, {"tbb", TBB_runtime_version()}};
     return {{"prt", PRT_VERSION},
             {"build_type", PRT_BUILD_TYPE},
             {"compiler", __VERSION__},
-            {"executable", hashFile(self)},
-            {"libraries", {{"compiled", compiled}, {"running", running}, {"loaded", kLinkedLibraries}}}};
+            {"executable", hashFileMemo(driver, memoFile)},
+            {"libraries", {{"compiled", compiled}, {"loaded", std::vector<std::string>(loaded.begin(), loaded.end())}}}};
+}
+
+nlohmann::json buildInfo() { return buildInfo(driverOf(std::filesystem::read_symlink("/proc/self/exe").string()), ""); }
+
+std::function<nlohmann::json(const std::vector<std::string>&)> inProcessAnswers(const std::string& memoFile) {
+    return [memoFile](const std::vector<std::string>& question) {
+        if (question.size() == 2 && question[1] == "--build-info") return buildInfo(driverOf(question[0]), memoFile);
+        std::vector<std::string> words = question;
+        std::vector<char*> argv;
+        for (std::string& word : words) argv.push_back(word.data());
+        nlohmann::json answer;
+        if (runDriver(int(argv.size()), argv.data(), nullptr, &answer) != kExitOk || !answer.is_object())
+            throw Error("", "cache key", "prt could not resolve the options of `" + question.back() + "`", kExitFailure);
+        return answer;
+    };
 }
 
 } // namespace prt::cli

@@ -1,3 +1,4 @@
+#include "build_info.h"
 #include "cli.h"
 
 #include "core.h"
@@ -30,6 +31,9 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     app.add_flag("-q,--quiet", log.quiet, "No progress or info output on stderr");
     app.add_flag("--log-json", log.json, "Log to stderr as JSON lines");
     app.add_flag("--build-info", printBuildInfo, "Print this build's identity and library versions as JSON, and exit");
+    std::string linkedLibraries;
+    app.add_option("--write-linked-libraries", linkedLibraries, "Write the libraries this executable links to FILE "
+                   "(JSON), and exit (its build does)")->group("");
     app.add_flag("--resolved-options", printResolved,
                  "Print the options STAGE would run with, defaults included, as JSON, and exit without running it");
     // With `answer`, the questions below are answered into it, and this process's logging is left as it is.
@@ -40,6 +44,10 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     };
     app.parse_complete_callback([&] {
         if (!answer) setLogOptions(log);
+        if (!linkedLibraries.empty() && !answer) {
+            writeLinkedLibraries(linkedLibraries);
+            throw CLI::Success();
+        }
         if (printBuildInfo) reply(buildInfo());
         if (app.get_subcommands().empty()) throw CLI::RequiredError("A subcommand");
         if (printResolved) {

@@ -18,9 +18,7 @@ struct MergeArgs {
 
 void runMerge(const MergeArgs& args) {
     double start = nowSeconds();
-    std::vector<Bundle> bundles;
-    for (const std::string& file : args.shards) bundles.push_back(readBundle(file));
-    writeBundle(args.output, mergeShards(bundles, args.shards));
+    writeBundle(args.output, mergeShardFiles(args.shards)); // one shard at a time
     logInfo("merge: joined " + std::to_string(args.shards.size()) + " shards into " + args.output);
     StageCost cost;
     cost.stage = "merge";

@@ -1,4 +1,5 @@
 // prt run: runs a pipeline file (docs/pipelines.md) locally or on Slurm, from the content-addressed cache.
+#include "build_info.h"
 #include "cli.h"
 
 #include "core.h"
@@ -46,18 +47,8 @@ void parseJobPart(const std::string& text, int& shardIndex, int& shardCount) {
 
 void runRun(RunArgs& args) {
     args.options.prt = prtBinary();
-    // This process is that prt (not the standalone prt-run): answer the cache key's questions in-process.
-    std::error_code error;
-    if (std::filesystem::equivalent("/proc/self/exe", args.options.prt, error))
-        args.options.askPrt = [](const std::vector<std::string>& question) {
-            std::vector<std::string> words = question;
-            std::vector<char*> argv;
-            for (std::string& word : words) argv.push_back(word.data());
-            nlohmann::json answer;
-            if (runDriver(int(argv.size()), argv.data(), nullptr, &answer) != kExitOk || !answer.is_object())
-                throw Error("", "cache key", "prt could not resolve its own options", kExitFailure);
-            return answer;
-        };
+    // The cache key's questions are answered in this process, by the option definitions the stages parse with.
+    args.options.askPrt = inProcessAnswers(hashMemoFile(args.options));
     args.options.executor = args.executor == "slurm" ? Executor::Slurm : Executor::Local;
     Pipeline pipeline = loadPipeline(args.pipeline);
     if (args.job.empty()) {

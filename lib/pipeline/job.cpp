@@ -333,10 +333,12 @@ nlohmann::json jobIngredients(const PipelineStage& stage, const std::map<std::st
     return keyIngredients(stage, hashes, shardIndex, shardCount, passes > 1 ? pass : -1);
 }
 
-// The file `port` of an earlier job of the stage, from its store entry.
+// The file `port` of an earlier job of the stage, from its store entry. With `verify`, its content must hash to
+// what the entry's manifest recorded (shard bundles carry no checksum of their own; pass files do), else it is
+// refused by name with exit 3.
 std::string storedFile(const PipelineStage& stage, const std::map<std::string, std::string>& hashes,
                        const RunOptions& options, int shardIndex, int shardCount, int pass, const std::string& port,
-                       const std::string& label) {
+                       const std::string& label, bool verify = false) {
     std::string store = storeDir(options);
     std::string key = keyOf(jobIngredients(stage, hashes, shardIndex, shardCount, pass));
     std::optional<StoreEntry> entry = findStoreEntry(store, key);
@@ -344,10 +346,15 @@ std::string storedFile(const PipelineStage& stage, const std::map<std::string, s
     if (stagePasses(stage, shardCount) > 1) what += " of pass " + std::to_string(pass);
     if (!entry || !entry->manifest["outputs"].contains(port))
         throw Error(store, label, what + " (" + key + ") is not in the store", kExitFailure);
-    return entry->dir + "/" + entry->manifest["outputs"][port]["file"].get<std::string>();
+    const nlohmann::json& output = entry->manifest["outputs"][port];
+    std::string file = entry->dir + "/" + output["file"].get<std::string>();
+    if (verify && hashFile(file) != output.value("hash", ""))
+        throw Error(file, label, what + " does not match the hash its store manifest recorded: the entry is corrupt",
+                    kExitInput);
+    return file;
 }
 
-// Joins the stored shards of `stage`'s last pass into `dir`, by mergeShards or by the stage itself
+// Joins the stored shards of `stage`'s last pass into `dir`, by mergeShardFiles or by the stage itself
 // (spec.mergeFlag); returns the merge's cost.
 nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, const StageInputs& inputs,
                          const RunOptions& options, int shardCount, const std::string& label) {
@@ -355,18 +362,16 @@ nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, con
     std::map<std::string, std::string> hashes = inputHashes(inputs);
     const PortSpec& port = stage.spec->outputs.front(); // shardable stages write one bundle
     int last = stagePasses(stage, shardCount) - 1;
-    std::vector<Bundle> shards;
     std::vector<std::string> files;
     for (int i = 0; i < shardCount; ++i)
-        files.push_back(storedFile(stage, hashes, options, i, shardCount, last, port.name, label));
+        files.push_back(storedFile(stage, hashes, options, i, shardCount, last, port.name, label, true));
     if (!stage.spec->mergeFlag.empty()) {
         JobExtras extras;
         extras.listFlag = stage.spec->mergeFlag;
         extras.listFiles = files;
         return runStageIn(dir, stage, inputs, options, kMergeJob, shardCount, label, extras);
     }
-    for (const std::string& file : files) shards.push_back(readBundle(file));
-    writeBundle(dir + "/" + port.name + "." + port.extension, mergeShards(shards, files));
+    writeBundle(dir + "/" + port.name + "." + port.extension, mergeShardFiles(files));
     writeBytesAtomic(dir + "/stage.log", "merged " + std::to_string(shardCount) + " shards\n");
     return {{"seconds", nowSeconds() - start}, {"rays", 0}, {"peak_memory_bytes", peakMemoryBytes()}};
 }
@@ -440,7 +445,16 @@ nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, con
                                passExtras(stage, hashes, options, shardIndex, shardCount, pass, label));
         nlohmann::json outputs = describeOutputs(jobOutputs(*stage.spec, merge ? kMergeJob : shardIndex, pass, passes),
                                                  dir, label);
-        if (existing && existing->manifest["outputs"] != outputs)
+        // A bundle's companion files (a bake's textures), so that copying it out needs no read of the bundle.
+        for (const PortSpec& port : stage.spec->outputs)
+            if (port.kind == FileKind::Bundle && outputs.contains(port.name) && (merge || !sharded))
+                outputs[port.name]["files"] = bundleCompanionNames(dir + "/" + outputs[port.name]["file"].get<std::string>());
+        auto hashes = [](const nlohmann::json& described) {
+            std::map<std::string, std::string> result;
+            for (auto& [name, output] : described.items()) result[name] = output.value("hash", "");
+            return result;
+        };
+        if (existing && hashes(existing->manifest["outputs"]) != hashes(outputs))
             logWarn(label + ": output differs from the stored result of the same key: the stage is not deterministic");
         nlohmann::json manifest = {{"key", key}, {"ingredients", ingredients}, {"outputs", outputs}, {"cost", cost}};
         writeBytesAtomic(dir + "/manifest.json", manifest.dump(2) + "\n");
@@ -471,7 +485,7 @@ nlohmann::json runStageJob(const Pipeline& given, const PipelineStage& givenStag
                              [&](const PipelineStage& s) { return s.id == givenStage.id; });
     if (same == pipeline.stages.end()) throw Error(given.file, givenStage.id, "is not a stage of this pipeline", kExitFailure);
     const PipelineStage& stage = *same;
-    std::map<std::string, InputFile> pipelineInputs = hashPipelineInputs(pipeline);
+    std::map<std::string, InputFile> pipelineInputs = hashPipelineInputs(pipeline, options);
     std::map<std::string, StoreEntry> entries;
     for (const PipelineStage& upstream : pipeline.stages) {
         if (upstream.id == stage.id) break;

@@ -4,6 +4,8 @@
 #include "core.h"
 
 #include <algorithm>
+#include <functional>
+#include <map>
 #include <numeric>
 
 namespace prt {
@@ -30,25 +32,59 @@ uint64_t rowParam(const Layer& layer, const char* key, const std::string& file) 
 
 } // namespace
 
-Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::string>& files) {
-    if (shards.empty() || shards.size() != files.size()) throw Error("", "merge", "no shards to merge", kExitUsage);
-    const Bundle& first = shards[0];
-    size_t count = shards.size();
+namespace {
 
-    std::vector<const Layer*> sharded(count);
-    for (size_t s = 0; s < count; ++s)
-        sharded[s] = first.layers.empty() ? nullptr : findLayer(shards[s], first.layers[0].name);
-    std::vector<size_t> order = orderShards(sharded, files);
-    for (const Layer& layer : first.layers)
-        if (layer.domain == "texel_range")
-            throw Error(files[0], "layer " + layer.name,
-                        "is a bake shard: its merge redoes the bake's finishing, so run `prt bake MESH -o OUT.glb "
-                        "--merge SHARD...` with the shards' options instead",
-                        kExitUsage);
+// One shard's rows of one sharded layer, moved out of the shard bundle, with the layer's description.
+struct LayerPart {
+    Layer meta; // the layer without its data
+    std::vector<float> data;
+};
 
-    Bundle merged = first;
+Layer describe(const Layer& layer) {
+    Layer meta;
+    meta.name = layer.name;
+    meta.domain = layer.domain;
+    meta.semantic = layer.semantic;
+    meta.shape = layer.shape;
+    meta.componentType = layer.componentType;
+    meta.object = layer.object;
+    meta.params = layer.params;
+    return meta;
+}
+
+// Joins shards that `load(s)` gives one at a time (s in 0..count-1, each loaded once, in order), so that at most
+// one shard bundle besides the first is held at once: the others' meshes and whole layers are compared with the
+// first's and dropped, their sharded rows kept until they are joined.
+Bundle mergeShardsFrom(size_t count, const std::function<Bundle(size_t)>& load, const std::vector<std::string>& files) {
+    if (count == 0 || count != files.size()) throw Error("", "merge", "no shards to merge", kExitUsage);
+    Bundle merged = load(0);
+    const Bundle& first = merged;
+    std::vector<Layer> keyLayers(count); // each shard's layer named as the first's first layer, without data
+    std::vector<bool> hasKey(count, false);
+    std::map<std::string, std::vector<LayerPart>> parts; // by layer name, in load order
+    // Moves shard s's rows of every layer the first shard holds sharded into `parts`; keeps descriptions.
+    auto stash = [&](Bundle& shard, size_t s) {
+        if (!first.layers.empty())
+            if (const Layer* key = findLayer(shard, first.layers[0].name)) {
+                keyLayers[s] = describe(*key);
+                hasKey[s] = true;
+            }
+        for (const Layer& layer : first.layers) {
+            if (layer.domain != "vertex_range") continue;
+            LayerPart piece;
+            if (Layer* part = const_cast<Layer*>(findLayer(shard, layer.name))) {
+                piece.meta = describe(*part);
+                piece.data = std::move(part->data);
+                part->data = {};
+            } else {
+                piece.meta.name = ""; // missing: reported when the layer is joined
+            }
+            parts[layer.name].push_back(std::move(piece));
+        }
+    };
+    stash(merged, 0);
     for (size_t s = 1; s < count; ++s) {
-        const Bundle& other = shards[s];
+        Bundle other = load(s);
         const TriMesh &a = first.mesh, &b = other.mesh;
         if (a.positions != b.positions || a.indices != b.indices || a.normals != b.normals ||
             a.texcoords != b.texcoords || a.albedo != b.albedo)
@@ -65,7 +101,17 @@ Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::str
                 throw Error(files[s], "layer " + layer.name, "differs from " + files[0] + "'s, but is not sharded",
                             kExitInput);
         }
+        stash(other, s);
     }
+    std::vector<const Layer*> sharded(count);
+    for (size_t s = 0; s < count; ++s) sharded[s] = hasKey[s] ? &keyLayers[s] : nullptr;
+    std::vector<size_t> order = orderShards(sharded, files);
+    for (const Layer& layer : first.layers)
+        if (layer.domain == "texel_range")
+            throw Error(files[0], "layer " + layer.name,
+                        "is a bake shard: its merge redoes the bake's finishing, so run `prt bake MESH -o OUT.glb "
+                        "--merge SHARD...` with the shards' options instead",
+                        kExitUsage);
 
     for (Layer& layer : merged.layers) {
         if (layer.domain != "vertex_range") continue; // layers every shard holds whole are kept as they are
@@ -80,9 +126,11 @@ Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::str
         data.reserve(vertices * rowWidth);
         nlohmann::json counters = nlohmann::json::object();
         uint64_t nextRow = 0;
+        std::vector<LayerPart>& pieces = parts[layer.name];
         for (size_t index = 0; index < count; ++index) {
             size_t s = order[index];
-            const Layer* part = findLayer(shards[s], layer.name);
+            LayerPart& piece = pieces[s];
+            const Layer* part = piece.meta.name.empty() ? nullptr : &piece.meta;
             if (!part || part->domain != "vertex_range" || part->semantic != layer.semantic ||
                 !std::equal(part->shape.begin() + 1, part->shape.end(), layer.shape.begin() + 1, layer.shape.end()) ||
                 part->shape.size() != layer.shape.size())
@@ -94,7 +142,8 @@ Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::str
                 throw Error(files[s], "layer " + layer.name, "rows [" + std::to_string(begin) + ", " + std::to_string(end) +
                                                                  ") do not continue at row " + std::to_string(nextRow), kExitInput);
             nextRow = end;
-            data.insert(data.end(), part->data.begin(), part->data.end());
+            data.insert(data.end(), piece.data.begin(), piece.data.end());
+            piece.data = {}; // held once: joined rows grow as shard rows go
             for (const char* key : kCounterParams)
                 if (part->params.contains(key)) counters[key] = counters.value(key, uint64_t(0)) + part->params[key].get<uint64_t>();
         }
@@ -108,6 +157,17 @@ Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::str
         layer.params.update(counters);
     }
     return merged;
+}
+
+} // namespace
+
+Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::string>& files) {
+    if (shards.size() != files.size()) throw Error("", "merge", "no shards to merge", kExitUsage);
+    return mergeShardsFrom(shards.size(), [&](size_t s) { return shards[s]; }, files);
+}
+
+Bundle mergeShardFiles(const std::vector<std::string>& files) {
+    return mergeShardsFrom(files.size(), [&](size_t s) { return readBundle(files[s]); }, files);
 }
 
 } // namespace prt

@@ -3,10 +3,13 @@
 // store. docs/pipelines.md is the reference for the file format, the cache and the executors.
 //
 // Cache key of a stage = XXH3-128 of a canonical JSON of: the stage's name, its code version (kStage table in
-// stages.cpp), its parameters as given, the options the stage resolves them to (defaults included, as the prt
-// binary reports them), the prt build (version, build type, compiler, content hash of the executable) and the
-// library versions it was compiled against and loads, and the content hashes of the files it reads. A shard's
-// key adds [index, count]. So a changed default, a rebuilt prt or an upgraded library never serves old bytes. Store layout: STORE/<key hex>/ holds the stage's outputs under fixed names, its log and
+// stages.cpp), its parameters as given, the options the stage resolves them to (defaults included, resolved in
+// the `prt run` process by the stage's own option definitions), the prt build (version, build type, compiler,
+// content hash of the prt-driver executable the stages run as) and the library versions it was compiled against
+// and links (each library's real file name and size), and the content hashes of the files it reads (memoised by
+// stat, hashFileMemo). A shard's key adds [index, count]. So a changed default, a rebuilt prt or an upgraded
+// library never serves old bytes, and no process is started to compute a key.
+// Store layout: STORE/<key hex>/ holds the stage's outputs under fixed names, its log and
 // manifest.json. An entry is built in STORE/.tmp-<key hex>-<host>-<pid>/ and renamed into place as a whole, so
 // an entry exists completely or not at all, whenever the process is killed.
 #pragma once
@@ -106,7 +109,8 @@ struct PipelineStage {
     int line = 0;
     // Filled by `prt run` before any key is computed (null until then, and then left out of keys): what
     // `prt --resolved-options STAGE ...` prints for this stage's command line (every option, defaults included),
-    // and what `prt --build-info` prints (prt's version, build, executable hash and library versions).
+    // and what `prt --build-info` prints (prt's version, build, executable hash and library versions), both
+    // answered in process (RunOptions::askPrt).
     nlohmann::json resolved = nullptr;
     nlohmann::json build = nullptr;
 };
@@ -173,6 +177,9 @@ void sweepStore(const std::string& store);
 // and other params in every shard, and row ranges that tile [0, vertex_count) exactly once; throws prt::Error
 // naming the offending shard file otherwise.
 Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::string>& files);
+// mergeShards over shard files, read one at a time: besides the first shard's bundle and the joined rows, at most
+// one other shard is held at once (its mesh and whole layers are compared with the first's and dropped).
+Bundle mergeShardFiles(const std::vector<std::string>& files);
 
 // ---- running --------------------------------------------------------------------------------------------------
 
@@ -194,10 +201,21 @@ struct RunOptions {
     int slurmCpusPerTask = 1;
     double slurmPollSeconds = 0.5;
     std::vector<std::string> slurmArgs; // extra sbatch arguments, passed as given
-    // Answers `prt ARGS` for --build-info and --resolved-options in this process, when this process is the prt
-    // binary above (set by `prt run`); else they are asked of that binary.
+    // Answers `prt ARGS` for `prt --build-info` and `prt --resolved-options STAGE ...` in this process, with the
+    // option definitions the stage itself parses with (prt::cli::inProcessAnswers, apps/cli/cli.h). Required: no
+    // key is ever computed by starting a process, so runPipeline and runStageJob throw without it.
     std::function<nlohmann::json(const std::vector<std::string>& args)> askPrt = nullptr;
 };
+
+// The content hash of a file (hashFile), memoised in `memoFile` (JSON; "" keeps the memo in this process only)
+// by the file's absolute path and stat identity: size, mtime and ctime in nanoseconds, inode and device. A memo
+// entry is used only when all of these match, and recorded only when the file did not change while it was hashed
+// and its mtime and ctime are more than 2 s old; since any write moves ctime, which no call can set back, every
+// change of content defeats the memo (hash_memo.cpp states the rule). Throws prt::Error when the file cannot be
+// read.
+std::string hashFileMemo(const std::string& path, const std::string& memoFile);
+// CACHE/hash-memo.json: the memo a run with these options keeps.
+std::string hashMemoFile(const RunOptions& options);
 
 // Runs a pipeline and returns its report (also written to CACHE/runs/<name>-<time>-<pid>/report.json):
 // {"pipeline","file","executor","ok","seconds","cache_hits","stages_run","peak_memory_bytes",
@@ -208,8 +226,8 @@ struct RunOptions {
 // Throws prt::Error for a stage that fails (naming it and quoting its log), after writing the report.
 nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options);
 
-// Fills every stage's `resolved` and `build` (above) by running options.prt with --resolved-options and
-// --build-info (each distinct command once per process). Throws prt::Error when the binary cannot say.
+// Fills every stage's `resolved` and `build` (above) through options.askPrt, in this process (each distinct
+// question once per process). Throws prt::Error when askPrt is unset or cannot say.
 void resolveStageOptions(Pipeline& pipeline, const RunOptions& options);
 
 // One stage job, the unit both executors run: resolves the stage's inputs from the store (its upstream stages

@@ -40,11 +40,16 @@ std::vector<std::string> stageArguments(const PipelineStage& stage);
 // each on its own line, indented.
 std::string readableLogTail(const std::string& path, size_t lines);
 
-std::map<std::string, InputFile> hashPipelineInputs(const Pipeline& pipeline);
+// The pipeline's input files with their content hashes (hashFileMemo, in the run's memo).
+std::map<std::string, InputFile> hashPipelineInputs(const Pipeline& pipeline, const RunOptions& options);
 // The files `stage` reads, or nothing when an upstream stage has no entry in `entries` (by stage id).
 std::optional<StageInputs> resolveInputs(const PipelineStage& stage, const std::map<std::string, InputFile>& pipelineInputs,
                                          const std::map<std::string, StoreEntry>& entries);
 std::map<std::string, std::string> inputHashes(const StageInputs& inputs);
+
+// The external files a bundle's layers reference (params.files: plain names next to the bundle, docs/bundle.md),
+// read from the bundle. Throws prt::Error for a name that is not a plain file name.
+std::vector<std::string> bundleCompanionNames(const std::string& bundleFile);
 
 // runStageJob with the inputs already resolved.
 nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options, int shardIndex,

@@ -15,9 +15,10 @@ namespace fs = std::filesystem;
 
 namespace prt {
 
-std::map<std::string, InputFile> hashPipelineInputs(const Pipeline& pipeline) {
+std::map<std::string, InputFile> hashPipelineInputs(const Pipeline& pipeline, const RunOptions& options) {
     std::map<std::string, InputFile> files;
-    for (const PipelineInput& input : pipeline.inputs) files[input.name] = {input.path, hashFile(input.path)};
+    std::string memo = hashMemoFile(options);
+    for (const PipelineInput& input : pipeline.inputs) files[input.name] = {input.path, hashFileMemo(input.path, memo)};
     return files;
 }
 
@@ -35,6 +36,21 @@ std::optional<StageInputs> resolveInputs(const PipelineStage& stage, const std::
         inputs[wire.port] = {entry->second.dir + "/" + output["file"].get<std::string>(), output["hash"].get<std::string>()};
     }
     return inputs;
+}
+
+std::vector<std::string> bundleCompanionNames(const std::string& bundleFile) {
+    std::vector<std::string> names;
+    for (const Layer& layer : readBundle(bundleFile).layers) {
+        if (!layer.params.contains("files") || !layer.params["files"].is_array()) continue;
+        for (const nlohmann::json& name : layer.params["files"]) {
+            fs::path relative = name.get<std::string>();
+            if (relative.is_absolute() || relative.filename() != relative)
+                throw Error(bundleFile, "layer \"" + layer.name + "\" params.files",
+                            "'" + relative.string() + "' is not a plain file name next to the bundle", kExitFailure);
+            names.push_back(relative.string());
+        }
+    }
+    return names;
 }
 
 namespace {
@@ -284,30 +300,32 @@ std::string costLine(const nlohmann::json& record) {
     return line;
 }
 
-// Copies `file` atomically to `path` unless that already holds the same bytes.
-void copyIfChanged(const std::string& file, const std::string& path, const std::string& hash) {
+// Copies `file` atomically to `path` unless that already holds the same bytes (by the run's hash memo).
+void copyIfChanged(const std::string& file, const std::string& path, const std::string& hash, const std::string& memo) {
     std::error_code error;
-    if (!fs::is_regular_file(path, error) || hashFile(path) != hash) writeBytesAtomic(path, readFileBytes(file));
+    if (!fs::is_regular_file(path, error) || hashFileMemo(path, memo) != hash) writeBytesAtomic(path, readFileBytes(file));
 }
 
-// The external files a bundle's layers reference (params.files, relative to the bundle, docs/bundle.md), as
-// (source, target) pairs: each goes next to the bundle's copy at `destination` under the same name, so the
-// references hold.
-std::vector<std::pair<std::string, std::string>> companionFiles(const std::string& bundleFile,
+// (source, target) pairs for the companion files `names` of the bundle `bundleFile`: each goes next to the
+// bundle's copy at `destination` under the same name, so the references hold.
+std::vector<std::pair<std::string, std::string>> companionPairs(const std::vector<std::string>& names,
+                                                                const std::string& bundleFile,
                                                                 const std::string& destination) {
     std::vector<std::pair<std::string, std::string>> files;
     fs::path from = fs::path(bundleFile).parent_path(), to = fs::path(destination).parent_path();
-    for (const Layer& layer : readBundle(bundleFile).layers) {
-        if (!layer.params.contains("files") || !layer.params["files"].is_array()) continue;
-        for (const nlohmann::json& name : layer.params["files"]) {
-            fs::path relative = name.get<std::string>();
-            if (relative.is_absolute() || relative.filename() != relative)
-                throw Error(bundleFile, "layer \"" + layer.name + "\" params.files",
-                            "'" + relative.string() + "' is not a plain file name next to the bundle", kExitFailure);
-            files.emplace_back((from / relative).string(), (to / relative).lexically_normal().string());
-        }
+    for (const std::string& name : names) {
+        fs::path relative = name;
+        if (relative.empty() || relative.is_absolute() || relative.filename() != relative)
+            throw Error(bundleFile, "companion files", "'" + name + "' is not a plain file name next to the bundle",
+                        kExitFailure);
+        files.emplace_back((from / name).string(), (to / name).lexically_normal().string());
     }
     return files;
+}
+
+std::vector<std::pair<std::string, std::string>> companionFiles(const std::string& bundleFile,
+                                                                const std::string& destination) {
+    return companionPairs(bundleCompanionNames(bundleFile), bundleFile, destination);
 }
 
 // One declared output to copy out of the store, with a bundle's companion files.
@@ -321,7 +339,8 @@ struct OutputCopy {
 // Copies each declared output whose stage has a result atomically into place, unless it already holds it; a
 // bundle's companion files (external textures) go next to it. Two outputs whose files would land on one path
 // (two bundles' textures in one folder) are an error naming both, raised before anything is copied.
-nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string, StoreEntry>& entries) {
+nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string, StoreEntry>& entries,
+                           const std::string& memo) {
     std::map<std::string, std::string> claimed; // destination path -> output name
     for (const PipelineOutput& output : pipeline.outputs)
         claimed.emplace(fs::path(output.path).lexically_normal().string(), output.name);
@@ -341,7 +360,11 @@ nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string,
         copy.kind = std::find_if(spec.outputs.begin(), spec.outputs.end(), [&](const PortSpec& port) {
                         return port.name == output.port;
                     })->kind;
-        if (copy.kind == FileKind::Bundle) copy.companions = companionFiles(copy.file, output.path);
+        // The store's manifest lists a bundle's companions (entries written before it did: read the bundle).
+        if (copy.kind == FileKind::Bundle)
+            copy.companions = product.contains("files") && product["files"].is_array()
+                                  ? companionPairs(product["files"].get<std::vector<std::string>>(), copy.file, output.path)
+                                  : companionFiles(copy.file, output.path);
         for (const auto& [source, target] : copy.companions) {
             auto [owner, fresh] = claimed.emplace(target, output.name);
             if (!fresh && owner->second != output.name)
@@ -365,16 +388,20 @@ nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string,
         std::vector<std::string> previous; // the textures of the bundle about to be replaced
         if (copy.kind == FileKind::Bundle && fs::is_regular_file(output.path, error)) {
             try {
-                for (const auto& [old, target] : companionFiles(output.path, output.path)) previous.push_back(target);
+                if (hashFileMemo(output.path, memo) == copy.hash) { // the same bundle: the same companions
+                    for (const auto& [source, target] : copy.companions) previous.push_back(target);
+                } else {
+                    for (const auto& [old, target] : companionFiles(output.path, output.path)) previous.push_back(target);
+                }
             } catch (const Error&) {
                 // not a bundle we wrote: leave what lies next to it alone
             }
         }
         for (const auto& [source, target] : copy.companions) {
-            copyIfChanged(source, target, hashFile(source));
+            copyIfChanged(source, target, hashFileMemo(source, memo), memo);
             files.push_back(target);
         }
-        copyIfChanged(copy.file, output.path, copy.hash);
+        copyIfChanged(copy.file, output.path, copy.hash, memo);
         for (const std::string& old : previous)
             if (std::find(files.begin(), files.end(), old) == files.end()) fs::remove(old, error);
         copied[output.name] = {{"path", output.path}, {"hash", copy.hash}, {"kind", fileKindName(copy.kind)},
@@ -399,7 +426,7 @@ nlohmann::json runPipeline(const Pipeline& given, const RunOptions& options) {
     double runStart = epochSeconds();
     std::string lastPath = options.cacheDir + "/runs/" + pipeline.name + ".last.json";
     nlohmann::json last = readJsonOr(lastPath, nlohmann::json::object());
-    std::map<std::string, InputFile> pipelineInputs = hashPipelineInputs(pipeline);
+    std::map<std::string, InputFile> pipelineInputs = hashPipelineInputs(pipeline, options);
     std::map<std::string, StoreEntry> entries;
     std::vector<StagePlan> plans = planStages(pipeline, options, pipelineInputs, last, entries);
     printPlan(pipeline, plans, options.plan);
@@ -442,7 +469,7 @@ nlohmann::json runPipeline(const Pipeline& given, const RunOptions& options) {
     report["outputs"] = nlohmann::json::object();
     if (!failure) {
         try {
-            report["outputs"] = copyOutputs(pipeline, entries);
+            report["outputs"] = copyOutputs(pipeline, entries, hashMemoFile(options));
         } catch (const Error& e) {
             failure = e; // the report still records what ran
         }

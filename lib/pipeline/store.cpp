@@ -10,7 +10,6 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -32,20 +31,22 @@ nlohmann::json keyIngredients(const PipelineStage& stage, const std::map<std::st
 
 namespace {
 
+// Asks options.askPrt, once per question and process. There is no fallback to running the binary: a key is
+// never computed by starting a process (a fresh prt-driver loads about 270 shared libraries).
 nlohmann::json askPrt(const std::vector<std::string>& args, const RunOptions& options) {
     static std::mutex mutex;
     static std::map<std::vector<std::string>, nlohmann::json> answers;
     std::lock_guard<std::mutex> lock(mutex);
     auto known = answers.find(args);
     if (known != answers.end()) return known->second;
-    if (options.askPrt) return answers[args] = options.askPrt(args);
-    int status = 0;
-    std::string output = captureCommand(args, false, status);
-    nlohmann::json answer = nlohmann::json::parse(output, nullptr, false);
-    if (status != 0 || !answer.is_object()) {
+    if (!options.askPrt)
+        throw Error("", "cache key", "RunOptions::askPrt is not set: the stages' options are resolved in process "
+                                     "(prt::cli::inProcessAnswers)", kExitFailure);
+    nlohmann::json answer = options.askPrt(args);
+    if (!answer.is_object()) {
         std::string command;
         for (const std::string& arg : args) command += (command.empty() ? "" : " ") + arg;
-        throw Error("", "cache key", "`" + command + "` did not print its JSON (exit " + std::to_string(status) + ")", kExitFailure);
+        throw Error("", "cache key", "`" + command + "` has no JSON answer", kExitFailure);
     }
     return answers[args] = answer;
 }

@@ -1,13 +1,17 @@
 // The files between the passes of a sharded interreflected transfer: hit records, a shard's rows, and a pass's
 // exitant array. One layout for the three (little-endian, as every machine prt builds on):
-//   8 bytes "PRTSHARD", uint32 format version (1), uint32 header length H (at most 64 KiB), H bytes of JSON, then
+//   8 bytes "PRTSHARD", uint32 format version (2), uint32 header length H (at most 64 KiB), H bytes of JSON, then
 //   the payload, whose every size follows from the header:
 //     hits:    uint32 count[rows], uint32 triangle[hit_count], uint32 barycentric[hit_count], uint16 sample[hit_count]
 //     rows:    float total[rows][n][3], float direct[rows][n][3], float exitant[rows][n * channels] (not after pass B)
 //     exitant: float exitant[vertex_count][n * channels]
 // The header names the run (mesh hash, counts, options), and hits and rows their shard, so a file of another run
 // is refused by name before its payload is touched; the payload's length must be what the header implies, and
-// that is bounded by the element cap, before anything is allocated.
+// that is bounded by the element cap, before anything is allocated. The header's "checksums" holds one checksum
+// per payload section (counts, triangles, barycentrics, samples; total, direct, exitant): XXH3-128 (hashBytes) of
+// the concatenated XXH3-128 digests of the section's consecutive 1 MiB chunks, so it is computed while streaming
+// and a reader that skips a section (the gather reads only the exitant rows) checks what it reads. A section is
+// checked before any of its values is used: a corrupted byte is refused as such, by file and section.
 #include "passes.h"
 
 #include "core.h"
@@ -18,13 +22,17 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
+#include <vector>
 
 namespace prt {
 
 namespace {
 
 constexpr char kMagic[8] = {'P', 'R', 'T', 'S', 'H', 'A', 'R', 'D'};
-constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kFormatVersion = 2;
+constexpr size_t kChecksumChunk = 1 << 20;
 constexpr uint32_t kMaxHeaderBytes = 64 * 1024;
 
 size_t rowCount(const ShardRun& run) { return run.rowEnd - run.rowBegin; }
@@ -59,8 +67,54 @@ nlohmann::json header(const char* kind, const ShardRun& run, bool withShard) {
     return h;
 }
 
-void writeShardFile(const std::string& path, const nlohmann::json& head,
-                    const std::function<void(std::ofstream&)>& payload) {
+// A section's checksum (the layout above), fed in pieces of any size.
+struct SectionChecksum {
+    std::string pending;
+    std::string digests;
+    void add(const void* data, size_t bytes) {
+        const char* at = static_cast<const char*>(data);
+        while (bytes > 0) {
+            if (pending.empty() && bytes >= kChecksumChunk) { // a whole chunk: hash it where it lies
+                digests += hashBytes(at, kChecksumChunk);
+                at += kChecksumChunk;
+                bytes -= kChecksumChunk;
+                continue;
+            }
+            size_t take = std::min(bytes, kChecksumChunk - pending.size());
+            pending.append(at, take);
+            at += take;
+            bytes -= take;
+            if (pending.size() == kChecksumChunk) {
+                digests += hashBytes(pending.data(), pending.size());
+                pending.clear();
+            }
+        }
+    }
+    std::string value() const {
+        std::string all = digests;
+        if (!pending.empty() || all.empty()) all += hashBytes(pending.data(), pending.size());
+        return hashBytes(all.data(), all.size());
+    }
+};
+
+// Writes the payload section by section, each with its checksum.
+struct PayloadWriter {
+    std::ofstream& out;
+    std::map<std::string, SectionChecksum> sections;
+    template <class T>
+    void write(const char* section, const T* data, size_t count) {
+        out.write(reinterpret_cast<const char*>(data), std::streamsize(count * sizeof(T)));
+        sections[section].add(data, count * sizeof(T));
+    }
+};
+
+// `sections` names the payload's sections, in order; `payload` writes each through the PayloadWriter (and may
+// leave one empty). The header is written first with placeholder checksums of the same length, then rewritten.
+void writeShardFile(const std::string& path, nlohmann::json head, const std::vector<const char*>& sections,
+                    const std::function<void(PayloadWriter&)>& payload) {
+    nlohmann::json placeholders = nlohmann::json::object();
+    for (const char* section : sections) placeholders[section] = hashBytes("", 0);
+    head["checksums"] = placeholders;
     std::string text = head.dump();
     writeFileAtomic(path, [&](const std::string& tmp) {
         std::ofstream out(tmp, std::ios::binary);
@@ -68,15 +122,16 @@ void writeShardFile(const std::string& path, const nlohmann::json& head,
         out.write(kMagic, sizeof(kMagic));
         out.write(reinterpret_cast<const char*>(prefix), sizeof(prefix));
         out.write(text.data(), std::streamsize(text.size()));
-        payload(out);
+        PayloadWriter writer{out, {}};
+        payload(writer);
+        for (const char* section : sections) head["checksums"][section] = writer.sections[section].value();
+        std::string final = head.dump();
+        if (final.size() != text.size()) throw Error(path, "header", "checksums changed the header's length", kExitFailure);
+        out.seekp(sizeof(kMagic) + sizeof(prefix));
+        out.write(final.data(), std::streamsize(final.size()));
         out.flush();
         if (!out) throw Error(path, "", "cannot write the shard file", kExitOutput);
     });
-}
-
-template <class T>
-void writeArray(std::ofstream& out, const T* data, size_t count) {
-    out.write(reinterpret_cast<const char*>(data), std::streamsize(count * sizeof(T)));
 }
 
 // An opened shard file whose header matched: the stream stands at the payload.
@@ -85,6 +140,7 @@ struct Reader {
     std::ifstream in;
     nlohmann::json head;
     uint64_t payloadBytes = 0;
+    std::map<std::string, SectionChecksum> sections;
 
     [[noreturn]] void fail(const std::string& place, const std::string& problem) const {
         throw Error(path, place, problem, kExitInput);
@@ -94,13 +150,24 @@ struct Reader {
         if (!value || !value->is_number_unsigned()) fail("header", std::string("has no valid '") + key + "'");
         return value->get<uint64_t>();
     }
+    // Reads `count` values of payload section `section` (in one or more calls), adding them to its checksum.
     template <class T>
     void read(T* data, uint64_t count, const char* section) {
         in.read(reinterpret_cast<char*>(data), std::streamsize(count * sizeof(T)));
         if (!in) fail(section, "cannot be read (the file changed while it was read?)");
+        sections[section].add(data, count * sizeof(T));
+    }
+    // Once the whole section is read: refuses it unless it matches the header's checksum.
+    void verify(const char* section) {
+        const nlohmann::json& checksums = head.value("checksums", nlohmann::json());
+        if (!checksums.is_object() || !checksums.contains(section) || !checksums[section].is_string())
+            fail("header", std::string("has no checksum for the '") + section + "' section");
+        if (checksums[section].get<std::string>() != sections[section].value())
+            fail(section, "does not match its checksum: the file is corrupt");
     }
     void readFinite(float* data, uint64_t count, const char* section) {
         read(data, count, section);
+        verify(section);
         for (uint64_t i = 0; i < count; ++i)
             if (!std::isfinite(data[i])) fail(section, "value " + std::to_string(i) + " is not finite");
     }
@@ -185,16 +252,16 @@ void writeHitRecords(const std::string& path, const ShardRun& run, const std::ve
     uint64_t hits = 0;
     for (const HitBlock& block : blocks) hits += block.triangle.size();
     head["hit_count"] = hits;
-    writeShardFile(path, head, [&](std::ofstream& out) {
+    writeShardFile(path, head, {"counts", "triangles", "barycentrics", "samples"}, [&](PayloadWriter& out) {
         std::vector<uint32_t> counts;
         for (const HitBlock& block : blocks) {
             counts.resize(block.end.size());
             for (size_t i = 0; i < block.end.size(); ++i) counts[i] = block.end[i] - (i ? block.end[i - 1] : 0);
-            writeArray(out, counts.data(), counts.size());
+            out.write("counts", counts.data(), counts.size());
         }
-        for (const HitBlock& block : blocks) writeArray(out, block.triangle.data(), block.triangle.size());
-        for (const HitBlock& block : blocks) writeArray(out, block.barycentric.data(), block.barycentric.size());
-        for (const HitBlock& block : blocks) writeArray(out, block.sample.data(), block.sample.size());
+        for (const HitBlock& block : blocks) out.write("triangles", block.triangle.data(), block.triangle.size());
+        for (const HitBlock& block : blocks) out.write("barycentrics", block.barycentric.data(), block.barycentric.size());
+        for (const HitBlock& block : blocks) out.write("samples", block.sample.data(), block.sample.size());
     });
 }
 
@@ -209,7 +276,8 @@ std::vector<HitBlock> readHitRecords(const std::string& path, const ShardRun& ru
     // Read section by section straight into the blocks, so the records are held once.
     std::vector<HitBlock> blocks(hitBlockCount(rows));
     std::vector<uint32_t> counts(rows);
-    reader.read(counts.data(), rows, "hit counts");
+    reader.read(counts.data(), rows, "counts");
+    reader.verify("counts");
     const uint64_t samples = uint64_t(run.options.samples);
     uint64_t sum = 0;
     for (size_t b = 0; b < blocks.size(); ++b) {
@@ -230,18 +298,25 @@ std::vector<HitBlock> readHitRecords(const std::string& path, const ShardRun& ru
     for (HitBlock& block : blocks) {
         block.triangle.resize(block.end.empty() ? 0 : block.end.back());
         reader.read(block.triangle.data(), block.triangle.size(), "triangles");
+    }
+    reader.verify("triangles");
+    for (HitBlock& block : blocks)
         for (uint32_t t : block.triangle)
             if (t >= run.triangleCount) reader.fail("triangles", "triangle " + std::to_string(t) + " is not in the mesh");
-    }
     for (HitBlock& block : blocks) {
         block.barycentric.resize(block.triangle.size());
         reader.read(block.barycentric.data(), block.barycentric.size(), "barycentrics");
+    }
+    reader.verify("barycentrics");
+    for (HitBlock& block : blocks)
         for (uint32_t uv : block.barycentric) // each rounded on its own, so their sum may pass 65535 by one
             if ((uv & 0xFFFFu) + (uv >> 16) > 65536u) reader.fail("barycentrics", "u + v exceeds 1");
-    }
     for (HitBlock& block : blocks) {
         block.sample.resize(block.triangle.size());
         reader.read(block.sample.data(), block.sample.size(), "samples");
+    }
+    reader.verify("samples");
+    for (HitBlock& block : blocks) {
         // The direct pass records a vertex's hits in ascending sample order.
         for (size_t i = 0, h = 0; i < block.end.size(); ++i)
             for (size_t first = h; h < block.end[i]; ++h)
@@ -268,10 +343,10 @@ void writeShardRows(const std::string& path, const ShardRun& run, const ShardRow
     nlohmann::json head = header("rows", run, true);
     head.update({{"pass", rows.pass}, {"rays", rows.rays}, {"hits", rows.hits}, {"back_face_hits", rows.backFaceHits},
                  {"ray_offset", double(rows.rayOffset)}, {"has_exitant", rows.pass < run.options.bounces}});
-    writeShardFile(path, head, [&](std::ofstream& out) {
-        writeArray(out, rows.total.data(), rows.total.size());
-        writeArray(out, rows.direct.data(), rows.direct.size());
-        writeArray(out, rows.exitant.data(), rows.exitant.size());
+    writeShardFile(path, head, {"total", "direct", "exitant"}, [&](PayloadWriter& out) {
+        out.write("total", rows.total.data(), rows.total.size());
+        out.write("direct", rows.direct.data(), rows.direct.size());
+        out.write("exitant", rows.exitant.data(), rows.exitant.size());
     });
 }
 
@@ -299,11 +374,11 @@ ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, 
     } else {
         rows.total.resize(totalFloats);
         rows.direct.resize(totalFloats);
-        reader.readFinite(rows.total.data(), totalFloats, "total rows");
-        reader.readFinite(rows.direct.data(), totalFloats, "direct rows");
+        reader.readFinite(rows.total.data(), totalFloats, "total");
+        reader.readFinite(rows.direct.data(), totalFloats, "direct");
     }
     rows.exitant.resize(exitantFloats);
-    reader.readFinite(rows.exitant.data(), exitantFloats, "exitant rows");
+    reader.readFinite(rows.exitant.data(), exitantFloats, "exitant");
     return rows;
 }
 
@@ -341,7 +416,7 @@ int gatherExitant(const std::vector<std::string>& parts, const ShardRun& run, co
     // Every index seen once among shardCount files: the ranges tile [0, vertexCount).
     nlohmann::json head = header("exitant", run, false);
     head["pass"] = pass;
-    writeShardFile(output, head, [&](std::ofstream& out) { writeArray(out, exitant.data(), exitant.size()); });
+    writeShardFile(output, head, {"exitant"}, [&](PayloadWriter& out) { out.write("exitant", exitant.data(), exitant.size()); });
     return pass;
 }
 

@@ -210,7 +210,8 @@ struct ResolvedStage {
     std::map<std::string, std::string> hashes = {{"mesh", "xxh128:0"}};
     ResolvedStage() {
         Pipeline p = parsePipeline(test::withDir(kPipeline, "/nowhere"), "p.toml");
-        resolveStageOptions(p, test::testOptions("/nowhere"));
+        test::TempDir cache;
+        resolveStageOptions(p, test::testOptions(cache.path));
         stage = p.stages[findStage(p, "transfer")];
     }
     std::string key(const PipelineStage& s) const { return keyOf(keyIngredients(s, hashes)); }

@@ -1,6 +1,7 @@
 // Shared by the pipeline tests: temporary folders, small inputs made in code, and reading run reports.
 #pragma once
 
+#include "build_info.h"
 #include "core.h"
 #include "image.h"
 #include "pipeline.h"
@@ -131,6 +132,7 @@ inline RunOptions testOptions(const std::string& cacheDir) {
     options.prt = kPrt;
     options.cacheDir = cacheDir;
     options.threads = 2;
+    options.askPrt = cli::inProcessAnswers(hashMemoFile(options)); // as `prt run` does
     return options;
 }
 

@@ -35,6 +35,38 @@ TEST(Shards, PipelineMergeEqualsTheUnshardedRunBitForBit) {
     EXPECT_EQ(test::outputHashes(overridden), test::outputHashes(whole));
 }
 
+// A stored shard bundle with one flipped byte (its size unchanged, so the entry looks whole) is refused by name
+// when the merge reads it, with exit 3, and the merged entry is not written.
+TEST(Shards, AMergeRefusesACorruptedShardBundleByName) {
+    test::TempDir dir;
+    test::writeSkyExr(dir / "sky.exr", 1.0f);
+    RunOptions options = test::testOptions(dir / "cache");
+    nlohmann::json report = test::runQuietly(shardedPipeline(dir, 3), options);
+    std::string store = options.cacheDir + "/store";
+    std::string mergedKey = report["stages"][1]["key"];
+    std::string shardFile;
+    for (const auto& item : std::filesystem::directory_iterator(store)) {
+        if (item.path().filename().string()[0] == '.') continue;
+        nlohmann::json manifest = nlohmann::json::parse(readFileBytes(item.path().string() + "/manifest.json"));
+        if (manifest["ingredients"].contains("shard") && manifest["ingredients"]["shard"][0] == 1)
+            shardFile = item.path().string() + "/" + manifest["outputs"]["bundle"]["file"].get<std::string>();
+    }
+    ASSERT_FALSE(shardFile.empty());
+    std::string bytes = readFileBytes(shardFile);
+    bytes[bytes.size() - 5] ^= 0x01;
+    writeBytesAtomic(shardFile, bytes);
+    std::filesystem::remove_all(store + "/" + mergedKey.substr(7)); // the merge must run again
+    try {
+        test::runQuietly(shardedPipeline(dir, 3), options);
+        FAIL() << "the corrupted shard was merged";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.exitCode(), kExitInput) << e.what();
+        EXPECT_EQ(e.file(), shardFile) << e.what();
+        EXPECT_NE(std::string(e.what()).find("shard 2/3 does not match the hash"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(store + "/" + mergedKey.substr(7)));
+}
+
 // Interreflected transfer with bounces runs sharded as passes: the direct pass and each bounce an array of shard
 // jobs, a gather between passes, the merge after the last; the product is the unsharded one, key included.
 TEST(Shards, InterreflectedPassesMergeIntoTheUnshardedRunBitForBit) {

@@ -145,6 +145,29 @@ protected:
     }
     std::string rows(int i) const { return path("p0." + std::to_string(i)); }
 
+    static size_t headerLength(const std::string& file) {
+        uint32_t bytes;
+        std::memcpy(&bytes, file.data() + 12, 4);
+        return bytes;
+    }
+    // Rewrites the header's checksum of `section` (`length` bytes at `offset`, under 1 MiB: one chunk) to match.
+    static void reseal(std::string& file, const std::string& section, size_t offset, size_t length) {
+        size_t headerBytes = headerLength(file);
+        nlohmann::json head = nlohmann::json::parse(file.substr(16, headerBytes));
+        ASSERT_LT(length, size_t(1) << 20);
+        std::string digest = hashBytes(file.data() + offset, length);
+        head["checksums"][section] = hashBytes(digest.data(), digest.size());
+        std::string text = head.dump();
+        ASSERT_EQ(text.size(), headerBytes);
+        file.replace(16, headerBytes, text);
+    }
+    // `file` with one bit of byte `offsetFromEnd` (counted back from the end) flipped.
+    static std::string flipped(const std::string& file, size_t offsetFromEnd) {
+        std::string copy = file;
+        copy[copy.size() - offsetFromEnd] ^= 0x01;
+        return copy;
+    }
+
     // Bounce 1 of shard 0 with these files must fail with exit 3, naming `file` and `problem`, writing nothing.
     void expectRefused(const std::string& previous, const std::string& hits, const std::string& exitant,
                        const std::string& file, const std::string& problem, const std::string& extra = "") {
@@ -187,21 +210,46 @@ TEST_F(TransferShardFiles, TruncatedPaddedOrForeignFilesAreRefused) {
     expectRefused(rows(0), path("short.hits"), path("e0"), path("short.hits"), "truncated or padded");
     writeBytesAtomic(path("long.hits"), hits + "x");
     expectRefused(rows(0), path("long.hits"), path("e0"), path("long.hits"), "truncated or padded");
-    // A corrupt triangle index: the payload keeps its length, the index check catches it.
+    // A corrupt triangle index: the payload keeps its length, the section's checksum catches it; resealed with a
+    // matching checksum (what a buggy writer would leave), the index check catches it.
     // Layout (lib/transfer/shard_files.cpp): 16-byte prefix, the header, a uint32 count per row, then triangles.
     std::string corrupt = hits;
     size_t rowsCount = shardRows(readBundle(mesh).mesh.vertexCount(), 0, 2).end;
-    uint32_t headerBytes;
-    std::memcpy(&headerBytes, corrupt.data() + 12, 4);
-    size_t triangles = 16 + headerBytes + rowsCount * 4;
+    size_t triangles = 16 + headerLength(corrupt) + rowsCount * 4;
     uint32_t bad = 0xFFFFFFF0u;
     std::memcpy(corrupt.data() + triangles, &bad, 4);
     writeBytesAtomic(path("corrupt.hits"), corrupt);
-    expectRefused(rows(0), path("corrupt.hits"), path("e0"), path("corrupt.hits"), "is not in the mesh");
+    expectRefused(rows(0), path("corrupt.hits"), path("e0"), path("corrupt.hits"), "triangles: does not match its checksum");
+    nlohmann::json head = nlohmann::json::parse(corrupt.substr(16, headerLength(corrupt)));
+    size_t hitCount = head["hit_count"];
+    reseal(corrupt, "triangles", triangles, hitCount * 4);
+    writeBytesAtomic(path("resealed.hits"), corrupt);
+    expectRefused(rows(0), path("resealed.hits"), path("e0"), path("resealed.hits"), "is not in the mesh");
 
     expectRefused(rows(0), rows(0) + ".hits", rows(0), rows(0), "not an exitant array");
     expectRefused(rows(0), rows(0) + ".hits", mesh, mesh, "is not a prt shard file");
     expectRefused(path("e0"), rows(0) + ".hits", path("e0"), path("e0"), "not shard rows");
+}
+
+// One flipped bit in the payload of each kind of file (a float's lowest mantissa bit: still a finite value that
+// every other check accepts) is refused by name, with exit 3, and nothing is written.
+TEST_F(TransferShardFiles, AFlippedPayloadByteIsRefusedByItsChecksum) {
+    // The exitant array's last float.
+    writeBytesAtomic(path("e0.flipped"), flipped(readFileBytes(path("e0")), 4));
+    expectRefused(rows(0), rows(0) + ".hits", path("e0.flipped"), path("e0.flipped"), "exitant: does not match its checksum");
+    // The previous pass's rows: the last float of their exitant section.
+    writeBytesAtomic(path("p0.flipped"), flipped(readFileBytes(rows(0)), 4));
+    expectRefused(path("p0.flipped"), rows(0) + ".hits", path("e0"), path("p0.flipped"), "exitant: does not match its checksum");
+    // Hit records: the last sample index's low byte.
+    writeBytesAtomic(path("hits.flipped"), flipped(readFileBytes(rows(0) + ".hits"), 2));
+    expectRefused(rows(0), path("hits.flipped"), path("e0"), path("hits.flipped"), "samples: does not match its checksum");
+    // The gather reads only the exitant rows, and checks them.
+    writeBytesAtomic(path("p0.1.flipped"), flipped(readFileBytes(rows(1)), 4));
+    CliRun gather = run(transfer + " --gather " + rows(0) + " " + path("p0.1.flipped") + " -o " + path("bad"));
+    EXPECT_EQ(gather.exitCode, 3) << gather.stderrText;
+    EXPECT_NE(gather.stderrText.find(path("p0.1.flipped")), std::string::npos) << gather.stderrText;
+    EXPECT_NE(gather.stderrText.find("does not match its checksum"), std::string::npos) << gather.stderrText;
+    EXPECT_FALSE(fs::exists(path("bad")));
 }
 
 TEST_F(TransferShardFiles, GatherNeedsEveryShardOfOnePassOnce) {
