@@ -489,6 +489,9 @@ Pipeline loadPipeline(const std::string& file) {
     Pipeline pipeline = parsePipeline(readFileBytes(file), file);
     for (const PipelineInput& input : pipeline.inputs) {
         std::error_code error;
+        if (std::filesystem::is_directory(input.path, error))
+            throw Error(file, "line " + std::to_string(input.line) + ", inputs." + input.name,
+                        "input '" + input.path + "' is a folder, not a file", kExitInput);
         if (!std::filesystem::is_regular_file(input.path, error))
             throw Error(file, "line " + std::to_string(input.line) + ", inputs." + input.name,
                         "missing input file '" + input.path + "' (relative paths start at the current directory " +
@@ -496,6 +499,28 @@ Pipeline loadPipeline(const std::string& file) {
                         kExitInput);
     }
     return pipeline;
+}
+
+void checkOutputsInside(const Pipeline& pipeline) {
+    namespace fs = std::filesystem;
+    std::error_code error;
+    auto resolved = [&](const fs::path& path) { return fs::weakly_canonical(fs::absolute(path), error); };
+    auto inside = [](const fs::path& path, const fs::path& folder) {
+        auto end = std::mismatch(folder.begin(), folder.end(), path.begin(), path.end()).first;
+        return end == folder.end() || (std::next(end) == folder.end() && end->empty()); // a trailing "/" on folder
+    };
+    const fs::path current = resolved(fs::current_path(error));
+    const fs::path fileFolder = resolved(fs::path(pipeline.file).parent_path().empty() ? fs::path(".")
+                                                                                        : fs::path(pipeline.file).parent_path());
+    for (const PipelineOutput& output : pipeline.outputs) {
+        const fs::path target = resolved(output.path);
+        if (inside(target, current) || inside(target, fileFolder)) continue;
+        throw Error(pipeline.file, "line " + std::to_string(output.line) + ", outputs." + output.name + ".path",
+                    "'" + output.path + "' resolves to " + target.string() + ", outside the current directory (" +
+                        current.string() + ") and the pipeline's folder (" + fileFolder.string() +
+                        "); outputs stay inside them unless `prt run --allow-outputs-anywhere`",
+                    kExitInput);
+    }
 }
 
 size_t findStage(const Pipeline& pipeline, const std::string& id) {
