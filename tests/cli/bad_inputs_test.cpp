@@ -188,6 +188,27 @@ std::function<std::string()> glossyBundle(float lambda) {
     };
 }
 
+// The base sphere with a specular_visibility layer (prt specular's) whose params.order is `order`, 9 columns.
+std::function<std::string()> specularBundle(uint64_t order) {
+    return [order] {
+        std::string base = (fs::temp_directory_path() / ("prt_bad_inputs_base_" + std::to_string(getpid()) + ".glb")).string();
+        prt::Bundle bundle = prt::readBundle(base);
+        prt::Layer layer;
+        layer.name = "specular_visibility";
+        layer.domain = "vertex";
+        layer.semantic = "sh_cosine_visibility";
+        layer.shape = {bundle.mesh.vertexCount(), 9};
+        layer.data.assign(bundle.mesh.vertexCount() * 9, 0.1f);
+        layer.params = {{"order", order}};
+        bundle.layers.push_back(layer);
+        std::string path = base + ".specular.glb";
+        prt::writeBundle(path, bundle);
+        std::string bytes = prt::readFileBytes(path);
+        fs::remove(path);
+        return bytes;
+    };
+}
+
 std::vector<Case> catalogue() {
     auto mesh = [](std::string reader, std::string name, std::string extension, std::function<std::string()> content,
                    std::string message, std::map<std::string, std::string> env = {}) {
@@ -376,6 +397,9 @@ std::vector<Case> catalogue() {
              }}}, "relight {in}/t.glb --lights {in}/l.json -o {out}/r.npy", 3, "above the limit of 8388608 bytes"},
         Case{"values", "glossy lobe sharpness -4", {{"g.glb", glossyBundle(-4.0f)}},
              "relight {in}/g.glb --env {in}/e.exr --eye 0,0,3 --glossy-only -o {out}/r.npy", 3, "lobe sharpness (lambda) -4"},
+        Case{"json-types", "specular visibility order 2^32 + 3", {{"s.glb", specularBundle(4294967299ull)}},
+             "relight {in}/s.glb --env {in}/e.exr --brdf phong:10,0.5 --eye 0,0,3 -o {out}/r.npy", 3,
+             "params.order: expected an integer in 1..32, got 4294967299"},
         Case{"values", "transfer --pass -3", {},
              "transfer {in}/b.glb -o {out}/t.glb --mode interreflected --bounces 1 --order 2 --samples 4 --shard 0/2 --pass -3",
              2, "--pass"},
@@ -460,7 +484,7 @@ TEST(BadInputs, CatalogueGivesItsExitCodeAndMessageAndLeavesNoOutput) {
     std::string counts;
     for (const auto& [reader, count] : byReader) counts += " " + reader + "=" + std::to_string(count);
     std::printf("bad-input cases: %zu,%s\n", cases.size(), counts.c_str());
-    EXPECT_GE(cases.size(), 99u);
+    EXPECT_GE(cases.size(), 100u);
     fs::remove_all(root);
     fs::remove(base);
 }
