@@ -405,10 +405,53 @@ void parseOutputs(const Context& context, const toml::table& table, Pipeline& pi
     }
 }
 
+// toml++ nests one table per part of a dotted key (`a.b.c = 1`, `[a.b.c]`, also inside inline tables) and
+// recurses over them, unbounded by its TOML_MAX_NESTED_VALUES: 100,000 parts overflow the stack. This scan, one
+// pass without recursion, refuses a key of more than kMaxTomlKeyParts parts first. Strings (basic, literal,
+// multi-line) and comments are skipped; dots in values (numbers) are not counted.
+constexpr int kMaxTomlKeyParts = 64;
+void checkTomlKeyParts(std::string_view text, const Context& context) {
+    int line = 1, parts = 1;
+    bool key = true;         // reading a key: at a line's start, in a header, after '{' or ',' in an inline table
+    std::vector<char> open;  // '[' arrays and '{' inline tables of the value being read
+    for (size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (c == '\n') {
+            ++line;
+            if (open.empty()) key = true, parts = 1;
+        } else if (c == '#') {
+            while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+        } else if (c == '"' || c == '\'') {
+            const bool triple = text.substr(i, 3) == std::string(3, c);
+            const size_t start = i + (triple ? 3 : 1);
+            size_t end = start;
+            for (; end < text.size(); ++end) {
+                if (c == '"' && text[end] == '\\') { ++end; continue; }
+                if (text[end] == '\n') ++line;
+                if (text[end] == c && (!triple || text.substr(end, 3) == std::string(3, c))) break;
+            }
+            i = end + (triple ? 2 : 0);
+        } else if (key) {
+            if (c == '.' && ++parts > kMaxTomlKeyParts)
+                context.fail(line, "", "a dotted key of more than " + std::to_string(kMaxTomlKeyParts) + " parts");
+            if (c == '=') key = false, parts = 1;
+            if (c == '}' && !open.empty()) open.pop_back(), key = false; // an empty inline table
+        } else if (c == '[' || c == '{') {
+            open.push_back(c);
+            if (c == '{') key = true, parts = 1;
+        } else if ((c == ']' || c == '}') && !open.empty()) {
+            open.pop_back();
+        } else if (c == ',' && !open.empty() && open.back() == '{') {
+            key = true, parts = 1;
+        }
+    }
+}
+
 } // namespace
 
 Pipeline parsePipeline(std::string_view text, const std::string& file) {
     Context context{file};
+    checkTomlKeyParts(text, context); // before toml++ recurses over the key's tables
     toml::table root;
     try {
         root = toml::parse(text, file);
