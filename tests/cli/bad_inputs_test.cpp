@@ -399,7 +399,7 @@ std::vector<Case> catalogue() {
              "relight {in}/g.glb --env {in}/e.exr --eye 0,0,3 --glossy-only -o {out}/r.npy", 3, "lobe sharpness (lambda) -4"},
         Case{"json-types", "specular visibility order 2^32 + 3", {{"s.glb", specularBundle(4294967299ull)}},
              "relight {in}/s.glb --env {in}/e.exr --brdf phong:10,0.5 --eye 0,0,3 -o {out}/r.npy", 3,
-             "params.order: expected an integer in 1..32, got 4294967299"},
+             "params.order: expected an integer in 1..32, got a number 4294967299"},
         Case{"values", "transfer --pass -3", {},
              "transfer {in}/b.glb -o {out}/t.glb --mode interreflected --bounces 1 --order 2 --samples 4 --shard 0/2 --pass -3",
              2, "--pass"},
@@ -408,7 +408,7 @@ std::vector<Case> catalogue() {
              "run {in}/p.toml --plan --cache-dir {out}/c", 3, "outside the current directory"},
         Case{"pipeline", "absolute output outside the folder", {{"p.toml", text(
                  "[stages.a]\nrun = \"scene\"\nname = \"sphere\"\n[outputs]\nm = { from = \"a.mesh\", path = \"/etc/x.glb\" }\n")}},
-             "run {in}/p.toml --plan --cache-dir {out}/c", 3, "line 4, outputs.m.path"},
+             "run {in}/p.toml --plan --cache-dir {out}/c", 3, "line 5, outputs.m.path"},
         Case{"pipeline", "table header of 100,000 dotted parts", {{"p.toml", [] {
                  std::string header = "[stages.a";
                  for (int i = 0; i < 100000; ++i) header += ".a";
