@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <limits>
 #include <memory>
 
 #ifndef PRT_VERSION
@@ -288,7 +289,7 @@ void addTransferCommand(CLI::App& app) {
                         "Sharded interreflected only: 0 (default) the direct pass, writing -o OUT (the shard's rows) "
                         "and OUT.hits (its hit records); P = 1..B bounce P, writing the rows (the shard bundle "
                         "after the last bounce)")
-        ->check(CLI::NonNegativeNumber); // -1 is "not given" inside: a negative --pass must not run the direct pass
+        ->check(CLI::Range(0, std::numeric_limits<int>::max())); // -1 is "not given" inside: refuse negatives
     command->add_option("--previous", args->previous, "Bounce pass P: this shard's rows of pass P-1");
     command->add_option("--exitant", args->exitant, "Bounce pass P: the exitant array of pass P-1 (--gather)");
     command->add_option("--hits", args->hits, "Bounce pass P: this shard's hit records (OUT.hits of pass 0)");
