@@ -4,6 +4,7 @@
 
 #include "bake.h"
 #include "core.h"
+#include "runtime.h"
 #include "sh.h"
 #include "transfer.h"
 
@@ -42,6 +43,13 @@ void runBakeCommand(BakeArgs args) {
     options.threads = resolveThreads(options.threads);
     options.toolVersion = PRT_VERSION;
     if (!args.shard.empty()) parseShard(args.shard, options.shardIndex, options.shardCount);
+    // The atlas's floats (transfer RGB per coefficient, surface and normal channels per texel), refused by the
+    // element cap before anything is allocated; runBake checks the ranges themselves.
+    if (options.resolution >= 1 && options.resolution <= kMaxBakeResolution && options.order >= 1 &&
+        options.order <= sh::kMaxOrder)
+        checkCommandLineSize({uint64_t(options.resolution), uint64_t(options.resolution),
+                              uint64_t(3 * options.order * options.order + kTexelSurfaceChannels + 3)},
+                             "atlas values (resolution^2 texels x (3 order^2 + 13) floats)", "--resolution");
     runBake(options);
 }
 

@@ -6,7 +6,9 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace prt {
 struct PinholeCamera; // raycast.h
@@ -81,6 +83,10 @@ struct SpecularRelightArgs {
 void addSpecularRelightOptions(CLI::App* command, SpecularRelightArgs& args);
 void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bundle, const std::string& env,
                         const std::string& eye, const std::string& output, bool glossyOnly);
+
+// checkedProduct (core.h) for a size given on the command line: the element cap refuses it as a usage error
+// (prt::Error(kExitUsage) naming `option`) before anything is allocated. Returns the product.
+uint64_t checkCommandLineSize(const std::vector<uint64_t>& factors, const std::string& what, const char* option);
 
 // Number of worker threads to use: `requested` if positive, else the hardware concurrency.
 int resolveThreads(int requested);

@@ -70,6 +70,8 @@ void parsePinholeCamera(const std::string& size, const char* sizeOption, const s
         wh[1] > 65536)
         throw Error("", sizeOption, "width and height must be positive integers up to 65536", kExitUsage);
     if (!(numbers[9] > 0.0f && numbers[9] < 180.0f)) throw Error("", "--camera", "FOVY must lie in (0, 180)", kExitUsage);
+    // The image's RGBA floats, refused by the element cap before anything is allocated for them.
+    checkCommandLineSize({uint64_t(wh[0]), uint64_t(wh[1]), 4}, "image values (W x H x RGBA)", sizeOption);
     camera.width = int(wh[0]);
     camera.height = int(wh[1]);
     std::copy(numbers.begin(), numbers.begin() + 3, camera.eye.begin());
@@ -135,6 +137,14 @@ std::array<float, 3> parsePoint(const std::string& text, const char* option) {
     if (values.size() != 3 || (!text.empty() && text.back() == ','))
         throw usage(option, "'" + text + "' is not three finite numbers X,Y,Z");
     return {values[0], values[1], values[2]};
+}
+
+uint64_t checkCommandLineSize(const std::vector<uint64_t>& factors, const std::string& what, const char* option) {
+    try {
+        return checkedProduct(factors, what, "", option);
+    } catch (const Error& e) {
+        throw Error("", option, e.problem(), kExitUsage);
+    }
 }
 
 int resolveThreads(int requested) {

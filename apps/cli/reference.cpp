@@ -42,6 +42,9 @@ struct ReferenceCommandOptions {
     std::string eye;       // "X,Y,Z"
 };
 
+// Coverage samples per side of a texel near a cone light, when a prt-lights file is rendered into a map.
+constexpr int kLightsSupersample = 8;
+
 // The decomposed lighting of a prt-lights file (residual SH plus cones) as a map the path tracer samples.
 EnvironmentMap lightsEnvironment(const std::string& path, int width) {
     HybridLighting lighting = readHybridLightingJson(path);
@@ -52,7 +55,7 @@ EnvironmentMap lightsEnvironment(const std::string& path, int width) {
                          light.angularRadius});
     std::vector<double> residual(lighting.residual.begin(), lighting.residual.end());
     double negative = 0.0;
-    EnvironmentMap env = envlight::renderLighting(cones, residual, lighting.order, width, 8, &negative);
+    EnvironmentMap env = envlight::renderLighting(cones, residual, lighting.order, width, kLightsSupersample, &negative);
     char line[320];
     std::snprintf(line, sizeof line, "reference: %s rendered as a %dx%d map; the residual's negative radiance (kept, "
                                      "signed): %.3g%% of its luminance energy", path.c_str(), width, width / 2,
@@ -147,6 +150,12 @@ void runReference(const ReferenceCommandOptions& options) {
         throw Error("", "--env", "give --env or --lights (exactly one)", kExitUsage);
     if (options.lightsWidth < 4 || options.lightsWidth > 16384 || options.lightsWidth % 2 != 0)
         throw Error("", "--lights-width", "must be even, 4..16384", kExitUsage);
+    // renderLighting's coverage samples (8 x 8 per texel near a light), refused by the element cap: it bounds the
+    // time the map takes, not only its floats.
+    if (!options.lights.empty())
+        checkCommandLineSize({uint64_t(options.lightsWidth), uint64_t(options.lightsWidth / 2),
+                              uint64_t(kLightsSupersample * kLightsSupersample)},
+                             "coverage samples (W x W/2 texels x 8 x 8)", "--lights-width");
     EnvironmentMap env = options.lights.empty() ? readEnvironmentMap(options.env)
                                                 : lightsEnvironment(options.lights, options.lightsWidth);
     if (direct) {

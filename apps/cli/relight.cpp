@@ -155,12 +155,7 @@ void runHybridRelight(const RelightOptions& options, double start) {
     checkHybridOrder(model, lighting, options.lights);
     if (!options.env.empty()) {
         // --env names the map the lights were made from: refuse lights made from another.
-        nlohmann::json document = nlohmann::json::parse(readFileBytes(options.lights));
-        std::string recorded = document.contains("input") ? document["input"].value("hash", "") : "";
-        std::string actual = hashFile(options.env);
-        if (recorded != actual)
-            throw Error(options.lights, "input.hash", "the lights were made from " + recorded + ", not from " +
-                                                          options.env + " (" + actual + ")");
+        envlight::checkLightsInput(options.lights, options.env);
     }
     if (options.rotateYDegrees != 0.0) {
         double R[9];

@@ -20,6 +20,7 @@ struct RunArgs {
     std::string executor = "local";
     std::string job, jobPart, runDir; // a Slurm job's own invocation
     int jobPass = 0;
+    bool allowOutputsAnywhere = false;
 };
 
 // The `prt` next to this program: stages run as `prt STAGE`, also when this is the standalone prt-run.
@@ -51,6 +52,7 @@ void runRun(RunArgs& args) {
     args.options.askPrt = inProcessAnswers(hashMemoFile(args.options));
     args.options.executor = args.executor == "slurm" ? Executor::Slurm : Executor::Local;
     Pipeline pipeline = loadPipeline(args.pipeline);
+    if (args.job.empty() && !args.allowOutputsAnywhere) checkOutputsInside(pipeline); // jobs copy no outputs
     if (args.job.empty()) {
         nlohmann::json report = runPipeline(pipeline, args.options);
         // The metrics are the run's answer: print them.
@@ -78,6 +80,8 @@ void addRunCommand(CLI::App& app) {
     command->add_option("pipeline", args->pipeline, "Pipeline file (.toml); its relative paths start at the current "
                                                     "directory")->required();
     command->add_flag("--plan", options.plan, "Print what would run and why; run nothing");
+    command->add_flag("--allow-outputs-anywhere", args->allowOutputsAnywhere,
+                      "Write outputs outside the current directory and the pipeline file's folder too");
     command->add_flag("--force", options.force, "Ignore the cache: rerun every stage");
     command->add_option("--only", options.only, "Rerun only this stage, its inputs from the cache");
     command->add_option("--from", options.from, "Rerun this stage and everything downstream of it");

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 
@@ -332,7 +333,8 @@ void addTransferCommand(CLI::App& app) {
     command->add_option("--pass", args->pass,
                         "Sharded interreflected only: 0 (default) the direct pass, writing -o OUT (the shard's rows) "
                         "and OUT.hits (its hit records); P = 1..B bounce P, writing the rows (the shard bundle "
-                        "after the last bounce)");
+                        "after the last bounce)")
+        ->check(CLI::Range(0, std::numeric_limits<int>::max())); // -1 is "not given" inside: refuse negatives
     command->add_option("--previous", args->previous, "Bounce pass P: this shard's rows of pass P-1");
     command->add_option("--exitant", args->exitant, "Bounce pass P: the exitant array of pass P-1 (--gather)");
     command->add_option("--hits", args->hits, "Bounce pass P: this shard's hit records (OUT.hits of pass 0)");

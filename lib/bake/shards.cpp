@@ -3,7 +3,9 @@
 #include "bake.h"
 
 #include "core.h"
+#include "json_input.h"
 
+#include <limits>
 #include <string>
 
 namespace prt {
@@ -15,14 +17,12 @@ const char* const kShardBounceLayer = "texel_transfer_bounce";
 
 // A shard's params member as text for messages ("(none)" when absent).
 std::string memberText(const nlohmann::json& params, const std::string& key) {
-    return params.contains(key) ? params[key].dump() : "(none)";
+    return params.contains(key) ? jsonExcerpt(params[key]) : "(none)";
 }
 
 uint64_t rowParam(const nlohmann::json& params, const char* key, const std::string& file) {
-    if (!params.contains(key) || !params[key].is_number_integer() || params[key].get<int64_t>() < 0)
-        throw Error(file, std::string("layer ") + kShardLayer + ", params." + key,
-                    "missing or not a non-negative integer", kExitInput);
-    return params[key].get<uint64_t>();
+    return uint64_t(jsonInteger(params, key, file, std::string("layer ") + kShardLayer + ", params", 0,
+                                std::numeric_limits<int64_t>::max()));
 }
 
 } // namespace
@@ -101,7 +101,7 @@ std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface
         for (const auto& [key, value] : identity.items())
             if (!layers[s]->params.contains(key) || layers[s]->params[key] != value)
                 throw Error(files[s], std::string("layer ") + kShardLayer + ", params." + key,
-                            "is " + memberText(layers[s]->params, key) + ", but this bake has " + value.dump() +
+                            "is " + memberText(layers[s]->params, key) + ", but this bake has " + jsonExcerpt(value) +
                                 ": the shard belongs to another bake (other inputs or options)",
                             kExitInput);
 
@@ -128,10 +128,9 @@ std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface
                         "holds no [" + std::to_string(end - begin) + ", " + std::to_string(rowWidth / 3) +
                             ", 3] rows for its range",
                         kExitInput);
-        const nlohmann::json& recorded = layer.params.contains("ray_offset") ? layer.params["ray_offset"] : nlohmann::json(0.0);
-        if (!recorded.is_number())
-            throw Error(file, std::string("layer ") + kShardLayer + ", params.ray_offset", "is not a number", kExitInput);
-        float offset = recorded.get<float>();
+        float offset = layer.params.contains("ray_offset")
+                           ? jsonFloat(layer.params, "ray_offset", file, std::string("layer ") + kShardLayer + ", params")
+                           : 0.0f;
         if (index > 0 && offset != rayOffset)
             throw Error(file, std::string("layer ") + kShardLayer + ", params.ray_offset",
                         "differs from shard 0's: the shards traced other geometry", kExitInput);

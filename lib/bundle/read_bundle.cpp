@@ -1,6 +1,7 @@
 #include "bundle_internal.h"
 
 #include "core.h"
+#include "json_input.h"
 
 #include <bit>
 #include <cctype>
@@ -87,6 +88,11 @@ static tinygltf::Model loadModel(const std::string& path, std::string& jsonText)
     if (declaredLength > bytes.size())
         throw Error(path, place, "truncated: the header declares " + std::to_string(declaredLength) + " bytes, the file has " +
                                      std::to_string(bytes.size()));
+    // Nesting bounded before tinygltf's recursive parser sees the JSON (a GLB's first chunk).
+    uint32_t jsonChunk = 0;
+    if (binary && bytes.size() >= 20) std::memcpy(&jsonChunk, bytes.data() + 12, 4);
+    checkJsonShape(binary ? std::string_view(bytes).substr(std::min<size_t>(20, bytes.size()), jsonChunk) : bytes,
+                   path, place, std::numeric_limits<unsigned int>::max());
 
     size_t slash = path.find_last_of('/');
     std::string folder = slash == std::string::npos ? "." : path.substr(0, slash); // for external buffers of a .gltf

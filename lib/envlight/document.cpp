@@ -1,6 +1,9 @@
 // The prt-lights JSON document that `prt envlight` writes and the runtime reads (readHybridLightingJson).
 #include "envlight.h"
 
+#include "core.h"
+#include "json_input.h"
+
 #include <cmath>
 
 namespace prt::envlight {
@@ -62,6 +65,24 @@ nlohmann::ordered_json lightsDocument(const Decomposition& decomposition, const 
           {"ceres_termination", decomposition.fit.termination},
           {"dropped_lights", decomposition.fit.droppedLights}}},
     };
+}
+
+void checkLightsInput(const std::string& lightsPath, const std::string& envPath) {
+    nlohmann::json document = readJsonFile(lightsPath, kMaxLightsJsonBytes);
+    const std::string actual = hashFile(envPath);
+    const nlohmann::json* found = document.is_object() && document.contains("input") ? &document["input"] : nullptr;
+    if (!found || (found->is_object() && !found->contains("hash")))
+        throw Error(lightsPath, "input.hash",
+                    "records no input hash, so it cannot be checked against --env " + envPath + " (" + actual +
+                        "); write the lights again with `prt envlight`, or leave out --env");
+    const nlohmann::json& input = *found;
+    const std::string recorded = jsonString(input, "hash", lightsPath, "input"); // typed: an object with a string
+    if (recorded == actual) return;
+    std::string from = input.contains("path") && input["path"].is_string()
+                           ? jsonExcerpt(input["path"]) + " (" + jsonExcerpt(input["hash"]) + ")"
+                           : jsonExcerpt(input["hash"]);
+    throw Error(lightsPath, "input.hash",
+                "the lights were made from " + from + ", not from " + envPath + " (" + actual + ")");
 }
 
 } // namespace prt::envlight

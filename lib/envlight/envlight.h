@@ -177,6 +177,11 @@ std::vector<double> lightsProjection(const std::vector<ConeLight>& lights, int o
 nlohmann::ordered_json lightsDocument(const Decomposition& decomposition, const Options& options,
                                       const std::string& inputPath, const std::string& inputHash);
 
+// Checks that the prt-lights file `lightsPath` was made from the map `envPath`: its input.hash (a string) equals
+// the map's content hash. Reads the file under the same size and nesting bounds as readHybridLightingJson. Throws
+// Error(lightsPath, "input.hash", ...) naming both files and both hashes, or saying that no hash is recorded.
+void checkLightsInput(const std::string& lightsPath, const std::string& envPath);
+
 // ---- rendering the decomposition ------------------------------------------------------------------------------
 // The lighting residual SH + cones as a width x width/2 equirectangular map: each texel the residual at its centre
 // plus each cone's exact coverage of the texel, estimated with `supersample`^2 stratified points. The SH residual

@@ -405,10 +405,53 @@ void parseOutputs(const Context& context, const toml::table& table, Pipeline& pi
     }
 }
 
+// toml++ nests one table per part of a dotted key (`a.b.c = 1`, `[a.b.c]`, also inside inline tables) and
+// recurses over them, unbounded by its TOML_MAX_NESTED_VALUES: 100,000 parts overflow the stack. This scan, one
+// pass without recursion, refuses a key of more than kMaxTomlKeyParts parts first. Strings (basic, literal,
+// multi-line) and comments are skipped; dots in values (numbers) are not counted.
+constexpr int kMaxTomlKeyParts = 64;
+void checkTomlKeyParts(std::string_view text, const Context& context) {
+    int line = 1, parts = 1;
+    bool key = true;         // reading a key: at a line's start, in a header, after '{' or ',' in an inline table
+    std::vector<char> open;  // '[' arrays and '{' inline tables of the value being read
+    for (size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (c == '\n') {
+            ++line;
+            if (open.empty()) key = true, parts = 1;
+        } else if (c == '#') {
+            while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+        } else if (c == '"' || c == '\'') {
+            const bool triple = text.substr(i, 3) == std::string(3, c);
+            const size_t start = i + (triple ? 3 : 1);
+            size_t end = start;
+            for (; end < text.size(); ++end) {
+                if (c == '"' && text[end] == '\\') { ++end; continue; }
+                if (text[end] == '\n') ++line;
+                if (text[end] == c && (!triple || text.substr(end, 3) == std::string(3, c))) break;
+            }
+            i = end + (triple ? 2 : 0);
+        } else if (key) {
+            if (c == '.' && ++parts > kMaxTomlKeyParts)
+                context.fail(line, "", "a dotted key of more than " + std::to_string(kMaxTomlKeyParts) + " parts");
+            if (c == '=') key = false, parts = 1;
+            if (c == '}' && !open.empty()) open.pop_back(), key = false; // an empty inline table
+        } else if (c == '[' || c == '{') {
+            open.push_back(c);
+            if (c == '{') key = true, parts = 1;
+        } else if ((c == ']' || c == '}') && !open.empty()) {
+            open.pop_back();
+        } else if (c == ',' && !open.empty() && open.back() == '{') {
+            key = true, parts = 1;
+        }
+    }
+}
+
 } // namespace
 
 Pipeline parsePipeline(std::string_view text, const std::string& file) {
     Context context{file};
+    checkTomlKeyParts(text, context); // before toml++ recurses over the key's tables
     toml::table root;
     try {
         root = toml::parse(text, file);
@@ -489,6 +532,9 @@ Pipeline loadPipeline(const std::string& file) {
     Pipeline pipeline = parsePipeline(readFileBytes(file), file);
     for (const PipelineInput& input : pipeline.inputs) {
         std::error_code error;
+        if (std::filesystem::is_directory(input.path, error))
+            throw Error(file, "line " + std::to_string(input.line) + ", inputs." + input.name,
+                        "input '" + input.path + "' is a folder, not a file", kExitInput);
         if (!std::filesystem::is_regular_file(input.path, error))
             throw Error(file, "line " + std::to_string(input.line) + ", inputs." + input.name,
                         "missing input file '" + input.path + "' (relative paths start at the current directory " +
@@ -496,6 +542,28 @@ Pipeline loadPipeline(const std::string& file) {
                         kExitInput);
     }
     return pipeline;
+}
+
+void checkOutputsInside(const Pipeline& pipeline) {
+    namespace fs = std::filesystem;
+    std::error_code error;
+    auto resolved = [&](const fs::path& path) { return fs::weakly_canonical(fs::absolute(path), error); };
+    auto inside = [](const fs::path& path, const fs::path& folder) {
+        auto end = std::mismatch(folder.begin(), folder.end(), path.begin(), path.end()).first;
+        return end == folder.end() || (std::next(end) == folder.end() && end->empty()); // a trailing "/" on folder
+    };
+    const fs::path current = resolved(fs::current_path(error));
+    const fs::path fileFolder = resolved(fs::path(pipeline.file).parent_path().empty() ? fs::path(".")
+                                                                                        : fs::path(pipeline.file).parent_path());
+    for (const PipelineOutput& output : pipeline.outputs) {
+        const fs::path target = resolved(output.path);
+        if (inside(target, current) || inside(target, fileFolder)) continue;
+        throw Error(pipeline.file, "line " + std::to_string(output.line) + ", outputs." + output.name + ".path",
+                    "'" + output.path + "' resolves to " + target.string() + ", outside the current directory (" +
+                        current.string() + ") and the pipeline's folder (" + fileFolder.string() +
+                        "); outputs stay inside them unless `prt run --allow-outputs-anywhere`",
+                    kExitInput);
+    }
 }
 
 size_t findStage(const Pipeline& pipeline, const std::string& id) {

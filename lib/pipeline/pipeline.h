@@ -138,6 +138,10 @@ struct Pipeline {
 // Does not touch the file system: loadPipeline also checks that input files exist.
 Pipeline parsePipeline(std::string_view text, const std::string& file);
 Pipeline loadPipeline(const std::string& file);
+// Throws prt::Error(file, "line N, outputs.NAME.path", ..., kExitInput) for an output that, resolved (against the
+// current directory, symlinks in its existing parents followed), lies neither inside the current directory nor
+// inside the pipeline file's folder: `../../etc/x` never escapes unless `prt run --allow-outputs-anywhere`.
+void checkOutputsInside(const Pipeline& pipeline);
 
 // Index of a stage in pipeline.stages; throws prt::Error(kExitUsage) naming the known stages when absent.
 size_t findStage(const Pipeline& pipeline, const std::string& id);

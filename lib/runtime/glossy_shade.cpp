@@ -53,8 +53,13 @@ GlossyModel glossyModel(const Bundle& bundle, const std::string& source) {
     model.vertexCount = uint32_t(layer->shape[0]);
     model.lobes = int(layer->shape[2]);
     model.values = layer->data;
-    for (float value : model.values)
-        if (!std::isfinite(value)) throw bad("holds a value that is not finite");
+    for (size_t i = 0; i < model.values.size(); ++i) {
+        if (!std::isfinite(model.values[i])) throw bad("holds a value that is not finite");
+        // (a, mu, lambda): a negative sharpness is a lobe that grows away from its mean.
+        if (i % 5 == 4 && model.values[i] < 0.0f)
+            throw bad("lobe sharpness (lambda) " + std::to_string(model.values[i]) + " at value " + std::to_string(i) +
+                      " is negative");
+    }
     model.positions = bundle.mesh.positions;
     model.normals = bundle.mesh.normals;
     return model;

@@ -3,6 +3,7 @@
 #include "runtime.h"
 
 #include "core.h"
+#include "json_input.h"
 
 #include <nlohmann/json.hpp>
 
@@ -19,7 +20,7 @@ std::array<float, 3> finiteTriple(const nlohmann::json& value, const std::string
     for (int c = 0; c < 3; ++c) {
         double x = value[c].is_number() ? value[c].get<double>() : NAN;
         if (!std::isfinite(x) || !std::isfinite(float(x)))
-            throw Error(path, place, "value " + value[c].dump() + " is not a finite float");
+            throw Error(path, place, "value " + jsonExcerpt(value[c]) + " is not a finite float");
         out[c] = float(x);
     }
     return out;
@@ -28,17 +29,13 @@ std::array<float, 3> finiteTriple(const nlohmann::json& value, const std::string
 } // namespace
 
 HybridLighting readHybridLightingJson(const std::string& path) {
-    nlohmann::json document;
-    try {
-        document = nlohmann::json::parse(readFileBytes(path));
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(path, "", std::string("not JSON: ") + e.what());
-    }
-    if (!document.is_object() || document.value("format", "") != "prt-lights")
+    // Size and nesting bounded before the parse; members typed (json_input.h).
+    nlohmann::json document = readJsonFile(path, kMaxLightsJsonBytes);
+    if (jsonString(document, "format", path, "") != "prt-lights")
         throw Error(path, "format", "not prt-lights JSON (expected \"format\": \"prt-lights\", as `prt envlight` writes)");
     const nlohmann::json& order = document.contains("order") ? document["order"] : nlohmann::json();
     if (!order.is_number_integer() || order.get<int64_t>() < 1 || order.get<int64_t>() > sh::kMaxOrder)
-        throw Error(path, "order", "order " + order.dump() + " is not an integer in 1.." + std::to_string(sh::kMaxOrder));
+        throw Error(path, "order", "order " + jsonExcerpt(order) + " is not an integer in 1.." + std::to_string(sh::kMaxOrder));
     HybridLighting lighting;
     lighting.order = order.get<int>();
     const nlohmann::json& rows = document.contains("residual") ? document["residual"] : nlohmann::json();
@@ -70,7 +67,7 @@ HybridLighting readHybridLightingJson(const std::string& path) {
         const nlohmann::json& radius = light.value("angular_radius", nlohmann::json());
         double r = radius.is_number() ? radius.get<double>() : NAN;
         if (!std::isfinite(r) || !(r > 0.0 && r < std::numbers::pi / 2))
-            throw Error(path, place + ".angular_radius", "value " + radius.dump() + " is not a finite angle in (0, pi/2)");
+            throw Error(path, place + ".angular_radius", "value " + jsonExcerpt(radius) + " is not a finite angle in (0, pi/2)");
         cone.angularRadius = float(r);
         lighting.lights.push_back(cone);
     }

@@ -2,6 +2,7 @@
 #include "runtime.h"
 
 #include "core.h"
+#include "json_input.h"
 
 #include <nlohmann/json.hpp>
 
@@ -17,19 +18,14 @@ std::vector<float> fitLighting(const float* lighting, int lightingCoefficientCou
 }
 
 std::vector<float> readLightingJson(const std::string& path, int* order) {
-    nlohmann::json document;
-    try {
-        document = nlohmann::json::parse(readFileBytes(path));
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(path, "", std::string("not JSON: ") + e.what());
-    }
+    nlohmann::json document = readJsonFile(path, kMaxShJsonBytes); // size and nesting bounded first
     // value() would throw a type error for a non-string "format": compare as JSON instead.
     if (!document.is_object() || !document.contains("format") || document["format"] != "prt-sh")
         throw Error(path, "format", "not prt-sh JSON (expected \"format\": \"prt-sh\", as `prt envsh` writes)");
     const nlohmann::json& orderValue = document.contains("order") ? document["order"] : nlohmann::json();
     if (!orderValue.is_number_integer() || orderValue.get<int64_t>() < 1 ||
         orderValue.get<int64_t>() > sh::kMaxOrder)
-        throw Error(path, "order", "order " + orderValue.dump() + " is not an integer in 1.." +
+        throw Error(path, "order", "order " + jsonExcerpt(orderValue) + " is not an integer in 1.." +
                                        std::to_string(sh::kMaxOrder));
     int bands = orderValue.get<int>();
     const nlohmann::json& rows = document.contains("coefficients") ? document["coefficients"] : nlohmann::json();
@@ -47,7 +43,7 @@ std::vector<float> readLightingJson(const std::string& path, int* order) {
             float radiance = value.is_number() ? value.get<float>() : NAN;
             if (!std::isfinite(radiance))
                 throw Error(path, "coefficients[" + std::to_string(i) + "]",
-                            "value " + value.dump() + " is not a finite float");
+                            "value " + jsonExcerpt(value) + " is not a finite float");
             lighting.push_back(radiance);
         }
     }

@@ -2,6 +2,7 @@
 #include "runtime.h"
 
 #include "core.h"
+#include "json_input.h"
 #include "runtime_internal.h"
 
 #include <cmath>
@@ -44,7 +45,7 @@ int transferLayerOrder(const Layer& layer, const std::string& source, const std:
                                        std::to_string(sh::kMaxOrder));
     const nlohmann::json& paramOrder = layer.params.contains("order") ? layer.params["order"] : nlohmann::json();
     if (!paramOrder.is_null() && !(paramOrder.is_number_integer() && paramOrder.get<int64_t>() == order))
-        throw Error(source, place, "params.order " + paramOrder.dump() + " does not match shape " + shapeText(shape));
+        throw Error(source, place, "params.order " + jsonExcerpt(paramOrder) + " does not match shape " + shapeText(shape));
     return order;
 }
 

@@ -4,6 +4,7 @@
 #include "runtime.h"
 
 #include "core.h"
+#include "json_input.h"
 #include "image.h"
 #include "runtime_internal.h"
 
@@ -69,8 +70,7 @@ std::vector<float> readExrRows(const std::string& path, int width, int height, i
 
 // Format "u8": a JSON sidecar listing one 8-bit RGB image per coefficient with its [min, max].
 std::vector<float> readU8Rows(const std::string& sidecarPath, int width, int height, int coefficients) {
-    std::ifstream in(sidecarPath);
-    nlohmann::json sidecar = nlohmann::json::parse(in, nullptr, false);
+    nlohmann::json sidecar = readJsonFile(sidecarPath, kMaxSidecarJsonBytes); // size and nesting bounded first
     if (!sidecar.is_object() || !sidecar.contains("format") || sidecar["format"] != "prt-texel-u8" ||
         !sidecar.contains("layers") || !sidecar["layers"].is_array())
         throw Error(sidecarPath, "", "not a prt-texel-u8 sidecar (JSON with format \"prt-texel-u8\" and layers)");

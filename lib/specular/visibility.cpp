@@ -2,6 +2,7 @@
 #include "specular.h"
 
 #include "core.h"
+#include "json_input.h"
 #include "transfer.h"
 
 #include <cmath>
@@ -63,11 +64,8 @@ Visibility readVisibility(const Bundle& bundle, const std::string& source) {
     const std::string place = std::string("layer ") + kVisibilityLayer;
     if (layer->domain != "vertex" || layer->semantic != "sh_cosine_visibility")
         throw Error(source, place, "is not a per-vertex \"sh_cosine_visibility\" layer");
-    int order = layer->params.contains("order") && layer->params["order"].is_number_integer()
-                    ? layer->params["order"].get<int>()
-                    : 0;
-    if (order < 1 || order > sh::kMaxOrder)
-        throw Error(source, place + " params.order", "missing or outside 1.." + std::to_string(sh::kMaxOrder));
+    // Typed and range-checked before narrowing: 2^32 + 3 must not read as 3.
+    const int order = int(jsonInteger(layer->params, "order", source, place + " params", 1, sh::kMaxOrder));
     const uint64_t vertices = bundle.mesh.vertexCount();
     if (layer->shape.size() != 2 || layer->shape[0] != vertices || layer->shape[1] != uint64_t(order) * order)
         throw Error(source, place + " shape",

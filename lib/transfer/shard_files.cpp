@@ -15,6 +15,7 @@
 #include "passes.h"
 
 #include "core.h"
+#include "json_input.h"
 
 #include <nlohmann/json.hpp>
 
@@ -23,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <vector>
 
@@ -174,7 +176,12 @@ struct Reader {
     void skip(uint64_t bytes) { in.seekg(std::streamoff(bytes), std::ios::cur); }
 };
 
-std::string describe(const nlohmann::json& value) { return value.is_string() ? value.get<std::string>() : value.dump(); }
+// A header value quoted in a message, cut short (the header is untrusted).
+std::string describe(const nlohmann::json& value) {
+    if (!value.is_string()) return jsonExcerpt(value);
+    const std::string& text = value.get_ref<const std::string&>();
+    return text.size() > 80 ? text.substr(0, 80) + "..." : text;
+}
 
 // Opens `path`, checks the prefix, the kind and the run's identity (and the shard, when withShard).
 Reader openShardFile(const std::string& path, const char* kind, const char* what, const ShardRun& run,
@@ -200,12 +207,13 @@ Reader openShardFile(const std::string& path, const char* kind, const char* what
         reader.fail("header", "claims " + std::to_string(headerBytes) + " bytes, more than the file or 64 KiB");
     std::string text(headerBytes, '\0');
     reader.read(text.data(), headerBytes, "header");
+    checkJsonShape(text, path, "header", kMaxHeaderBytes); // nesting bounded before the parse
     reader.head = nlohmann::json::parse(text, nullptr, false);
     nlohmann::json& head = reader.head;
-    if (!head.is_object() || head.value("format", "") != "prt-transfer-shard")
+    if (!head.is_object() || jsonString(head, "format", path, "header") != "prt-transfer-shard")
         reader.fail("header", "is not a prt transfer shard header");
-    if (head.value("kind", "") != kind)
-        reader.fail("header", "holds '" + head.value("kind", std::string("?")) + "', not " + what);
+    if (jsonString(head, "kind", path, "header") != kind)
+        reader.fail("header", "holds '" + describe(head["kind"]) + "', not " + what);
     nlohmann::json expected = identity(run);
     for (const char* key : kIdentityOrder) {
         if (!head.contains(key)) reader.fail("header", std::string("has no '") + key + "'");
@@ -238,6 +246,7 @@ void expectPayload(const Reader& reader, uint64_t bytes) {
 
 int readPass(const Reader& reader, int expected) {
     uint64_t pass = reader.count("pass");
+    if (pass > uint64_t(std::numeric_limits<int>::max())) reader.fail("header", "pass " + std::to_string(pass) + " is out of range");
     if (expected >= 0 && pass != uint64_t(expected))
         reader.fail("header", "holds pass " + std::to_string(pass) + ", this job needs pass " + std::to_string(expected));
     return int(pass);
@@ -362,7 +371,7 @@ ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, 
     const nlohmann::json& offset = reader.head.value("ray_offset", nlohmann::json());
     const nlohmann::json& hasExitant = reader.head.value("has_exitant", nlohmann::json());
     if (!offset.is_number() || !hasExitant.is_boolean()) reader.fail("header", "has no valid 'ray_offset' or 'has_exitant'");
-    rows.rayOffset = offset.get<float>();
+    rows.rayOffset = jsonFloat(reader.head, "ray_offset", path, "header");
     uint64_t n = coefficients(run);
     uint64_t totalFloats = checkedProduct({rowCount(run), n, 3}, "row values", path, "header");
     uint64_t exitantFloats = hasExitant.get<bool>() ? checkedProduct({rowCount(run), n, uint64_t(run.channels)},

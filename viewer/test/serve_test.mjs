@@ -1,6 +1,8 @@
 #!/usr/bin/env node
 // `prt serve`: serves the viewer at / and the given folder at /data/ on 127.0.0.1, refuses paths that climb out of
-// the folder, and refuses a missing folder (exit 3) or a bad port (exit 2) without starting.
+// the folder (symlinks inside it included), answers malformed requests 400 and keeps serving, answers a Host that
+// is not loopback 421, and refuses a missing folder (exit 3), a bad port or a port in use (exit 2, one line, no
+// stack trace) without starting.
 // usage: node viewer/test/serve_test.mjs PRT WORK_DIR
 import { spawn, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
@@ -13,6 +15,9 @@ fs.rmSync(work, { recursive: true, force: true });
 fs.mkdirSync(path.join(work, 'out'), { recursive: true });
 fs.writeFileSync(path.join(work, 'out/hello.json'), '{"hello": 1}\n');
 fs.writeFileSync(path.join(work, 'secret.txt'), 'secret\n');
+// Links inside the served folder that lead out of it: to a file and to a folder.
+fs.symlinkSync(path.join(work, 'secret.txt'), path.join(work, 'out/link.txt'));
+fs.symlinkSync(work, path.join(work, 'out/up'));
 
 let failed = false;
 const check = (ok, what) => { console.log(`${ok ? 'ok' : 'FAILED'}: ${what}`); failed ||= !ok; };
@@ -24,8 +29,8 @@ for (const [args, code, what] of [[['serve', path.join(work, 'missing')], 3, 'a 
 }
 
 // Raw requests: fetch() would normalise the dot segments away before they reach the server.
-const get = (port, target) => new Promise((resolve, reject) => {
-  http.get({ host: '127.0.0.1', port, path: target }, (response) => {
+const get = (port, target, headers = {}) => new Promise((resolve, reject) => {
+  http.get({ host: '127.0.0.1', port, path: target, headers }, (response) => {
     let body = '';
     response.on('data', (chunk) => { body += chunk; });
     response.on('end', () => resolve({ status: response.statusCode, body }));
@@ -54,6 +59,29 @@ try {
     const escape = await get(port, target);
     check(escape.status >= 400 && !escape.body.includes('secret'), `${target} is refused (${escape.status})`);
   }
+  for (const target of ['/data/link.txt', '/data/up/secret.txt']) {
+    const escape = await get(port, target);
+    check(escape.status === 403 && !escape.body.includes('secret'), `symlink out of the folder ${target} is refused (${escape.status})`);
+  }
+  for (const target of ['/data/%', '/data/%E0%A4%A', '/data/%zz', '/data/%00', '/data/a%00b.json', '/%C0%AE%C0%AE/x']) {
+    const bad = await get(port, target);
+    check(bad.status === 400, `malformed ${target} is answered 400 (${bad.status})`);
+  }
+  const alive = await get(port, '/data/hello.json');
+  check(alive.status === 200, `the server still serves after malformed requests (${alive.status})`);
+  for (const host of ['evil.example', `evil.example:${port}`, `127.0.0.1.evil.example:${port}`, `localhost:${port + 1}`,
+                      `127.0.0.300:${port}`, `[::2]:${port}`]) {
+    const rebound = await get(port, '/data/hello.json', { host });
+    check(rebound.status === 421 && !rebound.body.includes('hello'), `Host ${host} is refused (${rebound.status})`);
+  }
+  for (const host of [`localhost:${port}`, `127.0.0.1:${port}`, `127.1.2.3:${port}`, `[::1]:${port}`]) {
+    const loopback = await get(port, '/data/hello.json', { host });
+    check(loopback.status === 200, `Host ${host} is served (${loopback.status})`);
+  }
+  // The port now in use: one line on stderr, exit 2, no stack trace.
+  const busy = spawnSync(prt, ['serve', path.join(work, 'out'), '--port', String(port)], { encoding: 'utf8', timeout: 20000 });
+  check(busy.status === 2 && busy.stderr.trim().split('\n').length === 1 && busy.stderr.includes('in use') &&
+        !busy.stderr.includes('    at '), `port ${port} in use exits 2 with one line (got ${busy.status}: ${busy.stderr.trim()})`);
 } catch (error) {
   check(false, error.message);
 } finally {
