@@ -34,6 +34,7 @@ struct GlossyArgs {
     int grid = 16;
     double beta = 0.001, gamma = 0.001, delta = 0.001; // chosen by measurement (docs/results.md)
     bool noCoherence = false;
+    bool warmStart = false;
     int threads = 0;
     int iterations = 100;
     std::string stats;
@@ -123,6 +124,7 @@ void runGlossy(const GlossyArgs& args) {
         throw Error(args.output, "-o", "must end in .glb", kExitUsage);
     options.gridResolution = args.grid;
     options.weights = args.noCoherence ? glossy::FitWeights{} : glossy::FitWeights{args.beta, args.gamma, args.delta};
+    options.warmStart = args.warmStart;
     options.solverOptions.threads = resolveThreads(args.threads);
     options.solverOptions.maxIterations = args.iterations;
     options.progress = !logOptions().quiet;
@@ -157,6 +159,7 @@ void runGlossy(const GlossyArgs& args) {
                                  {"speed_ratio", c.ceresSeconds / c.openClSeconds},
                                  {"initial_cost", c.initialCost}, {"pocl_cost", c.openClCost},
                                  {"ceres_cost", c.ceresCost}, {"share_within_1pct", c.shareWithinOnePercent},
+                                 {"share_agreeing_1pct", c.shareAgreeing},
                                  {"pocl_mean_iterations", c.openClMeanIterations},
                                  {"ceres_mean_iterations", c.ceresMeanIterations}};
         logEvent("glossy_solver_comparison", record.dump());
@@ -240,6 +243,8 @@ void addGlossyCommand(CLI::App& app) {
     command->add_option("--gamma", args->gamma, "Weight of the width-coherence term (default 0.001)");
     command->add_option("--delta", args->delta, "Weight of the no-flip term (default 0.001)");
     command->add_flag("--no-coherence", args->noCoherence, "Independent fits only, no coherence pass");
+    command->add_flag("--warm-start", args->warmStart,
+                      "Fit 1, 2, ..., N lobes in turn, each from the previous fit plus one lobe (never a higher cost)");
     command->add_option("--iterations", args->iterations, "LM iteration limit per fit (default 100)");
     command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
     command->add_option("--stats", args->stats, "Also write the fit statistics as JSON to this file");
