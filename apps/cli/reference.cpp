@@ -120,9 +120,6 @@ void runReference(const ReferenceCommandOptions& options) {
     if (imageMode) parsePinholeCamera(options.imageSize, "--image", options.camera, camera);
 
     bool direct = options.bruteForce || options.unshadowed || !options.occluders.empty();
-    if (direct && reference.phong)
-        throw Error("", "--brdf", "the brute-force direct sum (--brute-force, --unshadowed, --occluder) is diffuse only",
-                    kExitUsage);
     if (direct && (imageMode || options.bounces != 0))
         throw Error("", "--occluder", "--occluder, --brute-force and --unshadowed need --bounces 0 and no --image",
                     kExitUsage);
@@ -163,11 +160,14 @@ void runReference(const ReferenceCommandOptions& options) {
         directOptions.albedo = reference.albedo;
         directOptions.shadows = !options.unshadowed;
         directOptions.threads = reference.threads;
+        directOptions.phong = reference.phong; // glossy: the exact direct sum toward --eye (checked above)
+        directOptions.eye = reference.eye;
         ReferenceRadiance radiance = referenceDirectRadiance(mesh, occluders, env, directOptions);
         writeVertexRadiance(options.output, radiance.radiance);
         if (!options.standardErrorOutput.empty()) writeVertexRadiance(options.standardErrorOutput, radiance.standardError);
         logInfo("reference: brute-force direct lighting over " + std::to_string(env.radiance.width) + "x" +
-                std::to_string(env.radiance.height) + " texels, " + std::to_string(occluders.size()) + " occluders");
+                std::to_string(env.radiance.height) + " texels, " + std::to_string(occluders.size()) + " occluders" +
+                (reference.phong ? ", Phong " + options.brdf + " toward the eye" : ""));
         StageCost cost;
         cost.stage = "reference";
         cost.seconds = nowSeconds() - start;
@@ -248,7 +248,8 @@ void addReferenceCommand(CLI::App& app) {
                         "implies the brute-force direct sum, needs --bounces 0");
     command->add_option("--at", options->at, "X,Y,Z: the occluder's translation; its vertex p sits at p + (X,Y,Z)");
     command->add_flag("--brute-force", options->bruteForce,
-                      "Direct light (--bounces 0) as the exact sum over every texel of the map, one shadow ray each");
+                      "Direct light (--bounces 0) as the exact sum over every texel of the map, one shadow ray each "
+                      "(with --brdf and --eye: the exact glossy direct light)");
     command->add_flag("--unshadowed", options->unshadowed, "With the brute-force sum: no shadows at all");
     command->add_option("--brdf", options->brdf,
                         "Glossy surfaces: phong:EXPONENT,KS, normalised Phong on top of the diffuse albedo "

@@ -30,7 +30,7 @@ SolverComparison compareSolvers(const TriMesh& mesh, const GlossyOptions& option
     double t2 = nowSeconds();
     result.openClSeconds = t1 - t0;
     result.ceresSeconds = t2 - t1;
-    size_t within = 0;
+    size_t within = 0, agreeing = 0;
     double openClIterations = 0, ceresIterations = 0;
     for (size_t p = 0; p < start.problems; ++p) {
         double initial = objective(grid, start, p, FitWeights{}, options.bounds, &start.params[p * width]);
@@ -40,12 +40,14 @@ SolverComparison compareSolvers(const TriMesh& mesh, const GlossyOptions& option
         double energy = dataEnergy(grid, &start.kernel[p * grid.count()]);
         // Within 1% of Ceres's cost, or both at the float noise floor of the problem's energy.
         if (opencl.cost[p] <= 1.01 * ceres.cost[p] || opencl.cost[p] <= 1e-7 * energy) ++within;
+        if (std::abs(opencl.cost[p] - ceres.cost[p]) <= 0.01 * ceres.cost[p] + 1e-7 * energy) ++agreeing;
         openClIterations += opencl.iterations[p];
         ceresIterations += ceres.iterations[p];
         result.openClCosts.push_back(opencl.cost[p]);
         result.ceresCosts.push_back(ceres.cost[p]);
     }
     result.shareWithinOnePercent = start.problems ? double(within) / double(start.problems) : 0.0;
+    result.shareAgreeing = start.problems ? double(agreeing) / double(start.problems) : 0.0;
     result.openClMeanIterations = start.problems ? openClIterations / double(start.problems) : 0.0;
     result.ceresMeanIterations = start.problems ? ceresIterations / double(start.problems) : 0.0;
     return result;

@@ -73,6 +73,46 @@ void solve(const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights
         solveCeres(grid, batch, weights, options.bounds, options.solverOptions);
 }
 
+// The independent pass with a warm start (GlossyOptions::warmStart): fits of 1, 2, ..., batch.lobes lobes, each
+// from the previous fit plus one greedy lobe (initialiseFrom); where a fit ends above the previous fit's cost,
+// the previous fit plus a zero-amplitude lobe is kept. Leaves batch.params, cost and iterations as solve() does.
+void warmStartFit(const DirectionGrid& grid, FitBatch& batch, const GlossyOptions& options) {
+    const int lobes = batch.lobes;
+    FitBatch step;
+    step.problems = batch.problems;
+    step.kernel = std::move(batch.kernel);
+    step.amplitudeMax = batch.amplitudeMax;
+    std::vector<float> previous, previousCost; // the last fit, [problems][(k - 1) * kLobeParams], and its costs
+    for (int k = 1; k <= lobes; ++k) {
+        const size_t width = size_t(k) * kLobeParams, before = width - kLobeParams;
+        step.lobes = k;
+        step.params.assign(step.problems * width, 0.0f);
+        for (size_t p = 0; p < step.problems; ++p) {
+            float* x = &step.params[p * width];
+            std::copy_n(previous.begin() + std::ptrdiff_t(p * before), before, x);
+            initialiseFrom(grid, &step.kernel[p * grid.count()], k - 1, k, options.phong.exponent, options.bounds, x);
+        }
+        solve(grid, step, FitWeights{}, options);
+        for (size_t p = 0; k > 1 && p < step.problems; ++p) {
+            if (!(step.cost[p] > previousCost[p])) continue;
+            float* x = &step.params[p * width];
+            std::copy_n(previous.begin() + std::ptrdiff_t(p * before), before, x);
+            float* extra = x + before; // a zero lobe along the first lobe, at the exponent
+            extra[0] = 0.0f;
+            double length = std::sqrt(double(x[1]) * x[1] + double(x[2]) * x[2] + double(x[3]) * x[3]);
+            for (int c = 0; c < 3; ++c) extra[1 + c] = float(x[1 + c] / length);
+            extra[4] = float(std::log(std::clamp(options.phong.exponent, options.bounds.lambdaMin, options.bounds.lambdaMax)));
+            step.cost[p] = previousCost[p];
+        }
+        previous = step.params;
+        previousCost = step.cost;
+    }
+    batch.kernel = std::move(step.kernel);
+    batch.params = std::move(step.params);
+    batch.cost = std::move(step.cost);
+    batch.iterations = std::move(step.iterations);
+}
+
 // Views of one vertex in breadth-first order over the view graph from the fitted view nearest the normal; each
 // entry's parent is an earlier fitted view (or -1 for the root of a component).
 std::vector<std::pair<int, int>> viewOrder(const std::vector<int>& slot, const float normal[3]) {
@@ -288,7 +328,10 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
         result.stats.tabulateSeconds += nowSeconds() - tabulateStart;
 
         double fitStart = nowSeconds();
-        solve(grid, batch, FitWeights{}, options);
+        if (options.warmStart && lobes > 1)
+            warmStartFit(grid, batch, options);
+        else
+            solve(grid, batch, FitWeights{}, options);
         std::vector<float> fitted(batch.problems * width);
         for (size_t p = 0; p < batch.problems; ++p) toOutput(&batch.params[p * width], &fitted[p * width], lobes);
         if (coherence) {
@@ -434,6 +477,7 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
     layer.params["weights"] = {{"beta", options.weights.beta}, {"gamma", options.weights.gamma},
                                {"delta", options.weights.delta}};
     layer.params["lambda_bounds"] = {options.bounds.lambdaMin, options.bounds.lambdaMax};
+    if (options.warmStart) layer.params["warm_start"] = true; // absent when off, so other bundles keep their bytes
     if (!options.indirectTransfer.empty()) // absent when off, so bundles without it keep their bytes
         layer.params["indirect"] = {{"bounce", "one diffuse bounce off the mesh (shadowed SH transfer at the hit)"},
                                     {"order", options.indirectOrder}, {"samples", options.indirectSamples}};

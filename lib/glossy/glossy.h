@@ -103,8 +103,13 @@ struct FitBatch {
     std::vector<int> iterations;    // [problems], filled by the solvers
 };
 
+// Both solvers run Ceres 2.1's trust-region Levenberg-Marquardt rules (Ceres itself with its projected line
+// search off; the OpenCL kernel re-implemented in double) and stop on the same three tests.
 struct SolverOptions {
     int maxIterations = 100;
+    double functionTolerance = 1e-9;  // |cost change| <= this x cost
+    double parameterTolerance = 1e-10; // |step| <= this x (|x| + this)
+    double gradientTolerance = 1e-14;  // max |x - project(x - J^T r)| <= this
     int threads = 0; // Ceres: worker threads over problems (0 all); PoCL uses its own device threads
 };
 
@@ -120,6 +125,11 @@ double objective(const DirectionGrid& grid, const FitBatch& batch, size_t p, con
 // Writes lobes * kLobeParams floats.
 void initialise(const DirectionGrid& grid, const float* kernel, int lobes, double exponent,
                 const FitBounds& bounds, float* params);
+
+// The same greedy start after `given` lobes already in params (solver form, a fit of `given` lobes): lobes
+// given..lobes-1 go at the peaks of the kernel minus every earlier lobe. initialise is initialiseFrom(given = 0).
+void initialiseFrom(const DirectionGrid& grid, const float* kernel, int given, int lobes, double exponent,
+                    const FitBounds& bounds, float* params);
 
 // Batched LM in OpenCL on the first platform's first device (PoCL's CPU device in CI). Kernels compile once per
 // process per (lobes, grid size) and are reused. Deterministic: every problem is its own work item in full work
@@ -160,6 +170,10 @@ struct GlossyOptions {
     FitBounds bounds;
     SolverOptions solverOptions;
     size_t chunkVertices = 64;    // vertices tabulated and fitted together; results do not depend on it
+    // Warm start: the independent pass fits 1, 2, ..., lobes lobes in turn, each started from the previous fit
+    // plus one greedy lobe, and keeps the previous fit (with a zero lobe) where the new one is not better, so the
+    // k + 1 lobe fit's cost is never above the k lobe fit's.
+    bool warmStart = false;
     size_t vertexBegin = 0, vertexEnd = SIZE_MAX;
     bool progress = true;
     std::string lobeType = "float16"; // the bundle layer's componentType: "float16" or "float32"
@@ -215,6 +229,7 @@ struct SolverComparison {
     double openClSeconds = 0.0, ceresSeconds = 0.0; // wall clock for all problems, after a warm-up launch
     double initialCost = 0.0, openClCost = 0.0, ceresCost = 0.0; // summed final objectives
     double shareWithinOnePercent = 0.0; // OpenCL cost <= 1.01 x Ceres cost (or at the float floor, 1e-7 E)
+    double shareAgreeing = 0.0;         // |OpenCL cost - Ceres cost| <= 1% of Ceres's (or both at that floor)
     double openClMeanIterations = 0.0, ceresMeanIterations = 0.0;
     std::vector<double> openClCosts, ceresCosts;
 };

@@ -23,4 +23,9 @@ int residualCount(size_t gridCount, int lobes);
 void evaluateResiduals(const DirectionGrid& grid, const ProblemView& problem, const FitWeights& weights,
                        const double* params, double* residuals, double* jacobian);
 
+// The OpenCL kernel's own normal equations at batch.params (projected onto the bounds), for the tests: per
+// problem 1 + w + w^2 doubles (w = lobes * kLobeParams): the objective, g = J^T r, then J^T J row-major.
+std::vector<double> openClNormalEquations(const DirectionGrid& grid, const FitBatch& batch, const FitWeights& weights,
+                                          const FitBounds& bounds);
+
 } // namespace prt::glossy

@@ -1,29 +1,21 @@
 // Batched Levenberg-Marquardt for the spherical-Gaussian fit of glossy.h: one work item per problem, the same
-// residuals as objective.cpp. Built with -D NL=lobes -D real=float|double.
+// residuals as objective.cpp, in double, following the trust-region rules of Ceres 2.1's TrustRegionMinimizer
+// with LEVENBERG_MARQUARDT (solve_ceres.cpp sets Ceres up the same way), so that from one start both take the
+// same steps and stop at the same point. Built with -D NL=lobes.
 #pragma OPENCL FP_CONTRACT OFF
-#if defined(USE_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
-#endif
 #define NP (NL * 5)
-#ifndef vreal8
-#define vreal8 float8
-#define vreal float
-#endif
-#if defined(VECTOR_DOUBLE)
-#define VLOAD(p) convert_double8(vload8(0, p))
-#else
-#define VLOAD(p) vload8(0, p)
-#endif
+typedef double real;
+typedef double8 real8;
+#define LOADF(p) convert_double8(vload8(0, p))
 
 typedef struct {
-    real cost;
-    real jtj[NP * NP];
-    real g[NP];
+    real cost;          // sum of squared residuals (the objective of glossy.h)
+    real jtj[NP * NP];  // upper triangle of J^T J
+    real g[NP];         // J^T r
 } Normal;
 
-inline real hsum(vreal8 v) {
-    return (real)(((v.s0 + v.s1) + (v.s2 + v.s3)) + ((v.s4 + v.s5) + (v.s6 + v.s7)));
-}
+inline real hsum(real8 v) { return ((v.s0 + v.s1) + (v.s2 + v.s3)) + ((v.s4 + v.s5) + (v.s6 + v.s7)); }
 
 // Adds residual r with Jacobian row j (NP values) to the normal equations.
 inline void addRow(real r, const real* j, Normal* n, int build) {
@@ -35,11 +27,11 @@ inline void addRow(real r, const real* j, Normal* n, int build) {
     }
 }
 
-// Data residuals run 8 grid directions at a time (float8), so the CPU device uses its vector units; count is
+// Data residuals run 8 grid directions at a time (double8), so the CPU device uses its vector units; count is
 // a multiple of 8 (the host pads the grid with zero-weight directions).
 void evaluate(const real* x, int build, int count, int p, __global const float* table,
               __global const float* dirX, __global const float* dirY, __global const float* dirZ,
-              __global const float* rootSolidAngle, real energy,
+              __global const double* rootSolidAngle, real energy,
               __global const float* prior, real priorWeight, real weightMean, real weightWidth, real weightFlip, Normal* n) {
     n->cost = 0;
     if (build) {
@@ -53,30 +45,31 @@ void evaluate(const real* x, int build, int count, int p, __global const float* 
         for (int c = 0; c < 3; ++c) mean[k][c] = q[1 + c] / len[k];
         lam[k] = exp(q[4]);
     }
-    vreal8 jtjv[NP * (NP + 1) / 2], gv[NP], costv = (vreal8)(0);
+    real8 jtjv[NP * (NP + 1) / 2], gv[NP], costv = (real8)(0);
     if (build) {
-        for (int a = 0; a < NP * (NP + 1) / 2; ++a) jtjv[a] = (vreal8)(0);
-        for (int a = 0; a < NP; ++a) gv[a] = (vreal8)(0);
+        for (int a = 0; a < NP * (NP + 1) / 2; ++a) jtjv[a] = (real8)(0);
+        for (int a = 0; a < NP; ++a) gv[a] = (real8)(0);
     }
     __global const float* row = table + (size_t)p * count;
-    vreal8 jv[NP];
+    real8 jv[NP];
     for (int i = 0; i < count; i += 8) {
-        vreal8 w0 = VLOAD(dirX + i), w1 = VLOAD(dirY + i), w2 = VLOAD(dirZ + i);
-        vreal8 root = VLOAD(rootSolidAngle + i);
-        vreal8 model = (vreal8)(0);
+        real8 w0 = LOADF(dirX + i), w1 = LOADF(dirY + i), w2 = LOADF(dirZ + i);
+        real8 root = vload8(0, rootSolidAngle + i);
+        real8 model = (real8)(0);
         for (int k = 0; k < NL; ++k) {
-            vreal8 cosine = (vreal)mean[k][0] * w0 + (vreal)mean[k][1] * w1 + (vreal)mean[k][2] * w2;
-            vreal8 e = exp((vreal)lam[k] * (cosine - 1));
-            vreal8 g = (vreal)x[k * 5] * e;
+            real8 cosine = mean[k][0] * w0 + mean[k][1] * w1 + mean[k][2] * w2;
+            real8 e = exp(lam[k] * (cosine - 1));
+            real8 g = x[k * 5] * e;
             model += g;
+            if (!build) continue;
             jv[k * 5] = root * e;
-            vreal8 along = root * g * (vreal)(lam[k] / len[k]);
-            jv[k * 5 + 1] = along * (w0 - cosine * (vreal)mean[k][0]);
-            jv[k * 5 + 2] = along * (w1 - cosine * (vreal)mean[k][1]);
-            jv[k * 5 + 3] = along * (w2 - cosine * (vreal)mean[k][2]);
-            jv[k * 5 + 4] = root * g * (vreal)lam[k] * (cosine - 1);
+            real8 along = root * g * (lam[k] / len[k]);
+            jv[k * 5 + 1] = along * (w0 - cosine * mean[k][0]);
+            jv[k * 5 + 2] = along * (w1 - cosine * mean[k][1]);
+            jv[k * 5 + 3] = along * (w2 - cosine * mean[k][2]);
+            jv[k * 5 + 4] = root * g * lam[k] * (cosine - 1);
         }
-        vreal8 r = root * (model - VLOAD(row + i));
+        real8 r = root * (model - LOADF(row + i));
         costv += r * r;
         if (build) {
             int index = 0;
@@ -98,16 +91,15 @@ void evaluate(const real* x, int build, int count, int p, __global const float* 
     real rootEnergy = sqrt(energy);
     for (int k = 0; k < NL; ++k) { // gauge
         for (int a = 0; a < NP; ++a) j[a] = 0;
-        for (int c = 0; c < 3; ++c) j[k * 5 + 1 + c] = rootEnergy * (real)2 * x[k * 5 + 1 + c];
-        addRow(rootEnergy * (len[k] * len[k] - (real)1), j, n, build);
+        for (int c = 0; c < 3; ++c) j[k * 5 + 1 + c] = rootEnergy * 2 * x[k * 5 + 1 + c];
+        addRow(rootEnergy * (len[k] * len[k] - 1), j, n, build);
     }
-    if (priorWeight == (real)0) return;
+    if (priorWeight == 0) return;
     real rootBeta = sqrt(weightMean * energy), rootGamma = sqrt(weightWidth * energy), rootDelta = sqrt(weightFlip * energy);
     for (int k = 0; k < NL; ++k)
         for (int c = 0; c < 3; ++c) {
             for (int a = 0; a < NP; ++a) j[a] = 0;
-            for (int d = 0; d < 3; ++d)
-                j[k * 5 + 1 + d] = rootBeta * (((c == d) ? (real)1 : (real)0) - mean[k][c] * mean[k][d]) / len[k];
+            for (int d = 0; d < 3; ++d) j[k * 5 + 1 + d] = rootBeta * (((c == d) ? 1.0 : 0.0) - mean[k][c] * mean[k][d]) / len[k];
             addRow(rootBeta * (mean[k][c] - (real)prior[k * 4 + c]), j, n, build);
         }
     for (int k = 0; k < NL; ++k) {
@@ -122,14 +114,14 @@ void evaluate(const real* x, int build, int count, int p, __global const float* 
                 q[c] = (real)prior[k1 * 4 + c] - (real)prior[k2 * 4 + c];
                 s -= (mean[k1][c] - mean[k2][c]) * q[c];
             }
-            if (s <= (real)0) continue;
+            if (s <= 0) continue;
             for (int a = 0; a < NP; ++a) j[a] = 0;
-            real slope = (real)1.5 * rootDelta * sqrt(s);
+            real slope = 1.5 * rootDelta * sqrt(s);
             for (int d = 0; d < 3; ++d) {
                 real d1 = 0, d2 = 0;
                 for (int c = 0; c < 3; ++c) {
-                    d1 -= q[c] * (((c == d) ? (real)1 : (real)0) - mean[k1][c] * mean[k1][d]) / len[k1];
-                    d2 += q[c] * (((c == d) ? (real)1 : (real)0) - mean[k2][c] * mean[k2][d]) / len[k2];
+                    d1 -= q[c] * (((c == d) ? 1.0 : 0.0) - mean[k1][c] * mean[k1][d]) / len[k1];
+                    d2 += q[c] * (((c == d) ? 1.0 : 0.0) - mean[k2][c] * mean[k2][d]) / len[k2];
                 }
                 j[k1 * 5 + 1 + d] = slope * d1;
                 j[k2 * 5 + 1 + d] = slope * d2;
@@ -138,17 +130,18 @@ void evaluate(const real* x, int build, int count, int p, __global const float* 
         }
 }
 
-// Solves (JtJ + mu D) step = -g by Cholesky; returns 0 when the damped matrix is not positive definite.
-int dampedSolve(const Normal* n, real mu, real* step) {
+// Ceres's LM step in the Jacobi-scaled variables y = x / scale: (S J^T J S + D / radius) y = -S g with
+// D = diag(S J^T J S) clamped to [1e-6, 1e32] (min_lm_diagonal, max_lm_diagonal), by Cholesky; step = S y.
+// Returns 0 when the damped matrix is not positive definite (Ceres's linear solver failure: an invalid step).
+int dampedSolve(const Normal* n, const real* scale, real radius, real* step) {
     real a[NP * NP];
     for (int i = 0; i < NP; ++i)
-        for (int k = i; k < NP; ++k) a[i * NP + k] = n->jtj[i * NP + k];
-    // Marquardt's scaling, clamped as Ceres clamps it (min_lm_diagonal, max_lm_diagonal).
-    for (int i = 0; i < NP; ++i) a[i * NP + i] += mu * clamp(n->jtj[i * NP + i], (real)1e-6, (real)1e32);
+        for (int k = i; k < NP; ++k) a[i * NP + k] = scale[i] * n->jtj[i * NP + k] * scale[k];
+    for (int i = 0; i < NP; ++i) a[i * NP + i] += clamp(a[i * NP + i], 1e-6, 1e32) / radius;
     for (int i = 0; i < NP; ++i) { // upper Cholesky: A = U^T U
         real s = a[i * NP + i];
         for (int k = 0; k < i; ++k) s -= a[k * NP + i] * a[k * NP + i];
-        if (!(s > (real)0)) return 0;
+        if (!(s > 0)) return 0;
         real d = sqrt(s);
         a[i * NP + i] = d;
         for (int c = i + 1; c < NP; ++c) {
@@ -159,32 +152,56 @@ int dampedSolve(const Normal* n, real mu, real* step) {
     }
     real y[NP];
     for (int i = 0; i < NP; ++i) {
-        real t = -n->g[i];
+        real t = -scale[i] * n->g[i];
         for (int k = 0; k < i; ++k) t -= a[k * NP + i] * y[k];
         y[i] = t / a[i * NP + i];
     }
     for (int i = NP - 1; i >= 0; --i) {
         real t = y[i];
-        for (int k = i + 1; k < NP; ++k) t -= a[i * NP + k] * step[k];
-        step[i] = t / a[i * NP + i];
+        for (int k = i + 1; k < NP; ++k) t -= a[i * NP + k] * y[k];
+        y[i] = t / a[i * NP + i];
+    }
+    for (int i = 0; i < NP; ++i) {
+        step[i] = scale[i] * y[i];
+        if (!isfinite(step[i])) return 0;
     }
     return 1;
 }
 
+// Projects x onto the bounds: amplitude in [0, amplitudeMax], log sharpness in [logMin, logMax].
+inline void project(real* x, real amplitudeMax, real logMin, real logMax) {
+    for (int k = 0; k < NL; ++k) {
+        x[k * 5] = clamp(x[k * 5], 0.0, amplitudeMax);
+        x[k * 5 + 4] = clamp(x[k * 5 + 4], logMin, logMax);
+    }
+}
+
+// Ceres's gradient test: max |x - project(x - g)| (g = J^T r, the gradient of half the objective).
+inline real projectedGradientNorm(const real* x, const real* g, real amplitudeMax, real logMin, real logMax) {
+    real moved[NP], largest = 0;
+    for (int a = 0; a < NP; ++a) moved[a] = x[a] - g[a];
+    project(moved, amplitudeMax, logMin, logMax);
+    for (int a = 0; a < NP; ++a) largest = fmax(largest, fabs(x[a] - moved[a]));
+    return largest;
+}
+
+// One problem per work item. Writes the result, its objective (this kernel's own sum, in double) and the
+// number of iterations Ceres would record (a step that ends the fit on a tolerance is not one).
 __kernel void fitLobes(int problems, int count, __global const float* table, __global const float* dirX,
                        __global const float* dirY, __global const float* dirZ,
-                       __global const float* rootSolidAngle,
-                       __global const float* energies, __global const float* amplitudeMax,
-                       __global const float* priors, __global const float* priorWeights, float weightMean, float weightWidth,
-                       float weightFlip, float logLambdaMin, float logLambdaMax, int maxIterations,
-                       float relativeTolerance, __global float* params, __global float* costs,
-                       __global int* iterations) {
+                       __global const double* rootSolidAngle,
+                       __global const double* energies, __global const float* amplitudeMaxima,
+                       __global const float* priors, __global const float* priorWeights, double weightMean,
+                       double weightWidth, double weightFlip, double logMin, double logMax, int maxIterations,
+                       double functionTolerance, double parameterTolerance, double gradientTolerance,
+                       __global float* params, __global double* costs, __global int* iterations,
+                       __global double* normals) {
     int p = get_global_id(0);
     if (p >= problems) return;
-    real energy = energies[p];
-    real x[NP], trial[NP], step[NP];
+    real energy = energies[p], amplitudeMax = amplitudeMaxima[p];
+    real x[NP], trial[NP], step[NP], scale[NP];
     for (int a = 0; a < NP; ++a) x[a] = params[(size_t)p * NP + a];
-    if (!(energy > (real)0)) {
+    if (!(energy > 0)) {
         costs[p] = 0;
         iterations[p] = 0;
         return;
@@ -192,55 +209,88 @@ __kernel void fitLobes(int problems, int count, __global const float* table, __g
     __global const float* prior = priors + (size_t)p * NL * 4;
     real priorWeight = priorWeights[p];
     Normal n, t;
-    evaluate(x, 1, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean, weightWidth, weightFlip,
-             &n);
-    // Ceres's Levenberg-Marquardt trust-region schedule: radius 1e4, grown by the gain ratio on success, shrunk
-    // by a doubling factor on failure; steps projected onto the bounds.
-    real radius = (real)1e4, decreaseFactor = (real)2;
-    int it = 0;
-    for (; it < maxIterations; ++it) {
-        int solved = dampedSolve(&n, (real)1 / radius, step);
-        real predicted = 0, stepNorm = 0, xNorm = 0;
-        if (solved) {
-            for (int a = 0; a < NP; ++a) trial[a] = x[a] + step[a];
-            for (int k = 0; k < NL; ++k) {
-                trial[k * 5] = clamp(trial[k * 5], (real)0, (real)amplitudeMax[p]);
-                trial[k * 5 + 4] = clamp(trial[k * 5 + 4], (real)logLambdaMin, (real)logLambdaMax);
-            }
-            // Predicted decrease of |r + J d|^2 for the projected step d.
-            for (int a = 0; a < NP; ++a) {
-                step[a] = trial[a] - x[a];
-                stepNorm += step[a] * step[a];
-                xNorm += x[a] * x[a];
-            }
+    project(x, amplitudeMax, logMin, logMax);
+    evaluate(x, 1, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean, weightWidth,
+             weightFlip, &n);
+    for (int a = 0; a < NP; ++a) scale[a] = 1 / (1 + sqrt(n.jtj[a * NP + a])); // Jacobi scaling, fixed at the start
+    real radius = 1e4, decreaseFactor = 2;
+    int it = 0, invalid = 0;
+    int done = projectedGradientNorm(x, n.g, amplitudeMax, logMin, logMax) <= gradientTolerance;
+    while (!done && it < maxIterations) {
+        ++it;
+        int valid = dampedSolve(&n, scale, radius, step);
+        real modelDecrease = 0; // of the objective, for the unprojected step: -(2 g.d + d^T J^T J d)
+        if (valid) {
             for (int a = 0; a < NP; ++a) {
                 real row = 0;
-                for (int b = 0; b < NP; ++b)
-                    row += (a <= b ? n.jtj[a * NP + b] : n.jtj[b * NP + a]) * step[b];
-                predicted -= (real)2 * n.g[a] * step[a] + step[a] * row;
+                for (int b = 0; b < NP; ++b) row += (a <= b ? n.jtj[a * NP + b] : n.jtj[b * NP + a]) * step[b];
+                modelDecrease -= 2 * n.g[a] * step[a] + step[a] * row;
             }
-            if (sqrt(stepNorm) <= (real)1e-7 * (sqrt(xNorm) + (real)1e-7)) { ++it; break; } // parameter tolerance
-            evaluate(trial, 0, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean,
-                     weightWidth, weightFlip, &t);
+            valid = modelDecrease > 0;
         }
-        real decrease = solved ? n.cost - t.cost : (real)0;
-        real rho = predicted > (real)0 ? decrease / predicted : (real)-1;
-        if (solved && decrease > (real)0 && rho > (real)1e-3) {
+        if (!valid) {
+            if (++invalid >= 5) break; // max_num_consecutive_invalid_steps
+            radius /= decreaseFactor;
+            decreaseFactor *= 2;
+            if (radius <= 1e-32) break;
+            continue;
+        }
+        invalid = 0;
+        real stepNorm = 0, xNorm = 0;
+        for (int a = 0; a < NP; ++a) trial[a] = x[a] + step[a];
+        project(trial, amplitudeMax, logMin, logMax);
+        for (int a = 0; a < NP; ++a) stepNorm += (trial[a] - x[a]) * (trial[a] - x[a]), xNorm += x[a] * x[a];
+        if (sqrt(stepNorm) <= parameterTolerance * (sqrt(xNorm) + parameterTolerance)) { --it; break; }
+        evaluate(trial, 0, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean,
+                 weightWidth, weightFlip, &t);
+        real decrease = n.cost - t.cost;
+        if (fabs(decrease) <= functionTolerance * n.cost) { --it; break; }
+        real rho = decrease / modelDecrease;
+        if (rho > 1e-3) { // min_relative_decrease
             for (int a = 0; a < NP; ++a) x[a] = trial[a];
-            real q = (real)2 * rho - (real)1;
-            radius = fmin(radius / fmax((real)1 / (real)3, (real)1 - q * q * q), (real)1e16);
-            decreaseFactor = (real)2;
-            real before = n.cost;
-            evaluate(x, 1, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean, weightWidth,
-                     weightFlip, &n);
-            if (decrease <= (real)relativeTolerance * before) { ++it; break; } // function tolerance
+            evaluate(x, 1, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean,
+                     weightWidth, weightFlip, &n);
+            real q = 2 * rho - 1;
+            radius = fmin(radius / fmax(1.0 / 3.0, 1 - q * q * q), 1e16);
+            decreaseFactor = 2;
+            done = projectedGradientNorm(x, n.g, amplitudeMax, logMin, logMax) <= gradientTolerance;
         } else {
             radius /= decreaseFactor;
-            decreaseFactor *= (real)2;
-            if (radius < (real)1e-12) { ++it; break; }
+            decreaseFactor *= 2;
         }
+        if (radius <= 1e-32) break;
     }
     for (int a = 0; a < NP; ++a) params[(size_t)p * NP + a] = (float)x[a];
-    costs[p] = (float)n.cost;
+    costs[p] = n.cost;
     iterations[p] = it;
+}
+
+// The normal equations at the given parameters (projected onto the bounds first, as fitLobes starts), for the
+// tests: cost, then g = J^T r (NP), then J^T J (NP x NP, both triangles), per problem in `normals`. Takes the
+// arguments of fitLobes; changes no parameters.
+__kernel void normalEquations(int problems, int count, __global const float* table, __global const float* dirX,
+                              __global const float* dirY, __global const float* dirZ,
+                              __global const double* rootSolidAngle,
+                              __global const double* energies, __global const float* amplitudeMaxima,
+                              __global const float* priors, __global const float* priorWeights, double weightMean,
+                              double weightWidth, double weightFlip, double logMin, double logMax, int maxIterations,
+                              double functionTolerance, double parameterTolerance, double gradientTolerance,
+                              __global float* params, __global double* costs, __global int* iterations,
+                              __global double* normals) {
+    int p = get_global_id(0);
+    if (p >= problems) return;
+    real x[NP];
+    for (int a = 0; a < NP; ++a) x[a] = params[(size_t)p * NP + a];
+    project(x, amplitudeMaxima[p], logMin, logMax);
+    Normal n;
+    evaluate(x, 1, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energies[p], priors + (size_t)p * NL * 4,
+             priorWeights[p], weightMean, weightWidth, weightFlip, &n);
+    __global double* out = normals + (size_t)p * (1 + NP + NP * NP);
+    out[0] = n.cost;
+    for (int a = 0; a < NP; ++a) {
+        out[1 + a] = n.g[a];
+        for (int b = 0; b < NP; ++b) out[1 + NP + a * NP + b] = a <= b ? n.jtj[a * NP + b] : n.jtj[b * NP + a];
+    }
+    costs[p] = n.cost;
+    iterations[p] = 0;
 }

@@ -120,24 +120,37 @@ double objective(const DirectionGrid& grid, const FitBatch& batch, size_t p, con
     return cost;
 }
 
-void initialise(const DirectionGrid& grid, const float* kernel, int lobes, double exponent, const FitBounds& bounds,
-                float* params) {
+void initialiseFrom(const DirectionGrid& grid, const float* kernel, int given, int lobes, double exponent,
+                    const FitBounds& bounds, float* params) {
     std::vector<double> residual(kernel, kernel + grid.count());
     for (int k = 0; k < lobes; ++k) {
-        size_t peak = size_t(std::max_element(residual.begin(), residual.end()) - residual.begin());
-        double sharpness = std::clamp(exponent * double(1 << k), bounds.lambdaMin, bounds.lambdaMax);
-        double amplitude = std::max(0.0, residual[peak]) * (k == 0 ? 1.0 : 0.5);
         float* p = params + k * kLobeParams;
-        const float* mean = &grid.directions[peak * 3];
-        p[0] = float(amplitude);
-        for (int c = 0; c < 3; ++c) p[1 + c] = mean[c];
-        p[4] = float(std::log(sharpness));
+        double mean[3], sharpness, amplitude;
+        if (k < given) { // a lobe of the given fit, as it stands
+            double length = std::sqrt(double(p[1]) * p[1] + double(p[2]) * p[2] + double(p[3]) * p[3]);
+            for (int c = 0; c < 3; ++c) mean[c] = p[1 + c] / length;
+            sharpness = std::exp(double(p[4]));
+            amplitude = p[0];
+        } else {
+            size_t peak = size_t(std::max_element(residual.begin(), residual.end()) - residual.begin());
+            sharpness = std::clamp(exponent * double(1 << k), bounds.lambdaMin, bounds.lambdaMax);
+            amplitude = std::max(0.0, residual[peak]) * (k == 0 ? 1.0 : 0.5);
+            const float* direction = &grid.directions[peak * 3];
+            p[0] = float(amplitude);
+            for (int c = 0; c < 3; ++c) p[1 + c] = direction[c], mean[c] = direction[c];
+            p[4] = float(std::log(sharpness));
+        }
         for (size_t i = 0; i < grid.count(); ++i) {
             const float* w = &grid.directions[i * 3];
-            double cosine = double(mean[0]) * w[0] + double(mean[1]) * w[1] + double(mean[2]) * w[2];
+            double cosine = mean[0] * w[0] + mean[1] * w[1] + mean[2] * w[2];
             residual[i] -= amplitude * std::exp(sharpness * (cosine - 1.0));
         }
     }
+}
+
+void initialise(const DirectionGrid& grid, const float* kernel, int lobes, double exponent, const FitBounds& bounds,
+                float* params) {
+    initialiseFrom(grid, kernel, 0, lobes, exponent, bounds, params);
 }
 
 namespace {

@@ -56,16 +56,19 @@ void solveCeres(const DirectionGrid& grid, FitBatch& batch, const FitWeights& we
         solverOptions.linear_solver_type = ceres::DENSE_QR;
         solverOptions.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
         solverOptions.max_num_iterations = options.maxIterations;
-        solverOptions.function_tolerance = 1e-9;
-        solverOptions.gradient_tolerance = 1e-14;
-        solverOptions.parameter_tolerance = 1e-10;
+        solverOptions.function_tolerance = options.functionTolerance;
+        solverOptions.gradient_tolerance = options.gradientTolerance;
+        solverOptions.parameter_tolerance = options.parameterTolerance;
+        // No projected line search along the LM step (Ceres's own TODO calls it "not terribly effective"): plain
+        // projected LM, the rules lm_kernel.cl follows, so both solvers take the same steps from one start.
+        solverOptions.max_num_line_search_step_size_iterations = 0;
         solverOptions.num_threads = 1;
         solverOptions.logging_type = ceres::SILENT;
         ceres::Solver::Summary summary;
         ceres::Solve(solverOptions, &problem, &summary);
         for (int i = 0; i < width; ++i) batch.params[p * width + i] = float(x[i]);
-        batch.cost[p] = float(objective(grid, batch, p, weights, bounds, &batch.params[p * width]));
-        batch.iterations[p] = int(summary.iterations.size());
+        batch.cost[p] = float(2.0 * summary.final_cost); // Ceres's own cost at its end point: half the objective
+        batch.iterations[p] = int(summary.iterations.size()) - 1; // iteration 0 is the start
     };
     tbb::task_arena arena(options.threads > 0 ? options.threads : int(tbb::task_arena::automatic));
     arena.execute([&] {

@@ -1,5 +1,5 @@
 // The batched solver: lm_kernel.cl on the first OpenCL device (PoCL's CPU device here), one work item per
-// problem. The context, queue and each (lobes, precision) program are created once per process.
+// problem. The context, queue and each lobe count's program are created once per process.
 #include "glossy.h"
 #include "glossy_internal.h"
 #include "lm_kernel.h"
@@ -110,31 +110,37 @@ void buildOpenClProgram(const std::string& source, const std::string& buildOptio
     clReleaseProgram(build(device(), source, buildOptions));
 }
 
-void solveOpenCl(const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights, const FitBounds& bounds,
-                 const SolverOptions& options) {
-    std::lock_guard lock(deviceMutex);
+namespace {
+
+// Uploads `batch`, runs kernel `name` (fitLobes or normalEquations, which share their arguments) on one work item
+// per problem, and reads back the parameters into batch.params, the kernel's own costs and iterations into
+// batch.cost and batch.iterations, and (normalEquations) the normal equations into *normalsOut.
+void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights,
+              const FitBounds& bounds, const SolverOptions& options, std::vector<double>* normalsOut) {
     Device& dev = device();
-    const std::string buildOptions = "-D NL=" + std::to_string(batch.lobes) + " -D real=float";
+    const std::string buildOptions = "-D NL=" + std::to_string(batch.lobes);
     cl_program& program = dev.programs[buildOptions];
     if (!program) program = build(dev, kLmKernelSource, buildOptions);
     cl_int status;
-    cl_kernel kernel = clCreateKernel(program, "fitLobes", &status);
+    cl_kernel kernel = clCreateKernel(program, name, &status);
     check(status, "clCreateKernel");
 
     const size_t problems = batch.problems, count = grid.count(), width = size_t(batch.lobes) * kLobeParams;
     const size_t padded = (problems + kLocalSize - 1) / kLocalSize * kLocalSize;
     const size_t stride = (count + 7) / 8 * 8; // the kernel reads 8 directions at a time
-    // The grid in columns, padded with zero-weight directions.
-    std::vector<float> dirX(stride, 0.0f), dirY(stride, 0.0f), dirZ(stride, 1.0f), rootSolidAngle(stride, 0.0f);
+    // The grid in columns, padded with zero-weight directions; the weights in double, as objective.cpp has them.
+    std::vector<float> dirX(stride, 0.0f), dirY(stride, 0.0f), dirZ(stride, 1.0f);
+    std::vector<double> rootSolidAngle(stride, 0.0);
     for (size_t i = 0; i < count; ++i) {
         dirX[i] = grid.directions[i * 3], dirY[i] = grid.directions[i * 3 + 1], dirZ[i] = grid.directions[i * 3 + 2];
-        rootSolidAngle[i] = std::sqrt(grid.solidAngle[i]);
+        rootSolidAngle[i] = std::sqrt(double(grid.solidAngle[i]));
     }
-    std::vector<float> kernelValues(stride * padded, 0.0f), energies(padded, 0.0f), amplitudeMax(padded, 0.0f);
+    std::vector<float> kernelValues(stride * padded, 0.0f), amplitudeMax(padded, 0.0f);
+    std::vector<double> energies(padded, 0.0);
     std::vector<float> priors(padded * batch.lobes * 4, 0.0f), priorWeights(padded, 0.0f), params(padded * width, 0.0f);
     for (size_t p = 0; p < problems; ++p) {
         std::copy_n(&batch.kernel[p * count], count, &kernelValues[p * stride]);
-        energies[p] = float(dataEnergy(grid, &batch.kernel[p * count]));
+        energies[p] = dataEnergy(grid, &batch.kernel[p * count]);
         amplitudeMax[p] = batch.amplitudeMax[p];
         if (!batch.hasPrior.empty() && batch.hasPrior[p]) {
             priorWeights[p] = 1.0f;
@@ -150,20 +156,21 @@ void solveOpenCl(const DirectionGrid& grid, FitBatch& batch, const FitWeights& w
     Buffer dirXBuffer(dev.context, in, stride * 4, dirX.data());
     Buffer dirYBuffer(dev.context, in, stride * 4, dirY.data());
     Buffer dirZBuffer(dev.context, in, stride * 4, dirZ.data());
-    Buffer rootBuffer(dev.context, in, stride * 4, rootSolidAngle.data());
-    Buffer energyBuffer(dev.context, in, padded * 4, energies.data());
+    Buffer rootBuffer(dev.context, in, stride * 8, rootSolidAngle.data());
+    Buffer energyBuffer(dev.context, in, padded * 8, energies.data());
     Buffer amplitudeBuffer(dev.context, in, padded * 4, amplitudeMax.data());
     Buffer priorBuffer(dev.context, in, priors.size() * 4, priors.data());
     Buffer priorWeightBuffer(dev.context, in, padded * 4, priorWeights.data());
     Buffer paramBuffer(dev.context, CL_MEM_READ_WRITE, params.size() * 4, params.data());
-    Buffer costBuffer(dev.context, CL_MEM_WRITE_ONLY, padded * 4, nullptr);
+    Buffer costBuffer(dev.context, CL_MEM_WRITE_ONLY, padded * 8, nullptr);
     Buffer iterationBuffer(dev.context, CL_MEM_WRITE_ONLY, padded * 4, nullptr);
+    const size_t normalSize = 1 + width + width * width;
+    Buffer normalBuffer(dev.context, CL_MEM_WRITE_ONLY, normalsOut ? padded * normalSize * 8 : 8, nullptr);
 
     cl_int problemCount = cl_int(padded), gridCount = cl_int(stride);
-    float beta = float(weights.beta), gamma = float(weights.gamma), delta = float(weights.delta);
-    float logMin = float(std::log(bounds.lambdaMin)), logMax = float(std::log(bounds.lambdaMax));
+    double beta = weights.beta, gamma = weights.gamma, delta = weights.delta;
+    double logMin = std::log(bounds.lambdaMin), logMax = std::log(bounds.lambdaMax);
     cl_int maxIterations = options.maxIterations;
-    float tolerance = 1e-6f;
     int arg = 0;
     auto set = [&](size_t size, const void* value) { check(clSetKernelArg(kernel, arg++, size, value), "clSetKernelArg"); };
     set(sizeof(cl_int), &problemCount);
@@ -171,31 +178,53 @@ void solveOpenCl(const DirectionGrid& grid, FitBatch& batch, const FitWeights& w
     for (Buffer* b : {&kernelBuffer, &dirXBuffer, &dirYBuffer, &dirZBuffer, &rootBuffer, &energyBuffer, &amplitudeBuffer,
                       &priorBuffer, &priorWeightBuffer})
         set(sizeof(cl_mem), &b->mem);
-    set(sizeof(float), &beta);
-    set(sizeof(float), &gamma);
-    set(sizeof(float), &delta);
-    set(sizeof(float), &logMin);
-    set(sizeof(float), &logMax);
+    for (const double* value : {&beta, &gamma, &delta, &logMin, &logMax}) set(sizeof(double), value);
     set(sizeof(cl_int), &maxIterations);
-    set(sizeof(float), &tolerance);
-    for (Buffer* b : {&paramBuffer, &costBuffer, &iterationBuffer}) set(sizeof(cl_mem), &b->mem);
+    for (const double* value : {&options.functionTolerance, &options.parameterTolerance, &options.gradientTolerance})
+        set(sizeof(double), value);
+    for (Buffer* b : {&paramBuffer, &costBuffer, &iterationBuffer, &normalBuffer}) set(sizeof(cl_mem), &b->mem);
     size_t global = padded, local = kLocalSize;
     check(clEnqueueNDRangeKernel(dev.queue, kernel, 1, nullptr, &global, &local, 0, nullptr, nullptr),
           "clEnqueueNDRangeKernel");
-    std::vector<float> costs(padded);
+    std::vector<double> costs(padded);
     std::vector<cl_int> iterations(padded);
     check(clEnqueueReadBuffer(dev.queue, paramBuffer.mem, CL_TRUE, 0, params.size() * 4, params.data(), 0, nullptr,
                               nullptr), "clEnqueueReadBuffer");
+    check(clEnqueueReadBuffer(dev.queue, costBuffer.mem, CL_TRUE, 0, padded * 8, costs.data(), 0, nullptr, nullptr),
+          "clEnqueueReadBuffer");
     check(clEnqueueReadBuffer(dev.queue, iterationBuffer.mem, CL_TRUE, 0, padded * 4, iterations.data(), 0, nullptr,
                               nullptr), "clEnqueueReadBuffer");
+    if (normalsOut) {
+        normalsOut->resize(padded * normalSize);
+        check(clEnqueueReadBuffer(dev.queue, normalBuffer.mem, CL_TRUE, 0, normalsOut->size() * 8, normalsOut->data(), 0,
+                                  nullptr, nullptr), "clEnqueueReadBuffer");
+        normalsOut->resize(problems * normalSize);
+    }
     clReleaseKernel(kernel);
     std::copy_n(params.begin(), problems * width, batch.params.begin());
     batch.cost.assign(problems, 0.0f);
     batch.iterations.assign(problems, 0);
-    for (size_t p = 0; p < problems; ++p) {
-        batch.cost[p] = float(objective(grid, batch, p, weights, bounds, &batch.params[p * width]));
+    for (size_t p = 0; p < problems; ++p) { // the kernel's own objective at its (double) end point
+        batch.cost[p] = float(costs[p]);
         batch.iterations[p] = iterations[p];
     }
+}
+
+} // namespace
+
+void solveOpenCl(const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights, const FitBounds& bounds,
+                 const SolverOptions& options) {
+    std::lock_guard lock(deviceMutex);
+    runBatch("fitLobes", grid, batch, weights, bounds, options, nullptr);
+}
+
+std::vector<double> openClNormalEquations(const DirectionGrid& grid, const FitBatch& batch, const FitWeights& weights,
+                                          const FitBounds& bounds) {
+    std::lock_guard lock(deviceMutex);
+    FitBatch copy = batch;
+    std::vector<double> normals;
+    runBatch("normalEquations", grid, copy, weights, bounds, SolverOptions{}, &normals);
+    return normals;
 }
 
 } // namespace prt::glossy

@@ -1,7 +1,9 @@
-// The brute-force direct-lighting reference: every texel of the full-resolution map, one shadow ray each.
+// The brute-force direct-lighting reference: every texel of the full-resolution map, one shadow ray each; diffuse,
+// or diffuse plus the Phong lobe toward an eye point (the exact glossy oracle).
 #include "reference.h"
 
 #include "core.h"
+#include "path_tracer.h"
 #include "raycast.h"
 #include "sh.h"
 
@@ -51,6 +53,13 @@ ReferenceRadiance referenceDirectRadiance(const TriMesh& receiver, const std::ve
                                           const EnvironmentMap& env, const DirectOptions& options) {
     if (receiver.normals.size() != receiver.positions.size() || receiver.positions.empty())
         throw Error("", "receiver", "has no vertex normals");
+    if (options.phong) {
+        if (!options.eye) throw Error("", "--eye", "a glossy BRDF's per-vertex radiance needs the eye point", kExitUsage);
+        if (!(options.phong->exponent > 0.0 && std::isfinite(options.phong->exponent)))
+            throw Error("", "--brdf", "the Phong exponent must be > 0", kExitUsage);
+        if (!(options.phong->ks >= 0.0 && options.phong->ks <= 1.0))
+            throw Error("", "--brdf", "the Phong specular albedo must lie in [0, 1]", kExitUsage);
+    }
     std::vector<double> solidAngle = sh::texelSolidAngles(env); // checks the size against the layout
     int width = env.radiance.width, height = env.radiance.height;
     size_t texels = solidAngle.size();
@@ -110,7 +119,18 @@ ReferenceRadiance referenceDirectRadiance(const TriMesh& receiver, const std::ve
                 float normal[3] = {n[0] / length, n[1] / length, n[2] / length};
                 float origin[3];
                 for (int c = 0; c < 3; ++c) origin[c] = receiver.positions[3 * v + c] + offset * normal[c];
-                double sum[3] = {0, 0, 0};
+                // The Phong lobe's mirror direction toward the eye; no lobe when the eye is below the surface.
+                float mirror[3] = {0, 0, 0};
+                bool glossy = false;
+                if (options.phong && options.phong->ks > 0.0) {
+                    float out[3];
+                    for (int c = 0; c < 3; ++c) out[c] = (*options.eye)[size_t(c)] - receiver.positions[3 * v + c];
+                    float toEye = std::sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
+                    float cosOut = toEye > 0.0f ? (out[0] * normal[0] + out[1] * normal[1] + out[2] * normal[2]) / toEye : 0.0f;
+                    glossy = cosOut > 0.0f;
+                    for (int c = 0; c < 3; ++c) mirror[c] = 2.0f * cosOut * normal[c] - out[c] / toEye;
+                }
+                double sum[3] = {0, 0, 0}, glossySum[3] = {0, 0, 0};
                 for (size_t t = 0; t < texels; ++t) {
                     const float* w = &direction[3 * t];
                     float cosine = normal[0] * w[0] + normal[1] * w[1] + normal[2] * w[2];
@@ -143,11 +163,14 @@ ReferenceRadiance referenceDirectRadiance(const TriMesh& receiver, const std::ve
                     }
                     if (!visible) continue;
                     for (int c = 0; c < 3; ++c) sum[c] += weighted[3 * t + c] * cosine;
+                    if (!glossy) continue;
+                    double lobe = pathtrace::phongLobe(mirror, w, options.phong->exponent, options.phong->ks);
+                    for (int c = 0; c < 3; ++c) glossySum[c] += weighted[3 * t + c] * cosine * lobe;
                 }
                 for (int c = 0; c < 3; ++c) {
                     float albedo = options.albedo ? (*options.albedo)[size_t(c)]
                                    : receiver.albedo.empty() ? 1.0f : receiver.albedo[3 * v + c];
-                    result.radiance[3 * v + c] = float(albedo / std::numbers::pi * sum[c]);
+                    result.radiance[3 * v + c] = float(albedo / std::numbers::pi * sum[c] + glossySum[c]);
                 }
             }
             rays += blockRays;

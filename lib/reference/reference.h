@@ -90,12 +90,19 @@ struct DirectOptions {
     std::optional<std::array<float, 3>> albedo; // as ReferenceOptions::albedo
     bool shadows = true; // false: unshadowed irradiance (no rays at all)
     int threads = 0;
+    // Glossy: the Phong lobe of `phong` on top of the albedo (as ReferenceOptions::phong), toward the eye point
+    // `eye`, which it then needs.
+    std::optional<PhongBrdf> phong;
+    std::optional<std::array<float, 3>> eye;
 };
 // Outgoing radiance at every receiver vertex from direct light only, as the exact sum over every texel of the map
 // at its full resolution: albedo / pi * sum_t L_t max(0, N . w_t) V_t dw_t, texel-centre directions, exact texel
 // solid angles, V_t one Embree shadow ray from the vertex (pushed off along its normal) against the receiver and
 // every occluder. A flat receiver cannot shadow itself, so there only the rays that meet an occluder's bounding
-// sphere are cast. Deterministic; standardError is zero. Needs receiver normals; throws prt::Error otherwise.
+// sphere are cast. With options.phong the sum is sum_t L_t f(w_t, w_o) max(0, N . w_t) V_t dw_t, f the diffuse
+// plus Phong BRDF (docs/conventions.md, "Glossy BRDF") evaluated at texel centres, w_o the unit direction from the
+// vertex to options.eye: the exact direct glossy radiance, the oracle of prt glossy (docs/glossy.md).
+// Deterministic; standardError is zero. Needs receiver normals, and the eye with phong; throws prt::Error otherwise.
 ReferenceRadiance referenceDirectRadiance(const TriMesh& receiver, const std::vector<DirectOccluder>& occluders,
                                           const EnvironmentMap& env, const DirectOptions& options);
 

@@ -1,5 +1,5 @@
-// The glossy runtime: lobe interpolation between the 3 views around the eye direction and lobe integration
-// against a box-filtered environment chain. Needs only the bundle reader and the standard library.
+// The glossy runtime: the 3 views around the eye direction, each view's lobes turned onto the eye's mirror
+// direction and integrated against a box-filtered environment chain, their radiances blended. Needs only the bundle reader and the standard library.
 #include "runtime.h"
 
 #include <algorithm>
@@ -186,8 +186,34 @@ void integrateLobe(const PrefilteredEnvironment& env, const float lobe[5], float
     for (int c = 0; c < 3; ++c) radiance[c] = float(lobe[0] * sum[c]);
 }
 
+void turnViewLobes(const GlossyModel& model, uint32_t vertex, uint32_t view, const float mirror[3], float* out) {
+    const float* n = &model.normals[size_t(vertex) * 3];
+    const float* w = &model.views[size_t(view) * 3];
+    double ln2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
+    double c = (double(w[0]) * n[0] + double(w[1]) * n[1] + double(w[2]) * n[2]) / ln2;
+    double from[3], to[3] = {mirror[0], mirror[1], mirror[2]};
+    for (int i = 0; i < 3; ++i) from[i] = 2.0 * c * n[i] - w[i];
+    // Rodrigues' rotation about from x to, by the angle between them (unit vectors).
+    double axis[3] = {from[1] * to[2] - from[2] * to[1], from[2] * to[0] - from[0] * to[2],
+                      from[0] * to[1] - from[1] * to[0]};
+    double sine = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    double cosine = from[0] * to[0] + from[1] * to[1] + from[2] * to[2];
+    const float* lobes = &model.values[(size_t(vertex) * model.viewCount() + view) * size_t(model.lobes) * 5];
+    std::copy_n(lobes, size_t(model.lobes) * 5, out);
+    if (!(sine > 1e-9)) return;
+    for (double& a : axis) a /= sine;
+    for (int k = 0; k < model.lobes; ++k) {
+        float* lobe = out + k * 5;
+        double m[3] = {lobe[1], lobe[2], lobe[3]};
+        double cross[3] = {axis[1] * m[2] - axis[2] * m[1], axis[2] * m[0] - axis[0] * m[2], axis[0] * m[1] - axis[1] * m[0]};
+        double along = axis[0] * m[0] + axis[1] * m[1] + axis[2] * m[2];
+        for (int i = 0; i < 3; ++i) lobe[1 + i] = float(m[i] * cosine + cross[i] * sine + axis[i] * along * (1.0 - cosine));
+    }
+}
+
 void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env, const float eye[3],
                     float* radiance) {
+    std::vector<float> turned(size_t(model.lobes) * 5);
     for (uint32_t v = 0; v < model.vertexCount; ++v) {
         float* out = radiance + size_t(v) * 3;
         out[0] = out[1] = out[2] = 0.0f;
@@ -201,11 +227,20 @@ void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env,
         uint32_t views[3];
         float weights[3];
         viewWeights(model, d, views, weights);
-        for (int k = 0; k < model.lobes; ++k) {
-            float lobe[5], lit[3];
-            interpolateLobe(model, v, k, views, weights, lobe);
-            integrateLobe(env, lobe, lit);
-            for (int c = 0; c < 3; ++c) out[c] += lit[c];
+        // The eye's mirror direction about the (unit) normal; each view's lobes turned onto it, then the three
+        // views' radiances blended: no lobe of one view is paired with a lobe of another.
+        double ln2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
+        double c = (double(d[0]) * n[0] + double(d[1]) * n[1] + double(d[2]) * n[2]) / ln2;
+        float mirror[3];
+        for (int i = 0; i < 3; ++i) mirror[i] = float(2.0 * c * n[i] - d[i]);
+        for (int j = 0; j < 3; ++j) {
+            if (!(weights[j] > 0.0f)) continue;
+            turnViewLobes(model, v, views[j], mirror, turned.data());
+            for (int k = 0; k < model.lobes; ++k) {
+                float lit[3];
+                integrateLobe(env, &turned[size_t(k) * 5], lit);
+                for (int i = 0; i < 3; ++i) out[i] += weights[j] * lit[i];
+            }
         }
     }
 }

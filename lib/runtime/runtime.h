@@ -388,8 +388,14 @@ PrefilteredEnvironment prefilterEnvironment(const float* rgb, int width, int hei
 // at most a quarter of the lobe's width 1 / sqrt(lambda).
 void integrateLobe(const PrefilteredEnvironment& env, const float lobe[5], float radiance[3]);
 
-// Glossy radiance of every vertex toward the point `eye`: the sum of its interpolated lobes integrated against
-// the environment; zero where the eye is below a vertex's tangent plane. radiance [V][3].
+// The lobes of vertex `vertex` at view `view`, each mean turned by the rotation that takes the view's mirror
+// direction about the vertex normal to unit `mirror` (amplitude and sharpness kept): out [lobes][5].
+void turnViewLobes(const GlossyModel& model, uint32_t vertex, uint32_t view, const float mirror[3], float* out);
+
+// Glossy radiance of every vertex toward the point `eye`: for each of the 3 views around the eye direction, that
+// view's lobes turned onto the eye's mirror direction (turnViewLobes) and integrated against the environment, the
+// three radiances blended with the barycentric weights (docs/glossy.md, "Runtime": lobes are never paired across
+// views); zero where the eye is below a vertex's tangent plane. radiance [V][3].
 void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env, const float eye[3],
                     float* radiance);
 

@@ -52,8 +52,10 @@ TEST(GlossyFit, SingleGaussianRecoveredByBothSolvers) {
     expectRecovered(ceres, 0, truth, energy);
     solveOpenCl(grid, opencl, FitWeights{}, FitBounds{}, SolverOptions{});
     expectRecovered(opencl, 0, truth, energy);
-    // The objective both minimise is the one reported.
-    EXPECT_FLOAT_EQ(opencl.cost[0], float(objective(grid, opencl, 0, FitWeights{}, FitBounds{}, opencl.params.data())));
+    // The kernel reports its own objective at its double end point; the host's objective at the returned float
+    // parameters agrees up to their rounding.
+    EXPECT_NEAR(opencl.cost[0], objective(grid, opencl, 0, FitWeights{}, FitBounds{}, opencl.params.data()),
+                1e-9 * energy);
 }
 
 TEST(GlossyFit, OpenClBatchIsBitIdenticalWhereverAProblemSits) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -71,6 +72,57 @@ TEST(GlossyRuntime, InterpolationBlendsLinearlyNormalisedAndInLog) {
     EXPECT_FLOAT_EQ(lobe[0], 2.0f);
     EXPECT_NEAR(lobe[4], 30.0f, 1e-4f);
     EXPECT_FLOAT_EQ(lobe[3], 1.0f);
+}
+
+// A lobe on its view's mirror direction is turned onto the eye's mirror direction; amplitude and sharpness stay.
+TEST(GlossyRuntime, TurnedLobesFollowTheMirrorDirection) {
+    const prt::glossy::ViewSet& views = prt::glossy::viewSet();
+    std::vector<float> values(92 * 2 * 5, 0.0f);
+    for (int v = 0; v < 92; ++v) {
+        const auto& w = views.directions[v];
+        float mirror[3] = {-w[0], -w[1], w[2]}; // about the normal (0, 0, 1)
+        float* lobe = &values[v * 10];
+        lobe[0] = 2.0f, lobe[1] = mirror[0], lobe[2] = mirror[1], lobe[3] = mirror[2], lobe[4] = 40.0f;
+        lobe[5] = 1.0f, lobe[6] = 0.0f, lobe[7] = 0.0f, lobe[8] = 1.0f, lobe[9] = 8.0f; // along the normal
+    }
+    prt::GlossyModel model = modelOf(2, values);
+    const float length = std::sqrt(0.36f * 0.36f + 0.933f * 0.933f);
+    const float target[3] = {0.36f / length, 0.0f, 0.933f / length};
+    float turned[10];
+    for (uint32_t v : {0u, 17u, 50u}) {
+        if (views.directions[v][2] <= 0.0f) continue;
+        prt::turnViewLobes(model, 0, v, target, turned);
+        EXPECT_NEAR(turned[1], target[0], 1e-5f) << v;
+        EXPECT_NEAR(turned[3], target[2], 1e-5f) << v;
+        EXPECT_EQ(turned[0], 2.0f);
+        EXPECT_EQ(turned[4], 40.0f);
+        EXPECT_NEAR(turned[5 + 1] * turned[5 + 1] + turned[5 + 2] * turned[5 + 2] + turned[5 + 3] * turned[5 + 3], 1.0f, 1e-5f);
+    }
+}
+
+// The runtime pairs no lobe of one view with a lobe of another: swapping the order of one view's lobes changes
+// nothing (a parameter blend would pair lobe k of every view).
+TEST(GlossyRuntime, GlossyRadianceDoesNotDependOnLobeOrder) {
+    const prt::glossy::ViewSet& views = prt::glossy::viewSet();
+    std::vector<float> values(92 * 2 * 5, 0.0f);
+    for (int v = 0; v < 92; ++v) {
+        const auto& w = views.directions[v];
+        float* lobe = &values[v * 10];
+        lobe[0] = 1.0f, lobe[1] = -w[0], lobe[2] = -w[1], lobe[3] = w[2], lobe[4] = 30.0f;
+        lobe[5] = 0.3f, lobe[6] = 0.6f, lobe[7] = 0.0f, lobe[8] = 0.8f, lobe[9] = 5.0f;
+    }
+    std::vector<float> map(128 * 64 * 3);
+    for (size_t i = 0; i < map.size(); ++i) map[i] = 0.5f + 0.5f * float(std::sin(0.01 * double(i)));
+    prt::PrefilteredEnvironment env = prt::prefilterEnvironment(map.data(), 128, 64);
+    const float eye[3] = {1.0f, 0.5f, 4.0f};
+    prt::GlossyModel model = modelOf(2, values);
+    float before[3], after[3];
+    prt::glossyRadiance(model, env, eye, before);
+    for (int v = 0; v < 92; v += 2) std::swap_ranges(&values[v * 10], &values[v * 10 + 5], &values[v * 10 + 5]);
+    model = modelOf(2, values);
+    prt::glossyRadiance(model, env, eye, after);
+    EXPECT_GT(before[0], 0.0f);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(after[c], before[c], 1e-6f * before[c]) << c;
 }
 
 TEST(GlossyRuntime, LobeIntegralUnderConstantAndGaussianLight) {
