@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 # with its tests (scripts/test.sh builds them). npm and node fetch the bunny (Makefile.data).
 packages=(
   cmake ninja-build ccache g++ make pkg-config git ca-certificates xz-utils
-  libembree-dev libopenmesh-dev libopenexr-dev libopenimageio-dev libceres-dev libtinygltf-dev
+  libembree-dev libopenmesh-dev libopenexr-dev libopenimageio-dev libceres-dev libtinygltf-dev libtinyobjloader-dev
   ocl-icd-opencl-dev opencl-headers
   libtbb-dev libeigen3-dev libcli11-dev nlohmann-json3-dev libtomlplusplus-dev
   libxxhash-dev libgtest-dev libbenchmark-dev

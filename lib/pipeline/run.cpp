@@ -3,22 +3,87 @@
 #include "pipeline_internal.h"
 
 #include "core.h"
+#include "json_input.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <set>
+#include <sstream>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
 
 namespace prt {
 
+namespace {
+
+// The files a mesh input reads besides itself, which its cache key must cover too: a .gltf's external buffers and
+// images (URIs that are not data: URIs), an OBJ's MTL file and the texture maps the MTL names. Names are resolved
+// next to the input; ones that do not exist are left out (the stage reports them). A .glb is self-contained.
+std::vector<std::string> meshCompanions(const std::string& path) {
+    std::vector<std::string> files;
+    const fs::path folder = fs::path(path).parent_path();
+    auto add = [&](std::string name) {
+        for (char& c : name)
+            if (c == '\\') c = '/';
+        std::error_code error;
+        fs::path file = folder / name;
+        if (!name.empty() && fs::is_regular_file(file, error)) files.push_back(file.string());
+    };
+    const std::string extension = fileExtension(path);
+    if (extension == "gltf") {
+        nlohmann::json gltf = readJsonFile(path, size_t(1) << 30);
+        for (const char* array : {"buffers", "images"})
+            if (gltf.contains(array) && gltf[array].is_array())
+                for (const nlohmann::json& item : gltf[array])
+                    if (item.is_object() && item.contains("uri") && item["uri"].is_string() &&
+                        item["uri"].get<std::string>().rfind("data:", 0) != 0)
+                        add(item["uri"].get<std::string>());
+    } else if (extension == "obj") {
+        // The last word of every line that starts with `keyword` (map_Kd options come before the file name).
+        auto lastWords = [](const std::string& text, const std::string& keyword) {
+            std::vector<std::string> words;
+            std::istringstream lines(text);
+            for (std::string line; std::getline(lines, line);) {
+                std::istringstream tokens(line);
+                std::string first, word, last;
+                if (!(tokens >> first) || first.rfind(keyword, 0) != 0) continue;
+                while (tokens >> word) last = word;
+                if (!last.empty()) words.push_back(last);
+            }
+            return words;
+        };
+        for (const std::string& library : lastWords(readFileBytes(path), "mtllib")) {
+            size_t before = files.size();
+            add(library);
+            if (files.size() == before) continue;
+            for (const std::string& map : lastWords(readFileBytes(files.back()), "map_")) add(map);
+        }
+    }
+    return files;
+}
+
+} // namespace
+
 std::map<std::string, InputFile> hashPipelineInputs(const Pipeline& pipeline, const RunOptions& options) {
     std::map<std::string, InputFile> files;
     std::string memo = hashMemoFile(options);
-    for (const PipelineInput& input : pipeline.inputs) files[input.name] = {input.path, hashFileMemo(input.path, memo)};
+    for (const PipelineInput& input : pipeline.inputs) {
+        std::string hash = hashFileMemo(input.path, memo);
+        // A mesh that reads other files (a .gltf's buffers and images, an OBJ's MTL and textures): its hash is that
+        // of the list of all their hashes, so that a changed texture reruns meshprep.
+        std::vector<std::string> companions =
+            input.kind == FileKind::Mesh ? meshCompanions(input.path) : std::vector<std::string>();
+        if (!companions.empty()) {
+            std::string all = hash;
+            for (const std::string& file : companions) all += "\n" + file + " " + hashFileMemo(file, memo);
+            hash = hashBytes(all.data(), all.size());
+        }
+        files[input.name] = {input.path, hash};
+    }
     return files;
 }
 

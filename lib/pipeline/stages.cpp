@@ -53,14 +53,16 @@ std::vector<StageSpec> makeCatalogue() {
                      {"sphere", "plane", "box-room", "cavity", "sphere-in-cavity", "two-spheres"}, true, true}};
     stages.push_back(scene);
 
-    StageSpec meshprep{"meshprep", 1, "clean a mesh: weld, normals, decimation"};
+    // 2: glTF scenes and OBJ with MTL are kept as the asset (scene bundles, version 3)
+    StageSpec meshprep{"meshprep", 2, "clean a mesh: weld, normals, decimation; keep a glTF or OBJ+MTL scene as the asset"};
     meshprep.inputs = {{"mesh", FileKind::Mesh, "", ""}};
     meshprep.outputs = {{"mesh", FileKind::Mesh, "-o", "glb"}, {"report", FileKind::Report, "--report", "json"}};
     meshprep.params = {{"weld-tolerance", ParamType::Number, 0.0, 1.0}, // of the bounding-box diagonal
                        {"weld-ignore-attributes", ParamType::Boolean},
                        {"recompute-normals", ParamType::Boolean},
                        {"decimate-to", ParamType::Integer, 1.0, 2147483647.0}, // triangles
-                       {"scale", ParamType::Number, 1e-30, 1e30}};
+                       {"scale", ParamType::Number, 1e-30, 1e30},
+                       {"flatten", ParamType::Boolean}};
     stages.push_back(meshprep);
 
     StageSpec envsh{"envsh", 1, "project an environment map onto SH"};
@@ -69,7 +71,8 @@ std::vector<StageSpec> makeCatalogue() {
     envsh.params = {{"order", ParamType::Integer, 1.0, kMaxOrder}, kRotateY, kWindow};
     stages.push_back(envsh);
 
-    StageSpec transfer{"transfer", 3, "per-vertex SH transfer by ray casting"}; // 2: transfer_bounce layer; 3: one spawn rule (lib/raycast)
+    // 2: transfer_bounce layer; 3: one spawn rule (lib/raycast); 4: scenes (materials at hits, irradiance transfer)
+    StageSpec transfer{"transfer", 4, "per-vertex SH transfer by ray casting"};
     transfer.inputs = {{"mesh", FileKind::Mesh, "", ""}};
     transfer.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
     transfer.params = {{"mode", ParamType::String, 0.0, 0.0, {"unshadowed", "shadowed", "interreflected"}},
@@ -169,14 +172,16 @@ std::vector<StageSpec> makeCatalogue() {
                      {"no-coherence", ParamType::Boolean},
                      {"iterations", ParamType::Integer, 1.0, 100000.0},
                      {"lobe-type", ParamType::String, 0.0, 0.0, {"float16", "float32"}},
-                     {"indirect-glossy", ParamType::Boolean}};
+                     {"indirect-glossy", ParamType::Boolean},
+                     {"warm-start", ParamType::Boolean}};
     glossy.takesThreads = true;
     glossy.shardable = true;
     glossy.shardRefusal = glossyShardRefusal;
     stages.push_back(glossy);
 
     // 2: the decomposed lighting (lights input) keeps its negative residual instead of clamping it
-    StageSpec reference{"reference", 2, "ground-truth radiance by path tracing"};
+    // 3: scenes traced with their materials
+    StageSpec reference{"reference", 3, "ground-truth radiance by path tracing"};
     reference.inputs = {{"mesh", FileKind::Mesh, "", ""},
                         {"env", FileKind::Env, "--env", "", true},
                         {"lights", FileKind::Sh, "--lights", "", true}};
@@ -193,7 +198,8 @@ std::vector<StageSpec> makeCatalogue() {
     reference.takesThreads = true;
     stages.push_back(reference);
 
-    StageSpec relight{"relight", 1, "per-vertex radiance of a bundle under new lighting"};
+    // 2: a scene's irradiance transfer times its diffuse_albedo layer
+    StageSpec relight{"relight", 2, "per-vertex radiance of a bundle under new lighting"};
     relight.inputs = {{"bundle", FileKind::Bundle, "", ""},
                       {"env", FileKind::Env, "--env", "", true},
                       {"sh", FileKind::Sh, "--sh", "", true},
