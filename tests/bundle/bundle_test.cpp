@@ -332,13 +332,16 @@ TEST(Bundle, PlainGltfReadsAsMeshWithoutLayers) {
 
 TEST(Bundle, BaseColorFactorAloneFillsAlbedo) {
     std::string path = scratch("factor.glb").string();
-    writeModel(plainModel(false), path, true);
+    tinygltf::Model model = plainModel(false);
+    model.materials[0].pbrMetallicRoughness.metallicFactor = 0.0; // glTF's default is 1: a metal has no diffuse albedo
+    writeModel(model, path, true);
     prt::TriMesh mesh = prt::readBundle(path).mesh;
     ASSERT_EQ(mesh.albedo.size(), 18u);
     for (size_t v = 0; v < 6; ++v) EXPECT_EQ(std::vector<float>(mesh.albedo.begin() + 3 * v, mesh.albedo.begin() + 3 * v + 3),
                                              (std::vector<float>{0.5f, 0.25f, 1.0f}));
     tinygltf::Model white = plainModel(false);
     white.materials[0].pbrMetallicRoughness.baseColorFactor = {1, 1, 1, 1};
+    white.materials[0].pbrMetallicRoughness.metallicFactor = 0.0;
     writeModel(white, path, true);
     EXPECT_TRUE(prt::readBundle(path).mesh.albedo.empty());
 }
