@@ -146,12 +146,25 @@ void splatCell(const SourceTexel& source, int cubeSize, double u0, double u1, do
         double boundary = columnCut ? 2.0 * hiColumn / cubeSize - 1.0 : 1.0 - 2.0 * hiRow / cubeSize;
         double g[4];
         for (int c = 0; c < 4; ++c) g[c] = columnCut ? corners[c].a - boundary : boundary - corners[c].b;
-        double low = 0.5 * (negativeFraction(g[0], g[1], g[3]) + negativeFraction(g[0], g[3], g[2]));
         CubePoint lowPoint = centre, highPoint = centre;
         if (columnCut) lowPoint.column = loColumn, highPoint.column = hiColumn;
         else lowPoint.row = loRow, highPoint.row = hiRow;
-        if (low > 0.0) addSplat(out, first, lowPoint.texel(cubeSize), solidAngle * low);
-        if (low < 1.0) addSplat(out, first, highPoint.texel(cubeSize), solidAngle * (1.0 - low));
+        double lowAngle;
+        if (source.env->layout == EnvLayout::CubeStrip) {
+            // A cube-strip texel lies on the same face: a is linear in u and b in v, so the boundary is the line
+            // u = cut (or v = cut) and the parts are rectangles with exact solid angles.
+            double g0 = g[0], g1 = columnCut ? g[1] : g[2];
+            double lo = columnCut ? u0 : v0, hi = columnCut ? u1 : v1;
+            double p0 = lo + kInset * (hi - lo), p1 = hi - kInset * (hi - lo);
+            double cut = g0 != g1 ? std::clamp(p0 + (p1 - p0) * g0 / (g0 - g1), lo, hi) : 0.5 * (lo + hi);
+            double part = columnCut ? source.solidAngle(u0, cut, v0, v1) : source.solidAngle(u0, u1, v0, cut);
+            lowAngle = g0 < 0.0 ? part : solidAngle - part; // the low texel holds the cell's first edge or its last
+        } else {
+            // (phi, cos theta): the solid angle is uniform over the cell, so the area fraction is the solid angle's.
+            lowAngle = solidAngle * 0.5 * (negativeFraction(g[0], g[1], g[3]) + negativeFraction(g[0], g[3], g[2]));
+        }
+        if (lowAngle > 0.0) addSplat(out, first, lowPoint.texel(cubeSize), lowAngle);
+        if (lowAngle < solidAngle) addSplat(out, first, highPoint.texel(cubeSize), solidAngle - lowAngle);
         return;
     }
     if (depth >= kMaxDepth) {

@@ -268,9 +268,11 @@ bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float 
         k0 = k1 - 1;
         tk = (distance - r[size_t(k0)]) / (r[size_t(k1)] - r[size_t(k0)]);
     }
-    float inverse2 = float(distance > r.front() ? 1.0 / (length * length) : 1.0 / (double(r.front()) * r.front()));
+    // rho^2 FIV interpolated, then divided by rho^2: the weights carry r_k^2 and the 1 / rho^2 comes last, in
+    // double, so a far occluder's tiny value underflows to 0 (it hides nothing) rather than every weight.
+    const double inverse2 = distance > r.front() ? 1.0 / (length * length) : 1.0 / (double(r.front()) * r.front());
     auto rowOf = [&](int k, int j, int i) { return (size_t(k) * o.polar + size_t(j)) * o.azimuth + size_t(i); };
-    auto shellWeight = [&](int k) { return r[size_t(k)] * r[size_t(k)] * inverse2; };
+    auto shellWeight = [&](int k) { return r[size_t(k)] * r[size_t(k)]; };
     float angular[4] = {(1 - ti) * (1 - tj), ti * (1 - tj), (1 - ti) * tj, ti * tj};
     Corner corners[8];
     int ks[2] = {k0, k1};
@@ -295,9 +297,9 @@ bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float 
         }
         if (used <= 0.0f) return false;
     }
-    float scale = full / used;
-    for (int e = 0; e < 9; ++e) fiv[e] *= scale;
-    for (int e = 0; e < 3; ++e) power[e] *= scale;
+    const double scale = double(full) / double(used) * inverse2;
+    for (int e = 0; e < 9; ++e) fiv[e] = float(fiv[e] * scale);
+    for (int e = 0; e < 3; ++e) power[e] = float(power[e] * scale);
     return true;
 }
 

@@ -38,15 +38,15 @@ std::array<double, 3> cubePower(const CubeEnvironment& env) {
 } // namespace
 
 TEST(FivResample, OneHotTexelKeepsItsPowerAndItsPlaceWhereverItLies) {
-    // A 2.8 degree sun on 22.5 (4^2) and 5.6 degree (16^2) cube texels: point samples would miss it or count it
+    // A 5.6 degree sun on 22.5 (4^2) and 11.25 degree (8^2) cube texels: point samples would miss it or count it
     // several times over; area weighting keeps its power exactly and puts it where it is.
-    const int width = 128, height = 64;
+    const int width = 64, height = 32;
     std::vector<double> solidAngle = sh::texelSolidAngles(equirect(width, 0, 0, 0));
     // Texels at a face centre, on face edges and corners (45 degrees, the cube's corner latitude), near a pole,
     // on the pole row, and at odd places.
-    const int places[][2] = {{0, 32}, {16, 32}, {15, 16}, {80, 19}, {112, 12}, {5, 0}, {77, 63}, {64, 1},
-                             {100, 50}, {31, 45}, {127, 31}};
-    for (int size : {4, 16})
+    const int places[][2] = {{0, 16}, {8, 16}, {7, 8}, {40, 9}, {56, 6}, {5, 0}, {38, 31}, {32, 1},
+                             {50, 25}, {15, 22}, {63, 15}};
+    for (int size : {4, 8})
         for (const auto& place : places) {
             EnvironmentMap env = equirect(width, 0, 0, 0);
             size_t texel = size_t(place[1]) * width + place[0];
