@@ -309,7 +309,7 @@ TEST(FivCli, HardenedReadersRefuseEveryCrashClassWithoutOutput) {
          "component type is uint32"},
         {edited("centre-string.glb", [&](Bundle& b) { layer(b, "fiv").params["centre"][1] = "up"; }),
          "centre[1]"},
-        {edited("radii-object.glb", [&](Bundle& b) { layer(b, "fiv").params["shell_radii"][2] = nlohmann::json::object(); }),
+        {edited("radii-object.glb", [&](Bundle& b) { layer(b, "fiv").params["shell_radii"][2] = false; }),
          "shell_radii[2]"},
         {edited("radius-bool.glb", [&](Bundle& b) { layer(b, "fiv").params["radius"] = true; }), "not a number"},
         {edited("centre-huge.glb", [&](Bundle& b) { layer(b, "fiv").params["centre"][0] = 1e39; }), "centre[0]"},
