@@ -50,6 +50,8 @@ void runFivCommand(FivArgs args) {
     args.stage.visibility.grid.shellMin = shells[0];
     args.stage.visibility.grid.shellMax = shells[1];
     fiv::checkGrid(args.stage.visibility.grid, "", kExitUsage); // before anything is read or allocated
+    fiv::checkWork(args.stage.visibility.grid, args.stage.visibility.cube, args.stage.visibility.supersample, "",
+                   kExitUsage);
     if (!args.shard.empty()) parseShard(args.shard, args.stage.visibility.shardIndex, args.stage.visibility.shardCount);
     args.stage.visibility.threads = resolveThreads(args.stage.visibility.threads);
     args.stage.half = !args.float32;

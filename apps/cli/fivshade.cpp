@@ -45,7 +45,13 @@ std::vector<std::array<float, 3>> parsePlacements(const std::vector<std::string>
         throw Error("", "--at", "give one --at X,Y,Z per --occluder (" + std::to_string(occluders.size()) +
                                     " occluders, " + std::to_string(at.size()) + " placements)", kExitUsage);
     std::vector<std::array<float, 3>> placements;
-    for (const std::string& text : at) placements.push_back(parsePoint(text, "--at"));
+    for (const std::string& text : at) {
+        placements.push_back(parsePoint(text, "--at"));
+        for (float x : placements.back())
+            if (std::abs(double(x)) > kFivMaxCoordinate)
+                throw Error("", "--at", "'" + text + "' lies beyond +-" + std::to_string(int64_t(kFivMaxCoordinate)) +
+                                            " (FIV bounds coordinates: float32 spacing there is 64 units)", kExitUsage);
+    }
     return placements;
 }
 
@@ -70,6 +76,7 @@ void runFivshade(const FivshadeArgs& args) {
         throw Error("", "--occluder", "needs at least one --occluder or --self, or a FIV scene bundle", kExitUsage);
     if (receiver.normals.size() != receiver.positions.size() || receiver.positions.empty())
         throw Error(args.receiver, "mesh", "has no vertex normals (prt meshprep adds them)");
+    checkFivPoints(receiver.positions, args.receiver);
     std::string envHash = hashFile(args.env);
 
     // Each distinct file is loaded once: instances of one type share its grid.

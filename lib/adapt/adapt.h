@@ -20,7 +20,9 @@ namespace prt::adapt {
 // What lighting the error is measured under.
 //   Maps:  the given lightings as they are (the error each vertex has under each of them, exactly).
 //   Worst: any rotation of the given lightings: per band, |T_l . L_l| <= |T_l| |L_l| (Cauchy-Schwarz), and band
-//          norms do not change under rotation, so the bound holds for every orientation of every given map.
+//          norms do not change under rotation, so the absolute tail bound holds for every orientation of every
+//          given map. The relative error divides it by the given orientation's RMS radiance s; a rotated map
+//          whose own RMS is s' has a relative error of at most (the bound) * s / s', not the bound itself.
 enum class Prior { Maps, Worst };
 
 // Per-vertex truncation error for each order n = 1..order: error[v * order + (n - 1)] is the largest, over the
@@ -51,6 +53,16 @@ std::vector<uint8_t> budgetOrders(const std::vector<double>& errorSquared, size_
 // order (so every vertex stays within its error bound). Needs indices < orders.size(). Deterministic.
 // Returns the number of vertices raised.
 size_t smoothOrders(const std::vector<uint32_t>& indices, std::vector<uint8_t>& orders, int maxStep = 1);
+
+// smoothOrders that keeps the per-vertex bound: under Prior::Maps the truncation error is not monotone in the
+// order (bands can cancel), so a vertex raised by grading can leave its bound. Grades, raises every vertex whose
+// error (truncationError's table, `order` values per vertex) exceeds maxError to its next order within it, and
+// repeats until both hold. Needs orders within the bound (selectOrders') and indices < orders.size(). Guarantees:
+// every edge differs by at most maxStep, every vertex's error <= maxError, and the result is the smallest such
+// field above the input (no vertex higher than the bound and the grading together need). Deterministic. Returns
+// the number of vertices raised.
+size_t smoothOrdersWithinBound(const std::vector<uint32_t>& indices, std::vector<uint8_t>& orders,
+                               const std::vector<float>& error, int order, double maxError, int maxStep = 1);
 
 // Ragged storage: vertex v's coefficients are rows offsets[v] .. offsets[v+1] - 1 of values ([rows][3]), the
 // first orders[v]^2 coefficients of its transfer.

@@ -194,7 +194,8 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
             if (options.perVertexBudget) {
                 std::vector<float> error = truncationError(full.data(), V, order, lightings, options.prior);
                 orders = selectOrders(error, V, order, options.maxError);
-                stats.raisedBySmoothing = smoothOrders(triangles, orders, options.maxStep);
+                stats.raisedBySmoothing =
+                    smoothOrdersWithinBound(triangles, orders, error, order, options.maxError, options.maxStep);
             } else {
                 // Truncation error is not monotone in the order (bands can cancel), so grading can overshoot the
                 // budget: then spend a smaller one until the graded field fits (at worst the full order, exact).

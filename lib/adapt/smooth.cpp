@@ -1,6 +1,8 @@
 // Grading the order across the mesh, and the seam measure that checks it.
 #include "adapt.h"
 
+#include "core.h"
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -36,6 +38,29 @@ size_t smoothOrders(const std::vector<uint32_t>& indices, std::vector<uint8_t>& 
             int lowest = std::max(int(orders[a]), int(orders[b])) - maxStep;
             if (orders[a] < lowest) orders[a] = uint8_t(lowest), changed = true;
             if (orders[b] < lowest) orders[b] = uint8_t(lowest), changed = true;
+        }
+    }
+    size_t raised = 0;
+    for (size_t v = 0; v < orders.size(); ++v) raised += orders[v] != original[v];
+    return raised;
+}
+
+size_t smoothOrdersWithinBound(const std::vector<uint32_t>& indices, std::vector<uint8_t>& orders,
+                               const std::vector<float>& error, int order, double maxError, int maxStep) {
+    std::vector<uint8_t> original = orders;
+    if (error.size() != orders.size() * size_t(order))
+        throw Error("", "smoothOrdersWithinBound", "error table does not hold `order` values per vertex", kExitFailure);
+    // Both steps only raise, and each maps a field below the smallest admissible graded field G (one that is graded
+    // and within the bound everywhere) to one still below G: grading because G is graded, the bound step because
+    // G[v] is an order within the bound at or above the current one. Order `order` has error 0, so G exists, and
+    // the loop ends at G itself: nothing is raised more than the bound and the grading need.
+    for (bool violated = true; violated;) {
+        smoothOrders(indices, orders, maxStep);
+        violated = false;
+        for (size_t v = 0; v < orders.size(); ++v) {
+            int n = std::max(1, int(orders[v]));
+            while (n < order && !(error[v * order + size_t(n - 1)] <= maxError)) ++n;
+            if (n != orders[v]) orders[v] = uint8_t(n), violated = true;
         }
     }
     size_t raised = 0;

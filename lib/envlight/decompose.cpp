@@ -56,13 +56,10 @@ double cover(const ConeLight& light, const double* w, double edge) {
 } // namespace
 
 std::vector<double> lightsProjection(const std::vector<ConeLight>& lights, int order) {
-    const int coefficients = sh::coefficientCount(order);
-    std::vector<double> projection(size_t(coefficients) * 3, 0.0), cap(coefficients);
-    for (const ConeLight& light : lights) {
-        sh::capProjection(order, light.direction.data(), std::cos(light.angularRadius), cap.data());
-        for (int j = 0; j < coefficients; ++j)
-            for (int c = 0; c < 3; ++c) projection[j * 3 + c] += light.radiance[c] * cap[j];
-    }
+    std::vector<double> projection(size_t(sh::coefficientCount(order)) * 3, 0.0);
+    for (const ConeLight& light : lights)
+        sh::addCapRadiance(order, light.direction.data(), std::cos(light.angularRadius), light.radiance.data(),
+                           projection.data());
     return projection;
 }
 

@@ -2,6 +2,11 @@
 #include "fiv.h"
 
 #include "core.h"
+#include "runtime.h"
+
+#include <cmath>
+#include <limits>
+#include <type_traits>
 
 #include <algorithm>
 
@@ -24,19 +29,32 @@ Layer integerLayer(const std::string& name, const std::string& semantic, const c
     return layer;
 }
 
-const Layer& requireLayer(const Bundle& bundle, const std::string& name, const std::string& path) {
-    const Layer* layer = findLayer(bundle, name);
-    if (!layer) throw Error(path, name, "layer is missing (not a bundle from `prt fiv`)");
-    return *layer;
-}
-
 template <typename T>
 T param(const json& params, const char* key, const std::string& path, const std::string& layer) {
     if (!params.contains(key)) throw Error(path, layer, std::string("params.") + key + " is missing");
-    try {
-        return params.at(key).get<T>();
-    } catch (const json::exception&) {
-        throw Error(path, layer, std::string("params.") + key + " has the wrong type");
+    const json& value = params.at(key);
+    const std::string place = layer + ", params." + key;
+    if constexpr (std::is_same_v<T, bool>) {
+        if (!value.is_boolean()) throw Error(path, place, "is " + std::string(value.type_name()) + ", not a boolean");
+        return value.get<bool>();
+    } else if constexpr (std::is_same_v<T, std::string>) {
+        if (!value.is_string()) throw Error(path, place, "is " + std::string(value.type_name()) + ", not a string");
+        return value.get<std::string>();
+    } else if constexpr (std::is_integral_v<T>) {
+        // Range-checked before the cast: 2^32 + 3 must not become 3.
+        if (!value.is_number_integer()) throw Error(path, place, "is " + std::string(value.type_name()) + ", not an integer");
+        bool fits = value.is_number_unsigned() ? value.get<uint64_t>() <= uint64_t(std::numeric_limits<T>::max())
+                                               : value.get<int64_t>() >= int64_t(std::numeric_limits<T>::min()) &&
+                                                     (value.get<int64_t>() < 0 ||
+                                                      uint64_t(value.get<int64_t>()) <= uint64_t(std::numeric_limits<T>::max()));
+        if (!fits) throw Error(path, place, "is out of range");
+        return value.get<T>();
+    } else {
+        if (!value.is_number()) throw Error(path, place, "is " + std::string(value.type_name()) + ", not a number");
+        double x = value.get<double>();
+        if (!std::isfinite(x) || std::abs(x) > kFivMaxCoordinate)
+            throw Error(path, place, "is not a finite number within +-" + std::to_string(int64_t(kFivMaxCoordinate)));
+        return T(x);
     }
 }
 
@@ -76,10 +94,9 @@ Bundle visibilityBundle(const TriMesh& occluder, const Visibility& vis, const js
 }
 
 Visibility readVisibility(const Bundle& bundle, const std::string& path) {
-    const Layer& offsets = requireLayer(bundle, "fiv_mask_offsets", path);
-    const Layer& bits = requireLayer(bundle, "fiv_mask_bits", path);
-    const Layer& valid = requireLayer(bundle, "fiv_mask_valid", path);
-    const json& p = offsets.params;
+    const Layer* header = findLayer(bundle, "fiv_mask_offsets");
+    if (!header) throw Error(path, "fiv_mask_offsets", "layer is missing (not a visibility bundle from `prt fiv`)");
+    const json& p = header->params;
     const std::string name = "fiv_mask_offsets";
     Visibility vis;
     vis.grid.azimuth = param<int>(p, "azimuth", path, name);
@@ -96,17 +113,22 @@ Visibility readVisibility(const Bundle& bundle, const std::string& path) {
     vis.bitsPerTexel = bitsPerTexel(vis.supersample);
     if (param<int>(p, "bits_per_texel", path, name) != vis.bitsPerTexel)
         throw Error(path, name, "bits_per_texel disagrees with supersample");
-    auto centre = param<std::vector<double>>(p, "centre", path, name);
-    if (centre.size() != 3) throw Error(path, name, "params.centre is not 3 numbers");
-    std::copy(centre.begin(), centre.end(), vis.sphere.centre.begin());
+    checkWork(vis.grid, vis.cube, vis.supersample, path, kExitInput);
+    if (!p.contains("centre") || !p.at("centre").is_array() || p.at("centre").size() != 3)
+        throw Error(path, name + ", params.centre", "is not an array of 3 numbers");
+    for (size_t c = 0; c < 3; ++c) {
+        json one = {{"centre", p.at("centre")[c]}};
+        vis.sphere.centre[c] = param<double>(one, "centre", path, name);
+    }
     vis.sphere.radius = param<double>(p, "radius", path, name);
     if (!(vis.sphere.radius > 0.0)) throw Error(path, name, "params.radius must be positive");
     vis.rowBegin = param<size_t>(p, "row_begin", path, name);
     vis.rowEnd = param<size_t>(p, "row_end", path, name);
-    auto shard = param<std::vector<int>>(p, "shard", path, name);
-    if (shard.size() != 2) throw Error(path, name, "params.shard is not [I, N]");
-    vis.shardIndex = shard[0];
-    vis.shardCount = shard[1];
+    if (!p.contains("shard") || !p.at("shard").is_array() || p.at("shard").size() != 2)
+        throw Error(path, name + ", params.shard", "is not [I, N]");
+    json shard = {{"index", p.at("shard")[0]}, {"count", p.at("shard")[1]}};
+    vis.shardIndex = param<int>(shard, "index", path, name + ", params.shard");
+    vis.shardCount = param<int>(shard, "count", path, name + ", params.shard");
     vis.rays = param<uint64_t>(p, "rays", path, name);
     vis.naiveRays = param<uint64_t>(p, "naive_rays", path, name);
     vis.closed = param<bool>(p, "closed", path, name);
@@ -114,13 +136,13 @@ Visibility readVisibility(const Bundle& bundle, const std::string& path) {
     if (vis.rowBegin > vis.rowEnd || vis.rowEnd > samples)
         throw Error(path, name, "rows " + std::to_string(vis.rowBegin) + ".." + std::to_string(vis.rowEnd) +
                                     " lie outside the grid's " + std::to_string(samples) + " samples");
-    size_t rows = vis.rowEnd - vis.rowBegin;
-    if (offsets.integers.size() != rows + 1)
-        throw Error(path, name, "holds " + std::to_string(offsets.integers.size()) + " offsets, the grid header needs " +
-                                    std::to_string(rows + 1));
-    if (valid.integers.size() != rows)
-        throw Error(path, "fiv_mask_valid", "holds " + std::to_string(valid.integers.size()) +
-                                                " rows, the grid header needs " + std::to_string(rows));
+    uint64_t rows = vis.rowEnd - vis.rowBegin;
+    // The one FIV layer check (runtime.h fivLayer): type, count and shape, so no layer is read as another storage.
+    const Layer& offsets = fivLayer(bundle, "fiv_mask_offsets", 0, "fiv_mask_offsets", FivStorage::Uint32, {rows + 1}, path);
+    const Layer& bits = fivLayer(bundle, "fiv_mask_bits", 0, "fiv_mask_bits", FivStorage::Uint8, {}, path);
+    const Layer& valid = fivLayer(bundle, "fiv_mask_valid", 0, "fiv_valid", FivStorage::Uint8, {rows}, path);
+    for (uint32_t v : valid.integers)
+        if (v > 1) throw Error(path, "fiv_mask_valid", "holds a value other than 0 and 1");
     if (offsets.integers.front() != 0 || offsets.integers.back() != bits.integers.size() ||
         !std::is_sorted(offsets.integers.begin(), offsets.integers.end()))
         throw Error(path, name, "offsets do not run from 0 to the size of fiv_mask_bits in order");

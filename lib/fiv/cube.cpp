@@ -15,51 +15,167 @@ namespace prt::fiv {
 
 namespace {
 
-// The cube strip's faces as docs/conventions.md (OpenEXR's ImfEnvmap.h) lays them out: axis, the direction of
-// increasing column, the direction of decreasing row. Same table as lib/sh's cubeStripDirection.
-struct Face {
-    double axis[3], right[3], up[3];
-};
-constexpr Face kFaces[6] = {
-    {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}},   {{-1, 0, 0}, {0, 0, -1}, {0, 1, 0}}, {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},
-    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}}, {{0, 0, 1}, {-1, 0, 0}, {0, 1, 0}}, {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}},
-};
+// A map texel as a rectangle of parameters (u, v) in [0, 1]^2 over which the solid angle is (nearly) uniform, with
+// the direction and the exact solid angle of any sub-rectangle: equirectangular texels in (phi, cos theta), where
+// the solid angle dphi dz is exactly uniform; cube-strip texels in face coordinates (a, b).
+struct SourceTexel {
+    const EnvironmentMap* env;
+    int x = 0, y = 0;
+    double zTop = 1.0, zBottom = -1.0; // equirectangular: cos theta at the texel's top and bottom edges
+    double bend = 0.0;                  // equirectangular: (zTop - zBottom) / (the smaller 1 - z^2 of the row)
 
-// Direction of face coordinates (a, b) in [-1, 1]^2 on `face`, unit.
-void faceDirection(int face, double a, double b, double d[3]) {
-    const Face& f = kFaces[face];
-    double length = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        d[c] = f.axis[c] + a * f.right[c] + b * f.up[c];
-        length += d[c] * d[c];
+    void setRow(int row) {
+        y = row;
+        if (env->layout == EnvLayout::Equirectangular) {
+            zTop = std::cos(std::numbers::pi * row / env->radiance.height);
+            zBottom = std::cos(std::numbers::pi * (row + 1) / env->radiance.height);
+            double r2 = std::min(1.0 - zTop * zTop, 1.0 - zBottom * zBottom);
+            bend = r2 > 0.0 ? (zTop - zBottom) / r2 : INFINITY;
+        }
     }
-    length = std::sqrt(length);
-    for (int c = 0; c < 3; ++c) d[c] /= length;
+    void direction(double u, double v, double d[3]) const {
+        const Image& image = env->radiance;
+        if (env->layout == EnvLayout::Equirectangular) {
+            double z = std::clamp(zTop + v * (zBottom - zTop), -1.0, 1.0), s = std::sqrt(std::max(0.0, 1.0 - z * z));
+            double phi = 2.0 * std::numbers::pi * (x + u) / image.width - std::numbers::pi;
+            d[0] = s * std::sin(phi), d[1] = z, d[2] = -s * std::cos(phi);
+        } else {
+            int size = image.width, face = y / size, row = y % size;
+            sh::cubeFaceDirection(face, 2.0 * (x + u) / size - 1.0, 1.0 - 2.0 * (row + v) / size, d);
+        }
+    }
+    double solidAngle(double u0, double u1, double v0, double v1) const {
+        const Image& image = env->radiance;
+        if (env->layout == EnvLayout::Equirectangular)
+            return 2.0 * std::numbers::pi * (u1 - u0) / image.width * (v1 - v0) * (zTop - zBottom);
+        int size = image.width, row = y % size;
+        return sh::cubeRectangleSolidAngle(2.0 * (x + u0) / size - 1.0, 2.0 * (x + u1) / size - 1.0,
+                                           1.0 - 2.0 * (row + v1) / size, 1.0 - 2.0 * (row + v0) / size);
+    }
+};
+
+struct Splat {
+    uint32_t target;
+    double solidAngle;
+};
+
+void addSplat(std::vector<Splat>& out, size_t first, uint32_t target, double solidAngle) {
+    for (size_t i = first; i < out.size(); ++i)
+        if (out[i].target == target) {
+            out[i].solidAngle += solidAngle;
+            return;
+        }
+    out.push_back({target, solidAngle});
 }
 
-double cornerSolidAngle(double a, double b) { return std::atan2(a * b, std::sqrt(a * a + b * b + 1.0)); }
-
-// The texel of a cube of `size` that direction d falls in.
-size_t cubeTexelOf(int size, const double d[3]) {
-    int axis = 0;
-    for (int c = 1; c < 3; ++c)
-        if (std::abs(d[c]) > std::abs(d[axis])) axis = c;
-    int face = 2 * axis + (d[axis] < 0.0 ? 1 : 0);
-    const Face& f = kFaces[face];
-    double depth = std::abs(d[axis]);
-    double a = (f.right[0] * d[0] + f.right[1] * d[1] + f.right[2] * d[2]) / depth;
-    double b = (f.up[0] * d[0] + f.up[1] * d[1] + f.up[2] * d[2]) / depth;
-    int column = std::clamp(int(std::floor((a + 1.0) * 0.5 * size)), 0, size - 1);
-    int row = std::clamp(int(std::floor((1.0 - b) * 0.5 * size)), 0, size - 1);
-    return (size_t(face) * size + size_t(row)) * size + size_t(column);
+// Where direction d falls on a cube of `size`: face, column, row, and the face coordinates.
+struct CubePoint {
+    int face, column, row;
+    double a, b;
+    uint32_t texel(int size) const { return uint32_t((size_t(face) * size + size_t(row)) * size + size_t(column)); }
+};
+CubePoint cubePoint(int size, const double d[3]) {
+    CubePoint p;
+    p.face = sh::cubeFaceOf(d, p.a, p.b);
+    p.column = std::clamp(int(std::floor((p.a + 1.0) * 0.5 * size)), 0, size - 1);
+    p.row = std::clamp(int(std::floor((1.0 - p.b) * 0.5 * size)), 0, size - 1);
+    return p;
 }
 
-size_t equirectTexelOf(int width, int height, const double d[3]) {
-    double theta = std::acos(std::clamp(d[1], -1.0, 1.0));
-    double phi = std::atan2(d[0], -d[2]);
-    int x = int(std::floor((phi + std::numbers::pi) / (2.0 * std::numbers::pi) * width));
-    int y = int(std::floor(theta / std::numbers::pi * height));
-    return size_t(std::clamp(y, 0, height - 1)) * width + size_t(std::clamp(x, 0, width - 1));
+// The fraction of a triangle's area where the linear function with vertex values p, q, r is negative.
+double negativeFraction(double p, double q, double r) {
+    int negative = (p < 0) + (q < 0) + (r < 0);
+    if (negative == 0) return 0.0;
+    if (negative == 3) return 1.0;
+    // The vertex alone on its side: a corner triangle of area fraction lone^2 / ((lone - o1)(lone - o2)).
+    double lone, o1, o2;
+    bool loneNegative = negative == 1;
+    if ((p < 0) == loneNegative) lone = p, o1 = q, o2 = r;
+    else if ((q < 0) == loneNegative) lone = q, o1 = p, o2 = r;
+    else lone = r, o1 = p, o2 = q;
+    double corner = lone * lone / ((lone - o1) * (lone - o2));
+    return loneNegative ? corner : 1.0 - corner;
+}
+
+// Deepest halving of a map texel's cells: leaves are 1/64 of the texel (or of its first split) per side. Only
+// cells near a cube-texel corner or a face seam (two boundaries) get that deep.
+constexpr int kMaxDepth = 6;
+
+// Splits the cell [u0, u1] x [v0, v1] of a map texel among the cube texels it overlaps, appending (target, solid
+// angle) to out from index `first` on. Probes: the centre and the four corners (pulled in by 1e-9 of the cell).
+// All in one cube texel: the cell goes to it whole. Split by one boundary (corners in two neighbouring columns,
+// or rows, of one face): the boundary is linear in face coordinates, which are nearly linear over a map texel, so
+// the cell is cut by the plane through the corners' signed distances on its two triangles, exactly for a straight
+// boundary, and the two parts go to the two texels (their solid angles summing to the cell's). Otherwise the cell
+// is halved both ways down to kMaxDepth, where a leaf goes whole to the texel of its centre.
+void splatCell(const SourceTexel& source, int cubeSize, double u0, double u1, double v0, double v1, int depth,
+               std::vector<Splat>& out, size_t first) {
+    constexpr double kInset = 1e-9;
+    double d[3];
+    source.direction(0.5 * (u0 + u1), 0.5 * (v0 + v1), d);
+    const CubePoint centre = cubePoint(cubeSize, d);
+    CubePoint corners[4]; // (u0, v0), (u1, v0), (u0, v1), (u1, v1)
+    bool single = true, sameFace = true, sameRow = true, sameColumn = true;
+    int loColumn = centre.column, hiColumn = centre.column, loRow = centre.row, hiRow = centre.row;
+    for (int corner = 0; corner < 4; ++corner) {
+        double u = corner & 1 ? u1 - kInset * (u1 - u0) : u0 + kInset * (u1 - u0);
+        double v = corner & 2 ? v1 - kInset * (v1 - v0) : v0 + kInset * (v1 - v0);
+        source.direction(u, v, d);
+        const CubePoint& p = corners[corner] = cubePoint(cubeSize, d);
+        sameFace = sameFace && p.face == centre.face;
+        sameRow = sameRow && p.row == centre.row;
+        sameColumn = sameColumn && p.column == centre.column;
+        loColumn = std::min(loColumn, p.column), hiColumn = std::max(hiColumn, p.column);
+        loRow = std::min(loRow, p.row), hiRow = std::max(hiRow, p.row);
+    }
+    single = sameFace && sameRow && sameColumn;
+    const double solidAngle = source.solidAngle(u0, u1, v0, v1);
+    if (single) {
+        addSplat(out, first, centre.texel(cubeSize), solidAngle);
+        return;
+    }
+    // Face coordinates are nearly linear over the cell, unless it is large against its distance from a pole:
+    // along a meridian the distance from the pole r = sqrt(1 - z^2) bends by about dz / r^2 over a cell dz tall
+    // (a bias, always the same way), so such cells are halved first (down to kMaxDepth, then cut anyway).
+    const bool linear = source.env->layout != EnvLayout::Equirectangular || depth >= kMaxDepth ||
+                        (v1 - v0) * source.bend < 4e-3;
+    const bool columnCut = linear && sameFace && sameRow && hiColumn == loColumn + 1;
+    const bool rowCut = linear && sameFace && sameColumn && hiRow == loRow + 1;
+    if (columnCut || rowCut) {
+        // Signed distance to the boundary, negative on the low column (or the low row, whose b is larger).
+        double boundary = columnCut ? 2.0 * hiColumn / cubeSize - 1.0 : 1.0 - 2.0 * hiRow / cubeSize;
+        double g[4];
+        for (int c = 0; c < 4; ++c) g[c] = columnCut ? corners[c].a - boundary : boundary - corners[c].b;
+        CubePoint lowPoint = centre, highPoint = centre;
+        if (columnCut) lowPoint.column = loColumn, highPoint.column = hiColumn;
+        else lowPoint.row = loRow, highPoint.row = hiRow;
+        double lowAngle;
+        if (source.env->layout == EnvLayout::CubeStrip) {
+            // A cube-strip texel lies on the same face: a is linear in u and b in v, so the boundary is the line
+            // u = cut (or v = cut) and the parts are rectangles with exact solid angles.
+            double g0 = g[0], g1 = columnCut ? g[1] : g[2];
+            double lo = columnCut ? u0 : v0, hi = columnCut ? u1 : v1;
+            double p0 = lo + kInset * (hi - lo), p1 = hi - kInset * (hi - lo);
+            double cut = g0 != g1 ? std::clamp(p0 + (p1 - p0) * g0 / (g0 - g1), lo, hi) : 0.5 * (lo + hi);
+            double part = columnCut ? source.solidAngle(u0, cut, v0, v1) : source.solidAngle(u0, u1, v0, cut);
+            lowAngle = g0 < 0.0 ? part : solidAngle - part; // the low texel holds the cell's first edge or its last
+        } else {
+            // (phi, cos theta): the solid angle is uniform over the cell, so the area fraction is the solid angle's.
+            lowAngle = solidAngle * 0.5 * (negativeFraction(g[0], g[1], g[3]) + negativeFraction(g[0], g[3], g[2]));
+        }
+        if (lowAngle > 0.0) addSplat(out, first, lowPoint.texel(cubeSize), lowAngle);
+        if (lowAngle < solidAngle) addSplat(out, first, highPoint.texel(cubeSize), solidAngle - lowAngle);
+        return;
+    }
+    if (depth >= kMaxDepth) {
+        addSplat(out, first, centre.texel(cubeSize), solidAngle);
+        return;
+    }
+    const double um = 0.5 * (u0 + u1), vm = 0.5 * (v0 + v1);
+    splatCell(source, cubeSize, u0, um, v0, vm, depth + 1, out, first);
+    splatCell(source, cubeSize, um, u1, v0, vm, depth + 1, out, first);
+    splatCell(source, cubeSize, u0, um, vm, v1, depth + 1, out, first);
+    splatCell(source, cubeSize, um, u1, vm, v1, depth + 1, out, first);
 }
 
 } // namespace
@@ -82,14 +198,13 @@ CubeTexels cubeTexels(int size) {
                 double a0 = 2.0 * column / size - 1.0, a1 = 2.0 * (column + 1) / size - 1.0;
                 double b0 = 1.0 - 2.0 * (row + 1) / size, b1 = 1.0 - 2.0 * row / size;
                 double* d = &cube.direction[3 * t];
-                faceDirection(face, 0.5 * (a0 + a1), 0.5 * (b0 + b1), d);
-                cube.solidAngle[t] = cornerSolidAngle(a0, b0) - cornerSolidAngle(a0, b1) - cornerSolidAngle(a1, b0) +
-                                     cornerSolidAngle(a1, b1);
+                sh::cubeFaceDirection(face, 0.5 * (a0 + a1), 0.5 * (b0 + b1), d);
+                cube.solidAngle[t] = sh::cubeRectangleSolidAngle(a0, a1, b0, b1);
                 double minCos = 1.0;
                 for (double a : {a0, a1})
                     for (double b : {b0, b1}) {
                         double corner[3];
-                        faceDirection(face, a, b, corner);
+                        sh::cubeFaceDirection(face, a, b, corner);
                         minCos = std::min(minCos, d[0] * corner[0] + d[1] * corner[1] + d[2] * corner[2]);
                     }
                 // Widened a little so float error never drops a texel whose corner touches the sphere.
@@ -106,32 +221,58 @@ void subsampleDirection(const CubeTexels& cube, size_t t, int sx, int sy, int su
     int row = int(t / size % size), column = int(t % size);
     double a = 2.0 * (column + (sx + 0.5) / supersample) / size - 1.0;
     double b = 1.0 - 2.0 * (row + (sy + 0.5) / supersample) / size;
-    faceDirection(face, a, b, d);
+    sh::cubeFaceDirection(face, a, b, d);
 }
 
 CubeEnvironment resampleToCube(const EnvironmentMap& env, int size) {
     CubeTexels cube = cubeTexels(size);
     const Image& image = env.radiance;
+    const bool equirect = env.layout == EnvLayout::Equirectangular;
+    if (image.width < 1 || image.height != (equirect ? image.width / 2 : 6 * image.width) ||
+        (equirect && image.width % 2) || image.rgb.size() != size_t(image.width) * image.height * 3)
+        throw Error("", "fiv::resampleToCube", "environment image size does not match its layout", kExitFailure);
+    // Map texels wider than 0.15 pi / size (under half the smallest cube texel, a face corner's) are split evenly
+    // first, so no cube texel lies inside a cell between its probes.
+    const double texelAngle = equirect ? std::numbers::pi / image.height : 0.5 * std::numbers::pi / image.width;
+    const int split = std::max(1, int(std::ceil(texelAngle / (0.15 * std::numbers::pi / size))));
+    std::vector<double> power(3 * cube.solidAngle.size(), 0.0); // sum of L dw per cube texel
+    // Rows in fixed blocks: splats in parallel, then added in row order, so the sums do not depend on threads.
+    constexpr int kRowsPerBlock = 16;
+    std::vector<std::vector<Splat>> splats(kRowsPerBlock);
+    std::vector<std::vector<size_t>> texelStart(kRowsPerBlock);
+    for (int block = 0; block < image.height; block += kRowsPerBlock) {
+        int rows = std::min(kRowsPerBlock, image.height - block);
+        tbb::parallel_for(0, rows, [&](int r) {
+            std::vector<Splat>& out = splats[size_t(r)];
+            std::vector<size_t>& begin = texelStart[size_t(r)];
+            out.clear(), begin.clear();
+            SourceTexel source{&env};
+            source.setRow(block + r);
+            for (int x = 0; x < image.width; ++x) {
+                source.x = x;
+                size_t first = out.size();
+                begin.push_back(first);
+                for (int i = 0; i < split; ++i)
+                    for (int j = 0; j < split; ++j)
+                        splatCell(source, size, double(i) / split, double(i + 1) / split, double(j) / split,
+                                  double(j + 1) / split, 0, out, first);
+            }
+            begin.push_back(out.size());
+        });
+        for (int r = 0; r < rows; ++r)
+            for (int x = 0; x < image.width; ++x) {
+                const float* radiance = &image.rgb[3 * (size_t(block + r) * image.width + x)];
+                for (size_t i = texelStart[size_t(r)][size_t(x)]; i < texelStart[size_t(r)][size_t(x) + 1]; ++i) {
+                    const Splat& splat = splats[size_t(r)][i];
+                    for (int c = 0; c < 3; ++c) power[3 * splat.target + c] += double(radiance[c]) * splat.solidAngle;
+                }
+            }
+    }
     CubeEnvironment out;
     out.size = size;
-    size_t count = cube.solidAngle.size();
-    out.radiance.assign(3 * count, 0.0);
-    constexpr int kStrata = 4;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 256), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t t = range.begin(); t < range.end(); ++t) {
-            double sum[3] = {0, 0, 0};
-            for (int sy = 0; sy < kStrata; ++sy)
-                for (int sx = 0; sx < kStrata; ++sx) {
-                    double d[3];
-                    subsampleDirection(cube, t, sx, sy, kStrata, d);
-                    size_t texel = env.layout == EnvLayout::Equirectangular
-                                       ? equirectTexelOf(image.width, image.height, d)
-                                       : cubeTexelOf(image.width, d);
-                    for (int c = 0; c < 3; ++c) sum[c] += image.rgb[3 * texel + c];
-                }
-            for (int c = 0; c < 3; ++c) out.radiance[3 * t + c] = sum[c] / (kStrata * kStrata);
-        }
-    });
+    out.radiance.resize(power.size());
+    for (size_t t = 0; t < cube.solidAngle.size(); ++t)
+        for (int c = 0; c < 3; ++c) out.radiance[3 * t + c] = power[3 * t + c] / cube.solidAngle[t];
     return out;
 }
 

@@ -26,6 +26,20 @@ void checkGrid(const GridSpec& grid, const std::string& source, int exitCode) {
         throw Error(source, "--spacing", "\"" + grid.spacing + "\" is not log or linear", exitCode);
 }
 
+void checkWork(const GridSpec& grid, int cube, int supersample, const std::string& source, int exitCode) {
+    const uint64_t limit = maxElements() > UINT64_MAX / 16 ? UINT64_MAX : 16 * maxElements();
+    // Every factor is capped (checkGrid, kMaxCube, kMaxSupersample), so the product fits 64 bits.
+    const uint64_t naive = uint64_t(std::max(grid.azimuth, 0)) * uint64_t(std::max(grid.polar, 0)) *
+                           uint64_t(std::max(grid.shells, 0)) * 6 * uint64_t(std::clamp(cube, 0, kMaxCube)) *
+                           uint64_t(std::clamp(cube, 0, kMaxCube)) * uint64_t(std::clamp(supersample, 0, kMaxSupersample)) *
+                           uint64_t(std::clamp(supersample, 0, kMaxSupersample));
+    if (naive > limit)
+        throw Error(source, "--grid", "samples x 6 cube^2 x supersample^2 = " + std::to_string(naive) +
+                                          " ray-texel pairs, above the limit of " + std::to_string(limit) +
+                                          " (16 x PRT_MAX_ELEMENTS; it bounds the visibility's time and mask memory)",
+                    exitCode);
+}
+
 std::vector<double> shellRadii(const GridSpec& grid) {
     std::vector<double> radii(size_t(grid.shells));
     for (int k = 0; k < grid.shells; ++k) {

@@ -8,11 +8,13 @@
 
 namespace prt::fiv {
 
-FivGrid reduceVisibility(const Visibility& vis, const CubeEnvironment& env) {
+FivGrid reduceVisibility(const Visibility& vis, const CubeEnvironment& env, const std::string& source) {
     size_t samples = vis.grid.sampleCount();
     if (vis.rowBegin != 0 || vis.rowEnd != samples)
-        throw Error("", "fiv", "the reduction needs every grid sample: join the shards first", kExitUsage);
-    if (env.size != vis.cube) throw Error("", "fiv", "environment cube size differs from the masks'", kExitFailure);
+        throw Error(source, "fiv", "the reduction needs every grid sample: join the shards first", kExitUsage);
+    if (env.size != vis.cube) throw Error(source, "fiv", "environment cube size differs from the masks'", kExitFailure);
+    if (vis.offsets.size() != samples + 1 || vis.valid.size() != samples)
+        throw Error(source, "fiv_mask_offsets", "does not hold one offset and one valid flag per grid sample");
     CubeTexels cube = cubeTexels(vis.cube);
     size_t texels = cube.solidAngle.size();
     std::vector<double> power(3 * texels), vector(9 * texels); // L dw and L w dw per texel
@@ -45,7 +47,9 @@ FivGrid reduceVisibility(const Visibility& vis, const CubeEnvironment& env) {
             const uint8_t* bits = vis.bits.data() + vis.offsets[row];
             size_t available = 8 * size_t(vis.offsets[row + 1] - vis.offsets[row]);
             if (available < candidates.size() * size_t(vis.bitsPerTexel))
-                throw Error("", "fiv_mask_bits", "row " + std::to_string(row) + " holds fewer bits than its candidates");
+                throw Error(source, "fiv_mask_bits", "row " + std::to_string(row) + " holds " + std::to_string(available) +
+                                                         " bits, fewer than its " + std::to_string(candidates.size()) +
+                                                         " candidate texels need");
             double fiv[9] = {0}, occluded[3] = {0};
             size_t bit = 0;
             for (uint32_t t : candidates) {

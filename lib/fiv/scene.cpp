@@ -3,6 +3,7 @@
 #include "fiv.h"
 
 #include "core.h"
+#include "runtime.h"
 
 #include <set>
 
@@ -14,16 +15,19 @@ const char* const kGridLayers[] = {"fiv", "fiv_power", "fiv_valid"};
 const char* const kLightingLayers[] = {"difmap", "fiv_env"};
 
 const Layer& requireFivLayer(const Bundle& bundle, const char* name, const std::string& source) {
-    const Layer* layer = findLayer(bundle, name);
-    if (!layer || layer->object != 0)
-        throw Error(source, name, "layer is missing on object 0 (not a FIV bundle from `prt fiv`)");
+    const Layer* layer = findObjectLayer(bundle, name, 0);
+    if (!layer) throw Error(source, name, "layer is missing on object 0 (not a FIV bundle from `prt fiv`)");
     return *layer;
 }
 
-std::string envHash(const Bundle& bundle, const std::string& source) {
+// The checks `prt fivshade` runs on the same file (runtime.h fivOccluder and fivLighting: every layer's type,
+// count and shape, the params typed and in range), so no scene is written that fivshade would refuse.
+std::string validatedEnvHash(const Bundle& bundle, const std::string& source) {
+    fivOccluder(bundle, source, 0);
+    fivLighting(bundle, source, 0);
     const Layer& fiv = requireFivLayer(bundle, "fiv", source);
     if (!fiv.params.contains("env") || !fiv.params.at("env").is_string())
-        throw Error(source, "fiv", "params.env (the environment's hash) is missing");
+        throw Error(source, "fiv", "params.env (the environment's hash) is missing or not a string");
     return fiv.params.at("env").get<std::string>();
 }
 
@@ -36,6 +40,7 @@ Bundle fivSceneBundle(const Bundle& receiver, const std::string& receiverSource,
         throw Error("", "--occluder", "a scene needs at least one occluder or the receiver's own grid", kExitUsage);
     if (receiver.mesh.positions.empty() || receiver.mesh.normals.size() != receiver.mesh.positions.size())
         throw Error(receiverSource, "mesh", "has no vertex normals (prt meshprep adds them)");
+    checkFivPoints(receiver.mesh.positions, receiverSource);
     Bundle scene;
     scene.mesh = receiver.mesh;
     scene.meshName = "receiver";
@@ -47,7 +52,7 @@ Bundle fivSceneBundle(const Bundle& receiver, const std::string& receiverSource,
                                    "receiver's own grid, for self-shadowing); difmap and fiv_env once"}};
     std::string sceneEnv;
     auto checkEnv = [&](const Bundle& bundle, const std::string& source) {
-        std::string hash = envHash(bundle, source);
+        std::string hash = validatedEnvHash(bundle, source);
         if (sceneEnv.empty()) sceneEnv = hash;
         if (hash != sceneEnv)
             throw Error(source, "fiv", "was reduced under another environment than the scene's other grids");

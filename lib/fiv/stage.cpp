@@ -82,7 +82,7 @@ void runFiv(const FivStageOptions& options) {
         EnvironmentMap env = readEnvironmentMap(options.env);
         std::string envHash = hashFile(options.env);
         CubeEnvironment cube = resampleToCube(env, vis.cube);
-        FivGrid grid = reduceVisibility(vis, cube);
+        FivGrid grid = reduceVisibility(vis, cube, options.inputs[0]);
         std::vector<float> difmap = difMap(cube, options.difmapSize);
         std::array<double, 9> fivEnv = environmentFiv(cube);
         inputs["env"] = envHash;

@@ -183,6 +183,7 @@ Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& op
         throw Error(source, "--shard", "needs 0 <= I < N", kExitUsage);
     if (occluder.triangleCount() == 0) throw Error(source, "occluder", "mesh has no triangles", kExitInput);
     CubeTexels cube = cubeTexels(options.cube);
+    checkWork(options.grid, options.cube, options.supersample, source, kExitUsage);
 
     Visibility vis;
     vis.grid = options.grid;

@@ -21,6 +21,10 @@ FivScene fivScene(const Bundle& bundle, const std::string& source) {
     scene.grids.resize(objects);
     std::vector<bool> hasGrid(objects, false);
     bool lit = false;
+    for (size_t i = 0; i < bundle.instances.size(); ++i)
+        if (bundle.instances[i].object >= objects)
+            throw Error(source, "instance " + std::to_string(i), "places object " +
+                                    std::to_string(bundle.instances[i].object) + ", which the bundle does not hold");
     for (uint32_t k = 0; k < objects; ++k) {
         if (findObjectLayer(bundle, "fiv", k)) {
             scene.grids[k] = fivOccluder(bundle, source, k);
@@ -43,7 +47,13 @@ FivScene fivScene(const Bundle& bundle, const std::string& source) {
                         "places object " + std::to_string(instance.object) + ", which has no FIV grid");
         FivInstance placed;
         placed.occluder = &scene.grids[instance.object];
-        for (int c = 0; c < 3; ++c) placed.translation[c] = instance.translation[size_t(c)];
+        for (int c = 0; c < 3; ++c) {
+            float t = instance.translation[size_t(c)];
+            if (!std::isfinite(t) || std::abs(double(t)) > kFivMaxCoordinate)
+                throw Error(source, "instance " + std::to_string(i) + ", translation",
+                            "is not finite or lies beyond +-" + std::to_string(int64_t(kFivMaxCoordinate)));
+            placed.translation[c] = t;
+        }
         scene.instances.push_back(placed);
     }
     scene.selfShadowing = hasGrid[0];

@@ -3,6 +3,7 @@
 #include "runtime.h"
 
 #include "core.h"
+#include "sh.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,12 +15,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// Cube strip faces (docs/conventions.md): axis, direction of increasing column, direction of decreasing row.
-constexpr float kFaces[6][3][3] = {
-    {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}},   {{-1, 0, 0}, {0, 0, -1}, {0, 1, 0}}, {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},
-    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}}, {{0, 0, 1}, {-1, 0, 0}, {0, 1, 0}}, {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}},
-};
-
 float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // Angle between unit vectors, accurate for tiny angles (acos of a dot product is not): 0 for equal vectors.
@@ -29,24 +24,21 @@ double angleBetween(const float* a, const float* b) {
     return 2.0 * std::asin(std::min(1.0, 0.5 * chord));
 }
 
-const Layer& requireLayer(const Bundle& bundle, const char* name, const char* semantic, const std::string& source,
-                          uint32_t object) {
-    const Layer* layer = findObjectLayer(bundle, name, object);
-    if (!layer)
-        throw Error(source, objectLayerName(name, object), "layer is missing (not a FIV bundle from `prt fiv`)");
-    if (layer->semantic != semantic) throw Error(source, name, "semantic is \"" + layer->semantic + "\", not " + semantic);
-    for (float v : layer->data)
-        if (!std::isfinite(v)) throw Error(source, name, "holds a non-finite value");
-    return *layer;
+std::string shapeText(const std::vector<uint64_t>& shape) {
+    std::string text;
+    for (uint64_t axis : shape) text += (text.empty() ? "" : ",") + std::to_string(axis);
+    return "[" + text + "]";
 }
 
-void requireShape(const Layer& layer, std::vector<uint64_t> shape, const std::string& source) {
-    if (layer.shape != shape) {
-        std::string want, have;
-        for (uint64_t s : shape) want += (want.empty() ? "" : ",") + std::to_string(s);
-        for (uint64_t s : layer.shape) have += (have.empty() ? "" : ",") + std::to_string(s);
-        throw Error(source, layer.name, "shape [" + have + "] disagrees with the grid header, which needs [" + want + "]");
-    }
+// A number param (JSON number, not a string or bool), as a float that is finite and within kFivMaxCoordinate.
+float coordinateParam(const nlohmann::json& value, const std::string& source, const std::string& place) {
+    if (!value.is_number())
+        throw Error(source, place, "is " + std::string(value.type_name()) + ", not a number");
+    double x = value.get<double>();
+    float f = float(x);
+    if (!std::isfinite(x) || !std::isfinite(f) || std::abs(x) > kFivMaxCoordinate)
+        throw Error(source, place, "is not a finite number within +-" + std::to_string(int64_t(kFivMaxCoordinate)));
+    return f;
 }
 
 int intParam(const Layer& layer, const char* key, const std::string& source, int lo, int hi) {
@@ -61,6 +53,7 @@ int intParam(const Layer& layer, const char* key, const std::string& source, int
 }
 
 std::string stringParam(const Layer& layer, const char* key) {
+    // Absent or not a string: "", which matches no environment hash.
     const nlohmann::json& p = layer.params;
     return p.contains(key) && p.at(key).is_string() ? p.at(key).get<std::string>() : std::string();
 }
@@ -115,18 +108,7 @@ void occludedIrradiance(const float n[3], const float fiv[9], const float power[
 } // namespace
 
 double clippedCapIrradiance(double cosTheta, double sinSigmaSquared) {
-    // Snyder's (1996) sphere-light form factor with horizon clipping, as in Lagarde and de Rousiers (2014).
-    cosTheta = std::clamp(cosTheta, -1.0, 1.0);
-    sinSigmaSquared = std::clamp(sinSigmaSquared, 1e-12, 1.0);
-    if (cosTheta * cosTheta > sinSigmaSquared) return cosTheta > 0.0 ? kPi * sinSigmaSquared * cosTheta : 0.0;
-    double sinTheta = std::sqrt(1.0 - cosTheta * cosTheta);
-    double x = std::sqrt(std::max(1.0 / sinSigmaSquared - 1.0, 0.0));
-    if (sinTheta < 1e-12) return 0.0;
-    double y = std::clamp(-x * cosTheta / sinTheta, -1.0, 1.0);
-    double sinThetaSqrtY = sinTheta * std::sqrt(1.0 - y * y);
-    double value = (cosTheta * std::acos(y) - x * sinThetaSqrtY) * sinSigmaSquared +
-                   (x > 0.0 ? std::atan(sinThetaSqrtY / x) : kPi / 2.0);
-    return std::max(0.0, value);
+    return sh::capCosineIntegral(cosTheta, sinSigmaSquared);
 }
 
 double discOverlap(double r1, double r2, double s) {
@@ -138,48 +120,90 @@ double discOverlap(double r1, double r2, double s) {
     return r1 * r1 * std::acos(a) + r2 * r2 * std::acos(b) - 0.5 * std::sqrt(std::max(0.0, k));
 }
 
+const Layer& fivLayer(const Bundle& bundle, const std::string& name, uint32_t object, const char* semantic,
+                      FivStorage storage, const std::vector<uint64_t>& shape, const std::string& source) {
+    const std::string place = objectLayerName(name, object);
+    const Layer* layer = findObjectLayer(bundle, name, object);
+    if (!layer) throw Error(source, place, "layer is missing (not a FIV bundle from `prt fiv`)");
+    if (semantic && layer->semantic != semantic)
+        throw Error(source, place, "semantic is \"" + layer->semantic + "\", not " + semantic);
+    const std::string& type = layer->componentType;
+    bool typed = storage == FivStorage::Float ? type == "float16" || type == "float32"
+                 : storage == FivStorage::Uint8 ? type == "uint8" : type == "uint32";
+    const char* want = storage == FivStorage::Float ? "float16 or float32" : storage == FivStorage::Uint8 ? "uint8" : "uint32";
+    if (shape.empty() ? layer->shape.size() != 1 : layer->shape != shape)
+        throw Error(source, place, "shape " + shapeText(layer->shape) + " disagrees with the grid header, which needs " +
+                                       (shape.empty() ? std::string("one axis") : shapeText(shape)));
+    uint64_t count = 1;
+    for (uint64_t axis : layer->shape) count = axis && count > UINT64_MAX / axis ? UINT64_MAX : count * axis;
+    // An empty layer (a shard's mask bits when all its rows are inside) has no storage to misread, and a glTF
+    // file keeps no component type for it.
+    if (count == 0) return *layer;
+    if (!typed) throw Error(source, place, "component type is " + type + ", not " + want);
+    size_t held = storage == FivStorage::Float ? layer->data.size() : layer->integers.size();
+    if (held != count)
+        throw Error(source, place, "holds " + std::to_string(held) + " values, its shape " + shapeText(layer->shape) +
+                                       " needs " + std::to_string(count));
+    if (storage == FivStorage::Float)
+        for (float v : layer->data)
+            if (!std::isfinite(v)) throw Error(source, place, "holds a non-finite value");
+    return *layer;
+}
+
+void checkFivPoints(const std::vector<float>& positions, const std::string& source) {
+    for (size_t i = 0; i < positions.size(); ++i)
+        if (!std::isfinite(positions[i]) || std::abs(double(positions[i])) > kFivMaxCoordinate)
+            throw Error(source, "vertex " + std::to_string(i / 3), "position is not finite or lies beyond +-" +
+                                                                     std::to_string(int64_t(kFivMaxCoordinate)));
+}
+
 FivOccluder fivOccluder(const Bundle& bundle, const std::string& source, uint32_t object) {
-    const Layer& fiv = requireLayer(bundle, "fiv", "fiv_occluded_rgb", source, object);
+    const Layer* header = findObjectLayer(bundle, "fiv", object);
+    if (!header) throw Error(source, objectLayerName("fiv", object), "layer is missing (not a FIV bundle from `prt fiv`)");
     FivOccluder o;
-    o.azimuth = intParam(fiv, "azimuth", source, 3, 4096);
-    o.polar = intParam(fiv, "polar", source, 2, 2049);
-    o.shells = intParam(fiv, "shells", source, 1, 1024);
+    o.azimuth = intParam(*header, "azimuth", source, 3, 4096);
+    o.polar = intParam(*header, "polar", source, 2, 2049);
+    o.shells = intParam(*header, "shells", source, 1, 1024);
     uint64_t rows = uint64_t(o.azimuth) * o.polar * o.shells;
-    requireShape(fiv, {rows, 3, 3}, source);
-    const Layer& power = requireLayer(bundle, "fiv_power", "occluded_power_rgb", source, object);
-    requireShape(power, {rows, 3}, source);
-    const Layer* valid = findObjectLayer(bundle, "fiv_valid", object);
-    if (!valid) throw Error(source, objectLayerName("fiv_valid", object), "layer is missing");
-    requireShape(*valid, {rows}, source);
+    const Layer& fiv = fivLayer(bundle, "fiv", object, "fiv_occluded_rgb", FivStorage::Float, {rows, 3, 3}, source);
+    const Layer& power = fivLayer(bundle, "fiv_power", object, "occluded_power_rgb", FivStorage::Float, {rows, 3}, source);
+    const Layer& valid = fivLayer(bundle, "fiv_valid", object, "fiv_valid", FivStorage::Uint8, {rows}, source);
+    for (uint32_t v : valid.integers)
+        if (v > 1) throw Error(source, objectLayerName("fiv_valid", object), "holds a value other than 0 and 1");
+    const std::string place = objectLayerName("fiv", object) + ", params.";
     const nlohmann::json& p = fiv.params;
-    if (!p.contains("radius") || !p.at("radius").is_number() || !(p.at("radius").get<double>() > 0.0))
-        throw Error(source, "fiv", "params.radius is missing or not positive");
-    o.radius = float(p.at("radius").get<double>());
+    if (!p.contains("radius")) throw Error(source, place + "radius", "is missing");
+    o.radius = coordinateParam(p.at("radius"), source, place + "radius");
+    if (!(o.radius > 0.0f)) throw Error(source, place + "radius", "is not positive");
     if (!p.contains("centre") || !p.at("centre").is_array() || p.at("centre").size() != 3)
-        throw Error(source, "fiv", "params.centre is not 3 numbers");
-    for (int c = 0; c < 3; ++c) o.centre[c] = float(p.at("centre")[size_t(c)].get<double>());
+        throw Error(source, place + "centre", "is not an array of 3 numbers");
+    for (int c = 0; c < 3; ++c)
+        o.centre[c] = coordinateParam(p.at("centre")[size_t(c)], source, place + "centre[" + std::to_string(c) + "]");
     if (!p.contains("shell_radii") || !p.at("shell_radii").is_array() || p.at("shell_radii").size() != size_t(o.shells))
-        throw Error(source, "fiv", "params.shell_radii does not hold `shells` radii");
-    for (const auto& r : p.at("shell_radii")) {
-        double rho = r.get<double>();
-        if (!(rho > 0.0) || (!o.shellRadii.empty() && !(rho * o.radius > o.shellRadii.back())))
-            throw Error(source, "fiv", "params.shell_radii are not positive and ascending");
-        o.shellRadii.push_back(float(rho * o.radius));
+        throw Error(source, place + "shell_radii", "is not an array of `shells` numbers");
+    for (size_t k = 0; k < size_t(o.shells); ++k) {
+        const std::string at = place + "shell_radii[" + std::to_string(k) + "]";
+        double rho = coordinateParam(p.at("shell_radii")[k], source, at);
+        float radius = coordinateParam(rho * o.radius, source, at + " times params.radius");
+        if (!(rho > 0.0) || (!o.shellRadii.empty() && !(radius > o.shellRadii.back())))
+            throw Error(source, at, "shell radii are not positive and ascending");
+        o.shellRadii.push_back(radius);
     }
     o.fiv = fiv.data;
     o.power = power.data;
-    o.valid.assign(valid->integers.begin(), valid->integers.end());
+    o.valid.assign(valid.integers.begin(), valid.integers.end());
     o.envHash = stringParam(fiv, "env");
     return o;
 }
 
 FivLighting fivLighting(const Bundle& bundle, const std::string& source, uint32_t object) {
-    const Layer& difmap = requireLayer(bundle, "difmap", "irradiance_cube_rgb", source, object);
+    const Layer* header = findObjectLayer(bundle, "difmap", object);
+    if (!header) throw Error(source, objectLayerName("difmap", object), "layer is missing (not a FIV bundle from `prt fiv`)");
     FivLighting l;
-    l.difmapSize = intParam(difmap, "size", source, 1, 1024);
-    requireShape(difmap, {6 * uint64_t(l.difmapSize) * l.difmapSize, 3}, source);
-    const Layer& env = requireLayer(bundle, "fiv_env", "fiv_environment_rgb", source, object);
-    requireShape(env, {1, 3, 3}, source);
+    l.difmapSize = intParam(*header, "size", source, 1, 1024);
+    const Layer& difmap = fivLayer(bundle, "difmap", object, "irradiance_cube_rgb", FivStorage::Float,
+                                   {6 * uint64_t(l.difmapSize) * l.difmapSize, 3}, source);
+    const Layer& env = fivLayer(bundle, "fiv_env", object, "fiv_environment_rgb", FivStorage::Float, {1, 3, 3}, source);
     l.difmap = difmap.data;
     std::copy(env.data.begin(), env.data.end(), l.fivEnv);
     l.envHash = stringParam(difmap, "env");
@@ -197,7 +221,10 @@ void fivDifmap(const FivLighting& lighting, const float n[3], float out[3]) {
         return;
     }
     int size = lighting.difmapSize;
-    float a = dot3(kFaces[face][1], n) / depth, b = dot3(kFaces[face][2], n) / depth;
+    const sh::CubeFace& f = sh::kCubeFaces[face];
+    const float right[3] = {float(f.right[0]), float(f.right[1]), float(f.right[2])};
+    const float up[3] = {float(f.up[0]), float(f.up[1]), float(f.up[2])};
+    float a = dot3(right, n) / depth, b = dot3(up, n) / depth;
     float x = std::clamp((a + 1.0f) * 0.5f * size - 0.5f, 0.0f, float(size - 1));
     float y = std::clamp((1.0f - b) * 0.5f * size - 0.5f, 0.0f, float(size - 1));
     int x0 = std::min(int(x), size - 1), y0 = std::min(int(y), size - 1);
@@ -212,10 +239,13 @@ void fivDifmap(const FivLighting& lighting, const float n[3], float out[3]) {
 }
 
 bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float power[3]) {
-    float distance = std::sqrt(dot3(offset, offset));
+    // In double: a float squared distance overflows for offsets past ~1.8e19.
+    const double length = std::sqrt(double(offset[0]) * offset[0] + double(offset[1]) * offset[1] +
+                                    double(offset[2]) * offset[2]);
+    float distance = float(length);
     float u[3] = {0, 1, 0};
-    if (distance > 0.0f)
-        for (int c = 0; c < 3; ++c) u[c] = offset[c] / distance;
+    if (length > 0.0)
+        for (int c = 0; c < 3; ++c) u[c] = float(offset[c] / length);
     float theta = std::acos(std::clamp(u[1], -1.0f, 1.0f));
     float phi = std::atan2(u[0], -u[2]);
     if (phi < 0.0f) phi += float(2.0 * kPi);
@@ -241,9 +271,11 @@ bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float 
         k0 = k1 - 1;
         tk = (distance - r[size_t(k0)]) / (r[size_t(k1)] - r[size_t(k0)]);
     }
-    float inverse2 = distance > r.front() ? 1.0f / (distance * distance) : 1.0f / (r.front() * r.front());
+    // rho^2 FIV interpolated, then divided by rho^2: the weights carry r_k^2 and the 1 / rho^2 comes last, in
+    // double, so a far occluder's tiny value underflows to 0 (it hides nothing) rather than every weight.
+    const double inverse2 = distance > r.front() ? 1.0 / (length * length) : 1.0 / (double(r.front()) * r.front());
     auto rowOf = [&](int k, int j, int i) { return (size_t(k) * o.polar + size_t(j)) * o.azimuth + size_t(i); };
-    auto shellWeight = [&](int k) { return r[size_t(k)] * r[size_t(k)] * inverse2; };
+    auto shellWeight = [&](int k) { return r[size_t(k)] * r[size_t(k)]; };
     float angular[4] = {(1 - ti) * (1 - tj), ti * (1 - tj), (1 - ti) * tj, ti * tj};
     Corner corners[8];
     int ks[2] = {k0, k1};
@@ -268,9 +300,9 @@ bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float 
         }
         if (used <= 0.0f) return false;
     }
-    float scale = full / used;
-    for (int e = 0; e < 9; ++e) fiv[e] *= scale;
-    for (int e = 0; e < 3; ++e) power[e] *= scale;
+    const double scale = double(full) / double(used) * inverse2;
+    for (int e = 0; e < 9; ++e) fiv[e] = float(fiv[e] * scale);
+    for (int e = 0; e < 3; ++e) power[e] = float(power[e] * scale);
     return true;
 }
 
@@ -309,7 +341,8 @@ void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, si
                 occludedIrradiance(n, fiv, power, d, o.radius, options.partial, h.value);
             }
             if (h.value[0] <= 0.0f && h.value[1] <= 0.0f && h.value[2] <= 0.0f) continue;
-            float distance = std::sqrt(dot3(offset, offset));
+            float distance = float(std::sqrt(double(offset[0]) * offset[0] + double(offset[1]) * offset[1] +
+                                             double(offset[2]) * offset[2]));
             for (int c = 0; c < 3; ++c) h.direction[c] = distance > 0.0f ? offset[c] / distance : 0.0f;
             h.angularRadius = distance > o.radius ? std::asin(o.radius / distance) : float(kPi / 2);
             float green = std::sqrt(dot3(&fiv[3], &fiv[3]));

@@ -86,23 +86,16 @@ HybridLighting rotateHybridLighting(const HybridLighting& lighting, const double
 }
 
 double coneCosineIntegral(double cosAngle, double angularRadius) {
-    const double sinSigma = std::sin(angularRadius), sin2 = sinSigma * sinSigma;
-    cosAngle = std::clamp(cosAngle, -1.0, 1.0);
-    if (cosAngle * cosAngle >= sin2) return std::numbers::pi * sin2 * std::max(0.0, cosAngle);
-    const double sinAngle = std::sqrt(1.0 - cosAngle * cosAngle);
-    const double x = std::sqrt(1.0 / sin2 - 1.0), y = -x * cosAngle / sinAngle;
-    const double sinSqrtY = sinAngle * std::sqrt(std::max(0.0, 1.0 - y * y));
-    return std::max(0.0, (cosAngle * std::acos(std::clamp(y, -1.0, 1.0)) - x * sinSqrtY) * sin2 + std::atan(sinSqrtY / x));
+    const double sinRadius = std::sin(angularRadius);
+    return sh::capCosineIntegral(cosAngle, sinRadius * sinRadius);
 }
 
 std::vector<float> coneLightsProjection(const std::vector<HybridConeLight>& lights, int order) {
-    const int coefficients = sh::coefficientCount(order);
-    std::vector<double> sum(size_t(coefficients) * 3, 0.0), cap(coefficients);
+    std::vector<double> sum(size_t(sh::coefficientCount(order)) * 3, 0.0);
     for (const HybridConeLight& light : lights) {
         double d[3] = {light.direction[0], light.direction[1], light.direction[2]};
-        sh::capProjection(order, d, std::cos(double(light.angularRadius)), cap.data());
-        for (int j = 0; j < coefficients; ++j)
-            for (int c = 0; c < 3; ++c) sum[j * 3 + c] += light.radiance[c] * cap[j];
+        double radiance[3] = {light.radiance[0], light.radiance[1], light.radiance[2]};
+        sh::addCapRadiance(order, d, std::cos(double(light.angularRadius)), radiance, sum.data());
     }
     return std::vector<float>(sum.begin(), sum.end());
 }

@@ -141,8 +141,25 @@ struct FivLighting {
 // fivscene`). Need: layer shapes that agree with the grid header in params (rows = azimuth * polar * shells,
 // shell_radii of `shells` ascending positive values, radius > 0), finite values. Throw prt::Error(source, layer,
 // problem) otherwise.
+// They check every layer through fivLayer, and the params with typed access: a value of the wrong JSON type, or a
+// centre, radius or shell radius whose float is not finite or beyond kFivMaxCoordinate, is refused (kExitInput).
 FivOccluder fivOccluder(const Bundle& bundle, const std::string& source, uint32_t object = 0);
 FivLighting fivLighting(const Bundle& bundle, const std::string& source, uint32_t object = 0);
+
+// The one layer check every FIV reader runs (fivOccluder, fivLighting, fivScene, and lib/fiv's visibility and
+// scene readers): layer `name` of object `object` exists, its semantic is `semantic` (unless null), its component
+// type fits `storage` (Float: float16 or float32 in data; Uint8 / Uint32: that type in integers), its storage holds
+// exactly as many values as its shape, floats are finite, and the shape is `shape` (empty: any one axis). Throws
+// prt::Error(source, layer, problem, kExitInput) naming what is wrong, so no reader reads the other storage.
+enum class FivStorage { Float, Uint8, Uint32 };
+const Layer& fivLayer(const Bundle& bundle, const std::string& name, uint32_t object, const char* semantic,
+                      FivStorage storage, const std::vector<uint64_t>& shape, const std::string& source);
+// The largest |coordinate| (world units) FIV accepts for centres, radii, translations and receiver points: float32
+// spacing there is already 64 units, and squared distances stay far inside the float range.
+inline constexpr double kFivMaxCoordinate = 1e9;
+// Refuses receiver points ([count][3]) that are not finite or lie beyond kFivMaxCoordinate: prt::Error(source,
+// "vertex V", problem, kExitInput).
+void checkFivPoints(const std::vector<float>& positions, const std::string& source);
 
 
 enum class FivPartial {

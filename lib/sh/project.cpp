@@ -13,19 +13,6 @@ namespace prt::sh {
 
 namespace {
 
-// Cube faces in strip order +X, -X, +Y, -Y, +Z, -Z, as OpenEXR's ImfEnvmap.h lays them out seen from inside:
-// the face's axis, the direction of increasing image column and the direction of decreasing image row.
-struct CubeFace {
-    double axis[3], right[3], up[3];
-};
-constexpr CubeFace kCubeFaces[6] = {
-    {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}},   {{-1, 0, 0}, {0, 0, -1}, {0, 1, 0}}, {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},
-    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}}, {{0, 0, 1}, {-1, 0, 0}, {0, 1, 0}}, {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}},
-};
-
-// Solid angle subtended by the face rectangle [0, a] x [0, b] at unit distance (signed by a and b).
-double cornerSolidAngle(double a, double b) { return std::atan2(a * b, std::sqrt(a * a + b * b + 1.0)); }
-
 void texelDirection(const EnvironmentMap& env, int x, int y, double d[3]) {
     if (env.layout == EnvLayout::Equirectangular)
         equirectDirection(env.radiance.width, env.radiance.height, x, y, d);
@@ -55,14 +42,7 @@ void cubeStripDirection(int faceSize, double x, double y, double d[3]) {
     int face = std::clamp(int(std::floor((y + 0.5) / faceSize)), 0, 5); // texel y spans y - 0.5 .. y + 0.5
     double a = 2.0 * (x + 0.5) / faceSize - 1.0;
     double b = 1.0 - 2.0 * (y - face * faceSize + 0.5) / faceSize;
-    const CubeFace& f = kCubeFaces[face];
-    double v[3], length = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        v[c] = f.axis[c] + a * f.right[c] + b * f.up[c];
-        length += v[c] * v[c];
-    }
-    length = std::sqrt(length);
-    for (int c = 0; c < 3; ++c) d[c] = v[c] / length;
+    cubeFaceDirection(face, a, b, d);
 }
 
 std::vector<double> texelSolidAngles(const EnvironmentMap& env) {
@@ -83,8 +63,7 @@ std::vector<double> texelSolidAngles(const EnvironmentMap& env) {
         for (int x = 0; x < size; ++x) {
             double a0 = 2.0 * x / size - 1.0, a1 = 2.0 * (x + 1) / size - 1.0;
             double b0 = 2.0 * y / size - 1.0, b1 = 2.0 * (y + 1) / size - 1.0;
-            double omega = cornerSolidAngle(a1, b1) - cornerSolidAngle(a0, b1) - cornerSolidAngle(a1, b0) +
-                           cornerSolidAngle(a0, b0);
+            double omega = cubeRectangleSolidAngle(a0, a1, b0, b1);
             for (int face = 0; face < 6; ++face) solidAngle[(size_t(face) * size + y) * size + x] = omega;
         }
     return solidAngle;

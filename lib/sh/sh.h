@@ -45,6 +45,34 @@ double clampedCosine(int l);
 // the recurrence; out_00 = solid angle * Y_00). Needs 1 <= order <= kMaxOrder, cosRadius in [-1, 1], d unit and
 // out sized order*order. A cone light of uniform radiance L projects to L * out.
 void capProjection(int order, const double d[3], double cosRadius, double* out);
+// out[j][c] += radiance[c] * capProjection(order, d, cosRadius)[j] for j < order^2: a uniform cone light added to
+// RGB coefficients [order^2][3]. Same needs as capProjection.
+void addCapRadiance(int order, const double d[3], double cosRadius, const double radiance[3], double* out);
+// Snyder's (1996) horizon-clipped cap: the integral of max(0, n . w) over the cap of half-angle sigma about a unit
+// axis at cosine cosTheta from the unit normal n, given sinSigmaSquared = sin^2 sigma (both clamped to their
+// ranges): pi sin^2(sigma) cosTheta when the cap lies wholly above the horizon, 0 wholly below, the exact clipped
+// form in between (Lagarde and de Rousiers 2014). Never negative.
+double capCosineIntegral(double cosTheta, double sinSigmaSquared);
+
+// ---- cube strips (lib/sh/cube.cpp) -------------------------------------------------------------------------------
+// Faces in strip order +X, -X, +Y, -Y, +Z, -Z, as OpenEXR's ImfEnvmap.h lays them out seen from inside
+// (docs/conventions.md): the face's axis, the direction of increasing image column (face coordinate a) and the
+// direction of decreasing image row (face coordinate b). The one table every cube map in prt uses.
+struct CubeFace {
+    double axis[3], right[3], up[3];
+};
+inline constexpr CubeFace kCubeFaces[6] = {
+    {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}},   {{-1, 0, 0}, {0, 0, -1}, {0, 1, 0}}, {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}},
+    {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}}, {{0, 0, 1}, {-1, 0, 0}, {0, 1, 0}}, {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}},
+};
+// Unit direction of face coordinates (a, b) (in [-1, 1]^2 on the face) of face 0..5.
+void cubeFaceDirection(int face, double a, double b, double d[3]);
+// Exact solid angle of the face rectangle [a0, a1] x [b0, b1] (a0 <= a1, b0 <= b1, face coordinates) by the
+// corner formula: the 6 x N^2 texels of a cube sum to 4 pi to rounding.
+double cubeRectangleSolidAngle(double a0, double a1, double b0, double b1);
+// The face (0..5) a non-zero direction d falls on (its largest axis; ties to the lower axis) and its face
+// coordinates a, b in [-1, 1].
+int cubeFaceOf(const double d[3], double& a, double& b);
 
 // ---- rotation ----------------------------------------------------------------------------------------------
 // A rotation of SH coefficient vectors: block diagonal, one (2l+1)^2 block per band, stored band after band.

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 using namespace prt;
@@ -266,4 +267,117 @@ TEST(FivCli, PipelineRerunsOnlyTheReductionWhenTheEnvironmentChanges) {
     pclose(pipe);
     EXPECT_NE(text.find("masks fiv-visibility cached"), std::string::npos) << text;
     EXPECT_NE(text.find("fiv        run"), std::string::npos) << text;
+}
+
+// The classes the crafted-input battery found (issue 20, "Hardening, round 2"), one case each: a layer typed as the
+// other storage, wrong JSON types, values whose float overflows, a visibility row short of bits, a grid whose work
+// sits at the sample cap, and coordinates whose squares overflow. fivshade and fivscene refuse the same files.
+TEST(FivCli, HardenedReadersRefuseEveryCrashClassWithoutOutput) {
+    const Files& f = files();
+    TempDir out;
+    std::string npy = out / "out.npy", glb = out / "out.glb", message;
+    auto edited = [&](const std::string& name, const std::function<void(Bundle&)>& edit) {
+        Bundle bundle = readBundle(f / "sphere.fiv.glb");
+        edit(bundle);
+        writeBundle(out / name, bundle);
+        return out / name;
+    };
+    auto layer = [](Bundle& bundle, const char* name) -> Layer& {
+        for (Layer& l : bundle.layers)
+            if (l.name == name) return l;
+        throw std::runtime_error(name);
+    };
+    struct Case {
+        std::string file, says;
+    };
+    std::vector<Case> cases = {
+        {edited("valid-float.glb",
+                [&](Bundle& b) {
+                    Layer& valid = layer(b, "fiv_valid");
+                    valid.componentType = "float32";
+                    valid.data.assign(valid.integers.begin(), valid.integers.end());
+                    valid.integers.clear();
+                }),
+         "component type is float32, not uint8"},
+        {edited("fiv-uint.glb",
+                [&](Bundle& b) {
+                    Layer& fiv = layer(b, "fiv");
+                    fiv.componentType = "uint32";
+                    fiv.integers.assign(fiv.data.size(), 0u);
+                    fiv.data.clear();
+                }),
+         "component type is uint32"},
+        {edited("centre-string.glb", [&](Bundle& b) { layer(b, "fiv").params["centre"][1] = "up"; }),
+         "centre[1]"},
+        {edited("radii-object.glb", [&](Bundle& b) { layer(b, "fiv").params["shell_radii"][2] = false; }),
+         "shell_radii[2]"},
+        {edited("radius-bool.glb", [&](Bundle& b) { layer(b, "fiv").params["radius"] = true; }), "not a number"},
+        {edited("centre-huge.glb", [&](Bundle& b) { layer(b, "fiv").params["centre"][0] = 1e39; }), "centre[0]"},
+        {edited("radius-huge.glb", [&](Bundle& b) { layer(b, "fiv").params["radius"] = 1e300; }), "radius"},
+        {edited("radii-huge.glb", [&](Bundle& b) { layer(b, "fiv").params["shell_radii"][5] = 1e38; }), "shell_radii[5]"},
+        {edited("radii-descending.glb", [&](Bundle& b) { layer(b, "fiv").params["shell_radii"][5] = 0.1; }), "ascending"},
+        {edited("azimuth-wraps.glb", [&](Bundle& b) { layer(b, "fiv").params["azimuth"] = 4294967312ull; }), "azimuth"},
+    };
+    for (const Case& c : cases) {
+        // fivshade and fivscene run the one validator (runtime.h fivLayer, fivOccluder, fivLighting).
+        EXPECT_EQ(run("fivshade " + f / "plane.glb --env " + f / "env.exr --occluder " + c.file + " --at 0,1,0 -o " + npy,
+                      &message), 3) << c.file << "\n" << message;
+        EXPECT_NE(message.find(c.says), std::string::npos) << message;
+        EXPECT_NE(message.find(c.file), std::string::npos) << message;
+        EXPECT_EQ(run("fivscene " + f / "plane.glb --occluder " + c.file + " --at 0,1,0 -o " + glb, &message), 3)
+            << c.file << "\n" << message;
+        EXPECT_NE(message.find(c.says), std::string::npos) << message;
+        EXPECT_FALSE(std::filesystem::exists(npy) || std::filesystem::exists(glb)) << c.file;
+    }
+
+    // Visibility bundles: a mask layer typed as floats, a centre of the wrong type, a row short of bits (the
+    // reduction's error names the file).
+    ASSERT_EQ(run("fiv-visibility " + f / "sphere.glb --grid 16,9,6 --cube 8 -o " + out / "vis.glb"), 0);
+    auto visibility = [&](const std::string& name, const std::function<void(Bundle&)>& edit) {
+        Bundle bundle = readBundle(out / "vis.glb");
+        edit(bundle);
+        writeBundle(out / name, bundle);
+        return out / name;
+    };
+    std::vector<Case> masks = {
+        {visibility("bits-float.glb",
+                    [&](Bundle& b) {
+                        Layer& bits = layer(b, "fiv_mask_bits");
+                        bits.componentType = "float32";
+                        bits.data.assign(bits.integers.begin(), bits.integers.end());
+                        bits.integers.clear();
+                    }),
+         "component type is float32, not uint8"},
+        {visibility("vis-centre.glb", [&](Bundle& b) { layer(b, "fiv_mask_offsets").params["centre"][0] = "x"; }),
+         "centre"},
+        {visibility("vis-short.glb",
+                    [&](Bundle& b) {
+                        // A valid row's bytes given to the next row: offsets still run 0..size in order.
+                        Layer& offsets = layer(b, "fiv_mask_offsets");
+                        const Layer& valid = layer(b, "fiv_mask_valid");
+                        size_t r = 0;
+                        while (r + 1 < offsets.integers.size() &&
+                               !(valid.integers[r] && offsets.integers[r + 1] > offsets.integers[r]))
+                            ++r;
+                        ASSERT_LT(r + 2, offsets.integers.size());
+                        offsets.integers[r + 1] = offsets.integers[r];
+                    }),
+         "fewer than its"},
+    };
+    for (const Case& c : masks) {
+        EXPECT_EQ(run("fiv " + c.file + " --env " + f / "env.exr -o " + glb, &message), 3) << c.file << "\n" << message;
+        EXPECT_NE(message.find(c.says), std::string::npos) << message;
+        EXPECT_NE(message.find(c.file), std::string::npos) << message;
+        EXPECT_FALSE(std::filesystem::exists(glb)) << c.file;
+    }
+
+    // Command-line values (exit 2, as every bad flag): a grid at the sample cap whose rays and masks the work cap
+    // refuses before anything is read, and a placement whose squared distance overflows a float.
+    EXPECT_EQ(run("fiv " + f / "sphere.glb --env " + f / "env.exr --grid 4096,2048,8 -o " + glb, &message), 2) << message;
+    EXPECT_NE(message.find("ray-texel pairs"), std::string::npos) << message;
+    EXPECT_EQ(run("fivshade " + f / "plane.glb --env " + f / "env.exr --occluder " + f / "sphere.fiv.glb --at 1e30,0,0 -o " +
+                  npy, &message), 2) << message;
+    EXPECT_NE(message.find("lies beyond"), std::string::npos) << message;
+    EXPECT_EQ(run("fivscene " + f / "plane.glb --occluder " + f / "sphere.fiv.glb --at 0,-1e30,0 -o " + glb, &message), 2);
+    EXPECT_FALSE(std::filesystem::exists(npy) || std::filesystem::exists(glb));
 }

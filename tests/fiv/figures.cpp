@@ -1,5 +1,6 @@
 // The FIV figures of docs/results.md, measured in one run and printed as JSON (not a test: it takes minutes).
-//   fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--grids 32x17x15,...] [--quick]
+//   fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--quick] [--grids 32x17x15,...] [--scenes "one bunny,self-shadow"]
+//               [--maps sunrise,courtyard]
 // Scenes (receiver 8x8 plane of 65x65 vertices unless said): the bunny scaled to 2 units hovering 0.5 above the
 // plane; two bunnies with overlapping shadows; three; one straddling the plane; one 0.05 above it (close); one
 // low beside the plane (grazing); the bunny as its own receiver. Maps: courtyard, sunrise (sharp sun), constant.
@@ -110,7 +111,28 @@ int main(int argc, char** argv) {
         return 2;
     }
     std::string bunnyPath = argv[1], envDir = argv[2], outDir = argv[3];
-    bool quick = argc > 4 && std::string(argv[4]) == "--quick";
+    bool quick = false;
+    std::string gridList, sceneList, mapList;
+    for (int a = 4; a < argc; ++a) {
+        std::string flag = argv[a];
+        if (flag == "--quick") quick = true;
+        else if (flag == "--grids" && a + 1 < argc) gridList = argv[++a];
+        else if (flag == "--scenes" && a + 1 < argc) sceneList = argv[++a];
+        else if (flag == "--maps" && a + 1 < argc) mapList = argv[++a];
+        else {
+            std::fprintf(stderr, "fiv_figures: unknown option %s\n", flag.c_str());
+            return 2;
+        }
+    }
+    auto split = [](const std::string& list) {
+        std::vector<std::string> items;
+        for (size_t start = 0; start <= list.size();) {
+            size_t end = std::min(list.find(',', start), list.size());
+            if (end > start) items.push_back(list.substr(start, end - start));
+            start = end + 1;
+        }
+        return items;
+    };
     setLogOptions({true, false});
     try {
         // The bunny, 2 units across, normals from lib/mesh.
@@ -137,10 +159,24 @@ int main(int argc, char** argv) {
             {"grazing (beside the plane)", false, {{-cx + 5.5f, -cy + 0.3f, -cz}}, true},
             {"self-shadow", true, {}},
         };
+        if (!sceneList.empty()) {
+            std::vector<std::string> keep = split(sceneList);
+            std::erase_if(scenes, [&](const SceneSpec& s) { return std::find(keep.begin(), keep.end(), s.name) == keep.end(); });
+            for (SceneSpec& s : scenes) s.failureOnly = false;
+        }
         std::vector<std::string> maps = {"courtyard", "sunrise", "constant"};
+        if (!mapList.empty()) maps = split(mapList);
         struct GridChoice { int nt, np, nr; };
         std::vector<GridChoice> grids = {{32, 17, 15}, {64, 33, 15}, {64, 33, 30}, {128, 65, 30}};
         if (quick) grids = {{32, 17, 15}, {64, 33, 15}};
+        if (!gridList.empty()) {
+            grids.clear();
+            for (const std::string& g : split(gridList)) {
+                GridChoice choice{};
+                if (std::sscanf(g.c_str(), "%dx%dx%d", &choice.nt, &choice.np, &choice.nr) != 3) return 2;
+                grids.push_back(choice);
+            }
+        }
         json report;
         report["bunny"] = {{"vertices", bunny.vertexCount()}, {"triangles", bunny.triangleCount()}, {"scale", scale}};
 

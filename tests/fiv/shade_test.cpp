@@ -213,3 +213,40 @@ TEST(FivShade, RefusesAGridWhoseSizeDisagreesWithItsHeader) {
         EXPECT_EQ(e.exitCode(), kExitInput);
     }
 }
+
+TEST(FivShade, FarOccludersLookUpWithoutOverflowAndScenesRefuseTranslationsPastTheBound) {
+    // An occluder 1e30 away: the float squared distance would be inf (the receiver went black); in double the
+    // lookup is the far-field value, and the receiver keeps its unoccluded light.
+    const Scene& s = sphereScene();
+    float p[3] = {0, 0, 0}, n[3] = {0, 1, 0}, unoccluded[3];
+    fivDifmap(s.lighting, n, unoccluded);
+    float offset[3] = {0, 1e30f, 0}, fiv[9], power[3];
+    ASSERT_TRUE(fivLookup(s.occluder, offset, fiv, power));
+    for (float v : fiv) EXPECT_TRUE(std::isfinite(v));
+    EXPECT_LT(std::abs(fiv[1]), 1e-20f);
+    FivInstance far{&s.occluder, {0, 1e30f, 0}};
+    EXPECT_NEAR(shade(s, {far}, p, n), unoccluded[0], 1e-6 * unoccluded[0]);
+    // A scene whose instance translation is past kFivMaxCoordinate (or not finite) is refused.
+    Bundle scene = s.bundle;
+    scene.meshRole = "receiver";
+    scene.objects.push_back({"occluder", "occluder", scene.mesh});
+    for (Layer& layer : scene.layers)
+        if (layer.name == "fiv" || layer.name == "fiv_power" || layer.name == "fiv_valid") {
+            layer.object = 1;
+            layer.name = objectLayerName(layer.name, 1);
+        }
+    scene.instances = {{"receiver", 0, {0, 0, 0}}, {"a", 1, {0, 2, 0}}};
+    EXPECT_NO_THROW(fivScene(scene, "scene.glb"));
+    for (float bad : {2e9f, INFINITY, NAN}) {
+        scene.instances[1].translation = {0, bad, 0};
+        try {
+            fivScene(scene, "scene.glb");
+            ADD_FAILURE() << bad;
+        } catch (const Error& e) {
+            EXPECT_EQ(e.exitCode(), kExitInput);
+            EXPECT_EQ(e.file(), "scene.glb");
+        }
+    }
+    scene.instances[1] = {"b", 7, {0, 2, 0}}; // an object the bundle does not hold
+    EXPECT_THROW(fivScene(scene, "scene.glb"), Error);
+}
