@@ -6,6 +6,7 @@ import http from 'node:http';
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { answerListing } from './listing.mjs';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const types = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.json': 'application/json',
@@ -16,6 +17,7 @@ export function serve(dataDir, port = 0) {
   const roots = { '/three/': path.join(here, 'node_modules/three/build'), '/data/': path.resolve(dataDir), '/': here };
   const server = http.createServer((request, response) => {
     const url = decodeURIComponent(new URL(request.url, 'http://x').pathname);
+    if (answerListing(url, dataDir, response)) return; // the viewer's panel: listing.mjs
     const prefix = Object.keys(roots).find((p) => url.startsWith(p));
     const root = roots[prefix];
     const file = path.resolve(root, '.' + (url.slice(prefix.length - 1) === '/' ? '/index.html' : url.slice(prefix.length - 1)));
