@@ -128,6 +128,16 @@ ImageRecord readImage(const tinygltf::Model& model, size_t index) {
     ImageRecord record;
     record.name = image.name;
     record.bytes = image.image;
+    // A self-contained model (selfContainedModel) keeps the bytes in the image's buffer view instead.
+    if (record.bytes.empty() && image.bufferView >= 0 && size_t(image.bufferView) < model.bufferViews.size()) {
+        const tinygltf::BufferView& view = model.bufferViews[size_t(image.bufferView)];
+        if (view.buffer >= 0 && size_t(view.buffer) < model.buffers.size()) {
+            const std::vector<unsigned char>& buffer = model.buffers[size_t(view.buffer)].data;
+            if (view.byteOffset <= buffer.size() && view.byteLength <= buffer.size() - view.byteOffset)
+                record.bytes.assign(buffer.begin() + std::ptrdiff_t(view.byteOffset),
+                                    buffer.begin() + std::ptrdiff_t(view.byteOffset + view.byteLength));
+        }
+    }
     record.mimeType = image.mimeType;
     const std::vector<unsigned char>& b = record.bytes;
     if (record.mimeType.empty()) {

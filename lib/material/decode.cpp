@@ -23,10 +23,7 @@ SurfaceImage decodeImage(const ImageRecord& record, const std::string& file, con
     // OpenImageIO picks its reader by the name's extension, then reads the bytes through the proxy.
     const char* name = record.mimeType == "image/png" ? "texture.png" : "texture.jpg";
     OIIO::Filesystem::IOMemReader reader(const_cast<unsigned char*>(record.bytes.data()), record.bytes.size());
-    // glTF colours are not premultiplied: keep OpenImageIO from associating alpha with them.
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(name, &config, &reader);
+    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(name, nullptr, &reader);
     if (!input) refuse("is not a readable " + record.mimeType + " image (" + OIIO::geterror().substr(0, 200) + ")");
     const OIIO::ImageSpec& spec = input->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.nchannels > 4)
@@ -48,10 +45,14 @@ SurfaceImage decodeImage(const ImageRecord& record, const std::string& file, con
     const size_t count = size_t(spec.width) * spec.height;
     image.rgba.resize(count * 4);
     const bool alpha = channels == 2 || channels == 4;
+    // glTF colours are not premultiplied, but OpenImageIO associates a PNG's alpha with its colours on reading
+    // (unless the file says it is unassociated): divide it out again. Where alpha is 0 the colour is lost, and unused.
+    const bool associated = alpha && spec.get_int_attribute("oiio:UnassociatedAlpha", 0) == 0;
     for (size_t p = 0; p < count; ++p) {
         const float* in = &pixels[p * channels];
         float* out = &image.rgba[p * 4];
-        for (int c = 0; c < 3; ++c) out[c] = srgbToLinear(std::clamp(in[channels >= 3 ? c : 0], 0.0f, 1.0f));
+        const float a = alpha ? in[channels - 1] : 1.0f, scale = associated && a > 0.0f ? 1.0f / a : 1.0f;
+        for (int c = 0; c < 3; ++c) out[c] = srgbToLinear(std::clamp(in[channels >= 3 ? c : 0] * scale, 0.0f, 1.0f));
         out[3] = alpha ? std::clamp(in[channels - 1], 0.0f, 1.0f) : 1.0f;
     }
     return image;

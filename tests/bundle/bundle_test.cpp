@@ -211,6 +211,7 @@ tinygltf::Model plainModel(bool withColor) {
     triangles.indices = accessor(append(indices.data(), 8), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_SCALAR, 3, false);
     tinygltf::Material material;
     material.pbrMetallicRoughness.baseColorFactor = {0.5, 0.25, 1.0, 1.0};
+    material.pbrMetallicRoughness.metallicFactor = 0.0; // glTF's default is 1, a metal: no diffuse albedo
     model.materials.push_back(material);
     triangles.material = 0;
     tinygltf::Primitive lines = triangles;
@@ -373,9 +374,9 @@ TEST(Bundle, OutOfRangeIndicesPassToValidation) {
 TEST(Bundle, UnsupportedVersionIsRefused) {
     std::string path = writeSample("version.glb");
     Glb glb = splitGlb(prt::readFileBytes(path));
-    glb.document["extensions"]["PRT_bundle"]["version"] = 3;
+    glb.document["extensions"]["PRT_bundle"]["version"] = 4;
     prt::writeBytesAtomic(path, joinGlb(glb));
-    expectReadError(path, "version 3 is not supported; this build reads versions 1 to 2");
+    expectReadError(path, "version 4 is not supported; this build reads versions 1 to 3");
 }
 
 TEST(Bundle, TruncatedFileIsRefused) {

@@ -231,7 +231,7 @@ TEST(BundleVersion2, VersionOneRefusesWhatOnlyVersionTwoHolds) {
     bundle.mesh = quad();
     bundle.layers.push_back(floatLayer("half", "float16", {4}, {1, 2, 3, 4}, 0));
     expectWriteError(bundle, "version 1 stores float32 only", 1);
-    expectWriteError(bundle, "cannot write bundle version 3", 3);
+    expectWriteError(bundle, "cannot write bundle version 4", 4);
 }
 
 TEST(BundleVersion2, InconsistentObjectsAndLayersAreRefusedOnWrite) {

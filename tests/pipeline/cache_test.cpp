@@ -107,7 +107,7 @@ TEST_F(Cache, VersionBumpRerunsTheStageAndStopsWhereOutputsAgree) {
     EXPECT_EQ(test::ranStages(report), (Names{"relight", "relight-sh"}));
     for (const nlohmann::json& stage : report["stages"]) {
         if (stage["stage"] != "relight") continue;
-        EXPECT_NE(stage["reason"].get<std::string>().find("code version 1 -> 2"), std::string::npos) << stage["reason"];
+        EXPECT_NE(stage["reason"].get<std::string>().find("code version 2 -> 3"), std::string::npos) << stage["reason"];
     }
     EXPECT_EQ(test::statuses(report)["compare"], "cached");
 
