@@ -157,12 +157,12 @@ void runMeshprep(const MeshprepOptions& options) {
     } else {
         const nlohmann::json& fixed = report["fixed"];
         logInfo("meshprep: " + options.input + ": " + counts["vertices_in"].dump() + " vertices, " + counts["faces_in"].dump() +
-            " faces -> " + counts["vertices_out"].dump() + " vertices, " + counts["faces_out"].dump() + " triangles; welded " +
-            fixed["welded_vertices"].dump() + " vertices, removed " + fixed["degenerate_faces_removed"].dump() +
-            " degenerate and " + fixed["duplicate_faces_removed"].dump() + " duplicate faces; " +
-            report["boundary"]["edges"].dump() + " boundary edges in " + report["boundary"]["loops"].dump() + " loops, " +
-            report["non_manifold_edges"].dump() + " non-manifold edges; normals " + fixed["normals"].get<std::string>() +
-            "; wrote " + options.output);
+                " faces -> " + counts["vertices_out"].dump() + " vertices, " + counts["faces_out"].dump() + " triangles; welded " +
+                fixed["welded_vertices"].dump() + " vertices, removed " + fixed["degenerate_faces_removed"].dump() +
+                " degenerate and " + fixed["duplicate_faces_removed"].dump() + " duplicate faces; " +
+                report["boundary"]["edges"].dump() + " boundary edges in " + report["boundary"]["loops"].dump() + " loops, " +
+                report["non_manifold_edges"].dump() + " non-manifold edges; normals " + fixed["normals"].get<std::string>() +
+                "; wrote " + options.output);
     }
 
     StageCost cost;

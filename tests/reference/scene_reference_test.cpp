@@ -3,6 +3,7 @@
 #include "material.h"
 #include "reference.h"
 #include "scene.h"
+#include "corner_scene.h"
 #include "scene_gltf.h"
 #include "transfer.h"
 
@@ -18,12 +19,7 @@ using nlohmann::json;
 
 TEST(SceneReference, AWhiteFloorBesideARedWallTurnsRedAsTransferSays) {
     TriMesh floor = makePlane(2.0f, 8, 0.0f);
-    TriMesh wall = makePlane(2.0f, 8, 0.0f);
-    for (size_t v = 0; v < wall.vertexCount(); ++v) { // (x, 0, z) -> (1, x + 1, z): at x = 1, facing -X
-        float x = wall.positions[3 * v];
-        wall.positions[3 * v] = 1.0f, wall.positions[3 * v + 1] = x + 1.0f;
-        wall.normals[3 * v] = -1.0f, wall.normals[3 * v + 1] = 0.0f;
-    }
+    TriMesh wall = wallAtXOne(2.0f, 8);
     TestScene scene;
     scene.meshes = {{{floor, 0}}, {{wall, 1}}};
     scene.nodes = json::array({{{"mesh", 0}}, {{"mesh", 1}}});

@@ -3,6 +3,7 @@
 // mirrored instances against mirrored meshes, cut-out shadows, metallic surfaces that bounce nothing.
 #include "material.h"
 #include "scene.h"
+#include "corner_scene.h"
 #include "scene_gltf.h"
 #include "transfer.h"
 
@@ -121,15 +122,7 @@ TEST(SceneTransfer, TwoInstancesOfAMeshGiveTheRowsOfTwoCopies) {
 TEST(SceneTransfer, AMirroredInstanceEqualsTheMirroredMesh) {
     // An asymmetric corner: a floor and a wall on its +X side.
     TriMesh floor = makePlane(2.0f, 4, 0.0f);
-    TriMesh wall = makePlane(2.0f, 4, 0.0f);
-    for (size_t v = 0; v < wall.vertexCount(); ++v) { // rotate the plane to x = 1, facing -X
-        float x = wall.positions[3 * v], z = wall.positions[3 * v + 2];
-        wall.positions[3 * v] = 1.0f;
-        wall.positions[3 * v + 1] = x + 1.0f;
-        wall.positions[3 * v + 2] = z;
-        wall.normals[3 * v] = -1.0f, wall.normals[3 * v + 1] = 0.0f, wall.normals[3 * v + 2] = 0.0f;
-    }
-    // (x, 0, z) -> (1, x + 1, z) turns makePlane's +Y-facing triangles to face -X, toward the floor.
+    TriMesh wall = wallAtXOne(2.0f, 4);
     TestScene scene;
     scene.meshes = {{{floor, 0}, {wall, 0}}};
     scene.nodes = json::array({{{"mesh", 0}, {"scale", {-1.0, 1.0, 1.0}}}});
@@ -187,12 +180,7 @@ TEST(SceneTransfer, AMaskCutOutCastsTheShadowOfItsOpaqueTexelsOnly) {
 TEST(SceneTransfer, MetallicSurfacesReflectNoDiffuseLight) {
     // A floor beside a wall: with a metallic wall the floor's bounces add exactly nothing.
     TriMesh floor = makePlane(2.0f, 6, 0.0f);
-    TriMesh wall = makePlane(2.0f, 6, 0.0f);
-    for (size_t v = 0; v < wall.vertexCount(); ++v) { // at x = 1, facing -X (as in the test above)
-        float x = wall.positions[3 * v];
-        wall.positions[3 * v] = 1.0f, wall.positions[3 * v + 1] = x + 1.0f;
-        wall.normals[3 * v] = -1.0f, wall.normals[3 * v + 1] = 0.0f;
-    }
+    TriMesh wall = wallAtXOne(2.0f, 6);
     TestScene scene;
     scene.meshes = {{{floor, 0}}, {{wall, 1}}};
     scene.nodes = json::array({{{"mesh", 0}}, {{"mesh", 1}}});
