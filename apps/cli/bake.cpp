@@ -80,7 +80,10 @@ void addBakeCommand(CLI::App& app) {
     command->add_option("--albedo", args->albedo,
                         "Diffuse albedo R,G,B (or one grey value) in [0,1]; overrides the mesh's per-vertex albedo "
                         "(default: the mesh's, else 1)");
-    command->add_option("--uv-set", o.uvSet, "Bake into TEXCOORD_K of the input (default 0)");
+    command->add_option("--uv-set", o.uvSet,
+                        "Bake into TEXCOORD_K of the input (default: TEXCOORD_0 of a mesh; a scene's TEXCOORD_1 when it "
+                        "is unique, else an atlas generated over every instance)")
+        ->check(CLI::Range(0, 7));
     command->add_option("--format", args->format,
                         "Coefficient storage: half or float (one multi-channel OpenEXR) or u8 (8-bit PNG per "
                         "coefficient with a per-layer [min, max] JSON sidecar) or bundle (float32 rows in the bundle's own "

@@ -44,9 +44,11 @@ void runRender(const RenderOptions& options) {
     TriMesh mesh = bundle.mesh;
     // A scene is relit without its albedo and multiplied by its materials per pixel.
     std::optional<Surface> surface;
-    if (bundle.asset && !options.texels) {
+    std::vector<float> cornerUv; // a scene bake's atlas (layer "lightmap_uv")
+    if (bundle.asset) {
         surface = decodeSurface(bundle, options.bundle);
         surface->mesh = &mesh;
+        if (options.texels) cornerUv = lightmapCorners(bundle, options.bundle);
     }
     TexelRelightModel atlas;
     if (options.texels) atlas = loadTexelRelightModel(options.bundle);
@@ -76,7 +78,8 @@ void runRender(const RenderOptions& options) {
         relit.width = atlas.width;
         relit.height = atlas.height;
         relit.rgb = std::move(radiance);
-        image = renderTexelRadiance(mesh, relit, camera);
+        image = renderTexelRadiance(mesh, relit, camera, cornerUv.empty() ? nullptr : cornerUv.data(),
+                                    surface ? &*surface : nullptr);
     } else {
         image = renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
     }

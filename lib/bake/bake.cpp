@@ -4,6 +4,7 @@
 
 #include "core.h"
 #include "image.h"
+#include "material.h"
 #include "runtime.h"
 #include "sh.h"
 #include "transfer.h"
@@ -28,7 +29,7 @@ void checkOptions(const BakeOptions& options) {
         throw usage("--samples", std::to_string(options.samples) + " outside 1.." +
                                      std::to_string(kMaxTransferSamples));
     if (options.bounces < 0) throw usage("--bounces", "must be >= 0");
-    if (options.uvSet < 0) throw usage("--uv-set", "must be >= 0");
+    if (options.uvSet < -1) throw usage("--uv-set", "must be >= 0 (or -1: the default choice)");
     if (!(options.cage > 0.0 && options.cage < 1.0)) throw usage("--cage", "must lie in (0, 1)");
     if (!(options.maxMissFraction >= 0.0 && options.maxMissFraction <= 1.0))
         throw usage("--max-miss", "must lie in [0, 1]");
@@ -37,12 +38,29 @@ void checkOptions(const BakeOptions& options) {
     if (options.threads < 0) throw usage("--threads", "must be >= 0 (0: all cores)");
 }
 
-TriMesh readMeshWithNormals(const std::string& path, const char* role) {
-    TriMesh mesh = readBundle(path).mesh;
+Bundle readBundleWithNormals(const std::string& path, const char* role) {
+    Bundle bundle = readBundle(path);
+    const TriMesh& mesh = bundle.mesh;
     if (mesh.normals.size() != mesh.positions.size())
         throw Error(path, "mesh", std::string("the ") + role + " mesh has no normals: run `prt meshprep` on it first");
     for (uint32_t v : mesh.indices)
         if (v >= mesh.vertexCount()) throw Error(path, "mesh", "index " + std::to_string(v) + " is out of range");
+    return bundle;
+}
+
+// A scene's input: the bundle kept whole (its asset and materials serve the rays and the output), refusing what
+// belongs to single meshes. Returns the flattened mesh with the atlas's source texcoords (empty: generate).
+TriMesh sceneBakeMesh(Bundle input, const BakeOptions& options, BakeSurface& surface, int& chosenSet) {
+    if (!options.high.empty())
+        throw usage("--high", "is for a single low mesh; a scene (" + options.input + ") bakes its own surfaces");
+    if (options.albedoOverride)
+        throw usage("--albedo", "a scene (" + options.input + ") takes its albedo from its materials");
+    TriMesh mesh = input.mesh;
+    mesh.texcoords = sceneAtlasTexcoords(input, options.uvSet, options.input, chosenSet);
+    input.layers.clear();
+    auto scene = std::make_shared<const Bundle>(std::move(input));
+    surface.materials = std::make_shared<const Surface>(decodeSurface(*scene, options.input));
+    surface.scene = std::move(scene);
     return mesh;
 }
 
@@ -56,8 +74,19 @@ double boundingDiagonal(const TriMesh& mesh) {
                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
 }
 
-// Per sample: the low mesh's albedo interpolated, or empty when the mesh has none or `skip` is set.
-std::vector<float> sampleAlbedo(const TriMesh& mesh, const TexelSamples& samples, bool skip) {
+// Per sample: the diffuse albedo of a scene's material at the sample point, or the low mesh's albedo
+// interpolated; empty when the mesh has none or `skip` is set.
+std::vector<float> sampleAlbedo(const TriMesh& mesh, const TexelSamples& samples, bool skip,
+                                const Surface* materials = nullptr) {
+    if (materials) {
+        std::vector<float> albedo(3 * samples.texel.size());
+        for (size_t i = 0; i < samples.texel.size(); ++i) {
+            std::array<float, 3> rho = diffuseAlbedoAt(*materials, samples.triangle[i], samples.barycentric[3 * i + 1],
+                                                       samples.barycentric[3 * i + 2]);
+            std::copy(rho.begin(), rho.end(), albedo.begin() + 3 * i);
+        }
+        return albedo;
+    }
     if (mesh.albedo.empty() || skip) return {};
     std::vector<float> albedo(3 * samples.texel.size());
     for (size_t i = 0; i < samples.texel.size(); ++i) {
@@ -86,20 +115,32 @@ BakeSurface bakeSurface(const BakeOptions& options) {
     const int size = options.resolution;
     BakeSurface surface;
     TriMesh& mesh = surface.mesh;
-    mesh = readMeshWithNormals(options.input, "low");
-    if (options.uvSet > 0) mesh.texcoords = readTexcoordSet(options.input, options.uvSet);
+    Bundle input = readBundleWithNormals(options.input, "low");
+    int sourceSet = std::max(options.uvSet, 0);
+    if (input.asset) {
+        mesh = sceneBakeMesh(std::move(input), options, surface, sourceSet);
+    } else {
+        mesh = std::move(input.mesh);
+        if (options.uvSet > 0) mesh.texcoords = readTexcoordSet(options.input, options.uvSet);
+    }
     bool generated = mesh.texcoords.empty();
     nlohmann::json& atlasRecord = surface.atlasRecord;
-    atlasRecord = {{"generated", generated}, {"source_uv_set", options.uvSet}};
+    atlasRecord = {{"generated", generated}};
+    if (!generated || !surface.scene) atlasRecord["source_uv_set"] = sourceSet;
     if (generated) {
         AtlasOptions atlasOptions;
         atlasOptions.width = atlasOptions.height = size;
         atlasOptions.padding = options.padding;
         GeneratedAtlas atlas = generateAtlas(mesh, atlasOptions);
         mesh = std::move(atlas.mesh);
-        logWarn("bake: " + options.input + " has no UVs: GENERATED a lightmap atlas of " +
-                std::to_string(atlas.charts) + " charts (" + std::to_string(options.padding) + " texels padding, " +
-                std::to_string(atlas.texelsPerUnit) + " texels per unit); the bundle's TEXCOORD_0 is that atlas");
+        std::string layout = std::to_string(atlas.charts) + " charts (" + std::to_string(options.padding) +
+                             " texels padding, " + std::to_string(atlas.texelsPerUnit) + " texels per unit)";
+        if (surface.scene)
+            logInfo("bake: generated a lightmap atlas of " + layout + " over every placed primitive of " +
+                    options.input + "; the bundle's layer lightmap_uv is that atlas");
+        else
+            logWarn("bake: " + options.input + " has no UVs: GENERATED a lightmap atlas of " + layout +
+                    "; the bundle's TEXCOORD_0 is that atlas");
         atlasRecord["charts"] = atlas.charts;
         atlasRecord["texels_per_unit"] = atlas.texelsPerUnit;
         atlasRecord["padding"] = options.padding;
@@ -122,7 +163,7 @@ BakeSurface bakeSurface(const BakeOptions& options) {
     surface.detailNormals = normals;
     if (!options.high.empty()) {
         TriMesh& high = surface.high;
-        high = readMeshWithNormals(options.high, "high");
+        high = readBundleWithNormals(options.high, "high").mesh;
         float cage = float(options.cage * boundingDiagonal(mesh));
         CageProjection projection = projectOntoHigh(high, positions, normals, cage);
         surface.cageRays = count;
@@ -172,7 +213,9 @@ TexelTransferRows bakeTexelTransfer(const BakeSurface& surface, const BakeOption
     const int size = options.resolution;
     end = std::min(end, count);
     begin = std::min(begin, end);
-    const TriMesh& geometry = options.high.empty() ? surface.mesh : surface.high;
+    // A scene's rays see its own flattened mesh (the same triangles as the atlas mesh, its vertices unsplit, which
+    // its materials address) with its materials; a plain bake's, the low mesh or the high one.
+    const TriMesh& geometry = surface.scene ? surface.scene->mesh : options.high.empty() ? surface.mesh : surface.high;
     TexelTransferRows result;
     result.begin = begin;
     result.end = end;
@@ -180,7 +223,8 @@ TexelTransferRows bakeTexelTransfer(const BakeSurface& surface, const BakeOption
     stats.texels = end - begin;
 
     // Transfer per texel: the per-vertex integrator with texels as receivers.
-    std::vector<float> albedo = sampleAlbedo(surface.mesh, samples, options.albedoOverride);
+    // A scene's rows are irradiance transfer: its materials' albedo is applied at bounces, never at the receiver.
+    std::vector<float> albedo = surface.scene ? std::vector<float>() : sampleAlbedo(surface.mesh, samples, options.albedoOverride);
     std::vector<uint64_t> keys(samples.texel.begin() + begin, samples.texel.begin() + end); // rotations follow texels
     Receivers receivers;
     receivers.positions = surface.positions.data() + 3 * begin;
@@ -189,6 +233,7 @@ TexelTransferRows bakeTexelTransfer(const BakeSurface& surface, const BakeOption
     receivers.keys = keys.data();
     receivers.count = end - begin;
     TransferOptions transferOptions = texelTransferOptions(options);
+    transferOptions.surface = surface.materials.get();
     std::string range = end - begin == count ? "" : " (texels " + std::to_string(begin) + ".." + std::to_string(end) +
                                                         " of them)";
     logInfo("bake: " + std::to_string(count) + " texels of " + std::to_string(size) + "x" + std::to_string(size) +
@@ -240,9 +285,10 @@ void normaliseTexels(float* texels, size_t count, int channels, int first) {
 // The "texel_surface" atlas: receivers' positions, normals and albedo, gutters filled, coverage exact.
 // Needs the bake's mesh and samples and its receivers' positions and normals ([covered texel][3]).
 std::vector<float> surfaceAtlas(const TriMesh& mesh, const TexelSamples& samples, const std::vector<float>& positions,
-                                const std::vector<float>& normals, const BakeOptions& options, const uint8_t* covered) {
+                                const std::vector<float>& normals, const BakeOptions& options, const uint8_t* covered,
+                                const Surface* materials) {
     const size_t count = samples.texel.size();
-    std::vector<float> albedo = sampleAlbedo(mesh, samples, options.albedoOverride);
+    std::vector<float> albedo = sampleAlbedo(mesh, samples, options.albedoOverride, materials);
     std::vector<float> rows(count * kTexelSurfaceChannels);
     for (size_t i = 0; i < count; ++i) {
         float* row = &rows[i * kTexelSurfaceChannels];
@@ -295,7 +341,9 @@ BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vect
     };
     baked.transfer = atlasOf(rows);
     if (!bounce.empty()) baked.bounce = atlasOf(bounce);
-    baked.surface = surfaceAtlas(mesh, samples, surface.positions, surface.normals, options, covered.data());
+    baked.surface =
+        surfaceAtlas(mesh, samples, surface.positions, surface.normals, options, covered.data(), surface.materials.get());
+    baked.scene = surface.scene;
 
     std::vector<float> tangentNormals =
         tangentSpaceNormals(mesh, vertexTangents(mesh), samples, surface.detailNormals);
@@ -305,13 +353,14 @@ BakedAtlas finishBake(BakeSurface surface, const BakeOptions& options, std::vect
 
     baked.params = {{"width", size},
                     {"height", size},
-                    {"uv_set", 0},
+                    {"uv_set", surface.scene ? nlohmann::json("lightmap_uv") : nlohmann::json(0)},
                     {"atlas", surface.atlasRecord},
                     {"order", options.order},
                     {"mode", transferModeName(texelTransferOptions(options).mode)},
                     {"samples", options.samples},
                     {"bounces", options.bounces},
-                    {"albedo", mesh.albedo.empty() || options.albedoOverride
+                    {"albedo", surface.scene ? nlohmann::json("excluded")
+                               : mesh.albedo.empty() || options.albedoOverride
                                    ? nlohmann::json(options.albedo)
                                    : nlohmann::json("per-vertex")},
                     {"seed", options.seed},

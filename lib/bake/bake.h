@@ -16,10 +16,13 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace prt {
+
+struct Surface; // lib/material: a scene's materials at surface points
 
 // Largest atlas side: a 16384^2 atlas of order-3 float transfer already takes 29 GB.
 inline constexpr int kMaxBakeResolution = 16384;
@@ -162,7 +165,8 @@ GeneratedAtlas generateAtlas(const TriMesh& mesh, const AtlasOptions& options);
 // ---- seams ------------------------------------------------------------------------------------------------------
 
 // An edge of the surface (vertices at equal positions count as one) whose two triangles map it to different
-// places in the atlas. Corners a, b of `first` and c, d of `second` lie at the same two positions: a with c,
+// places in the atlas, on a smooth surface: where the vertex normals of the two sides differ (a crease, such as a
+// floor meeting a wall, across which irradiance really jumps) the edge is no seam. Corners a, b of `first` and c, d of `second` lie at the same two positions: a with c,
 // b with d.
 struct SeamEdge {
     uint32_t first = 0, second = 0; // triangles
@@ -219,6 +223,19 @@ std::vector<float> readCoefficientExr(const std::string& path, int& width, int& 
 // Reads the first `channels` channels of an 8-bit image (expected sizes of 0 accept any).
 std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int channels);
 
+// ---- scenes (scene_atlas.cpp) ------------------------------------------------------------------------------------
+
+// The texcoords a scene bakes into, per flattened vertex: TEXCOORD_<uvSet> (0 or 1), or with uvSet -1 TEXCOORD_1
+// when every primitive has it and no mesh is placed twice; empty when the atlas is to be generated (logged why).
+// chosenSet receives the set taken, or -1. Throws prt::Error(path, ...) for a set some primitive lacks, a set
+// above 1 (kExitUsage), and an explicit set on a mesh placed by several nodes, whose instances it would overlap.
+std::vector<float> sceneAtlasTexcoords(const Bundle& scene, int uvSet, const std::string& path, int& chosenSet);
+
+// The atlas of a scene bake as the layer "lightmap_uv" (domain "corner", semantic "lightmap_uv", [3 T][2]): row
+// 3 t + k is corner k of triangle t of the flattened mesh, its atlas uv. Corners, not vertices, because a generated
+// atlas splits vertices where charts meet and the scene keeps its own vertices. Needs texcoords on atlasMesh.
+Layer lightmapUvLayer(const TriMesh& atlasMesh);
+
 // ---- the stage --------------------------------------------------------------------------------------------------
 
 struct BakeOptions {
@@ -229,7 +246,10 @@ struct BakeOptions {
     int order = 3;
     int samples = 1024;
     int bounces = 0;          // > 0: interreflected
-    int uvSet = 0;            // TEXCOORD_<uvSet> of the input
+    // The atlas: TEXCOORD_<uvSet> of the input, or with -1 (auto) the mesh's TEXCOORD_0 (a scene's TEXCOORD_1, its
+    // lightmap set, when no mesh is placed twice), and a generated atlas where that set is absent. A scene's
+    // TEXCOORD_0 addresses its textures, so a scene takes it only when asked.
+    int uvSet = -1;
     std::array<float, 3> albedo = {1.0f, 1.0f, 1.0f}; // used where the low mesh has no albedo, or always with
     bool albedoOverride = false;                      // albedoOverride (linear RGB in [0, 1])
     TexelFormat format = TexelFormat::Half;
@@ -275,11 +295,14 @@ struct BakedAtlas {
     std::vector<float> normals;      // [width * height][3]: tangent-space unit normals, filled
     nlohmann::json params;           // what the texel layer records about the bake (docs/bundle.md)
     BakeStats stats;
+    std::shared_ptr<const Bundle> scene; // BakeSurface::scene: the output keeps the asset, the atlas goes in a layer
 };
 
 // The bake in three steps, so that shards compute step 2 for a range and a merge does step 3 once:
 // 1. bakeSurface: reads the inputs and validates everything (options, UVs, high-mesh coverage): the atlas, its
 //    covered texels (the row order of the transfer) and the receivers, cage-projected onto the high mesh if given.
+//    A scene bakes one atlas over every placed primitive in world space, so each instance has texels of its own
+//    (a generated atlas, unless the scene's TEXCOORD_1 is unique), and refuses --high and --albedo.
 // 2. bakeTexelTransfer: the per-vertex transfer integrator with covered texels [begin, end) as receivers (rays
 //    against the high mesh when given). Rows depend only on the surface and the options, never on the range.
 // 3. finishBake: from the rows of every covered texel, scatter, gutter fill, seam stitching, tangent-space normals.
@@ -294,6 +317,11 @@ struct BakeSurface {
     TriMesh high;                 // empty without --high
     nlohmann::json atlasRecord, highRecord; // recorded in the texel layer's params
     uint64_t cageRays = 0;
+    // A scene (docs/bundle.md "Scene bundles"): the input bundle (its asset and flattened mesh, whose triangles are
+    // `mesh`'s in the same order) and its decoded materials, which give every bounce its albedo and every texel its
+    // diffuse albedo; the transfer is then irradiance transfer (params.albedo "excluded"). Null for a plain mesh.
+    std::shared_ptr<const Bundle> scene;
+    std::shared_ptr<const Surface> materials;
 };
 BakeSurface bakeSurface(const BakeOptions& options);
 

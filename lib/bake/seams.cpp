@@ -45,6 +45,15 @@ bool sameTexcoord(const TriMesh& mesh, uint32_t v, uint32_t w) {
            mesh.texcoords[2 * size_t(v) + 1] == mesh.texcoords[2 * size_t(w) + 1];
 }
 
+// Whether vertices v and w carry the same shading normal (within about 2.6 degrees), or the mesh has none: where
+// they do not, the edge is a crease (a floor meeting a wall), across which irradiance really jumps.
+bool sameNormal(const TriMesh& mesh, uint32_t v, uint32_t w) {
+    if (mesh.normals.empty()) return true;
+    const float* n = &mesh.normals[3 * size_t(v)];
+    const float* m = &mesh.normals[3 * size_t(w)];
+    return n[0] * m[0] + n[1] * m[1] + n[2] * m[2] > 0.999f;
+}
+
 } // namespace
 
 std::vector<SeamEdge> findSeams(const TriMesh& mesh) {
@@ -70,6 +79,7 @@ std::vector<SeamEdge> findSeams(const TriMesh& mesh) {
         if (ids[c] != ids[seam.a]) std::swap(c, d);
         seam.c = c, seam.d = d;
         if (sameTexcoord(mesh, seam.a, seam.c) && sameTexcoord(mesh, seam.b, seam.d)) continue;
+        if (!sameNormal(mesh, seam.a, seam.c) || !sameNormal(mesh, seam.b, seam.d)) continue; // a crease
         seams.push_back(seam);
     }
     std::sort(seams.begin(), seams.end(), [](const SeamEdge& x, const SeamEdge& y) {

@@ -253,13 +253,19 @@ void runBake(const BakeOptions& options) {
                           {"hash", hashFile(normalPath)},
                           {"width", size},
                           {"height", size},
-                          {"uv_set", 0},
+                          {"uv_set", baked.scene ? nlohmann::json("lightmap_uv") : nlohmann::json(0)},
                           {"encoding", "rgb8 = round((n + 1) * 127.5)"},
                           {"frame", "x along +u, y along -v (image up), z the interpolated vertex normal"},
                           {"source", options.high.empty() ? "low mesh normals" : "high mesh normals"}};
 
+    // A scene keeps its asset and its own rows; the atlas, whose generated charts split vertices, is a corner layer.
     Bundle bundle;
-    bundle.mesh = std::move(baked.mesh);
+    if (baked.scene) {
+        bundle = *baked.scene;
+        bundle.layers.push_back(lightmapUvLayer(baked.mesh));
+    } else {
+        bundle.mesh = std::move(baked.mesh);
+    }
     bundle.layers.push_back(std::move(layer));
     if (!baked.bounce.empty()) bundle.layers.push_back(std::move(bounceLayer));
     bundle.layers.push_back(std::move(surfaceLayer));

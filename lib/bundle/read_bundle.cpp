@@ -170,6 +170,10 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, const B
     size_t vertexCount = objectMesh(bundle, layer.object).vertexCount();
     if (layer.domain == "vertex" && layer.shape[0] != vertexCount)
         refuse("vertex layer has " + std::to_string(layer.shape[0]) + " rows but the mesh has " + std::to_string(vertexCount) + " vertices");
+    size_t cornerCount = objectMesh(bundle, layer.object).indices.size();
+    if (layer.domain == "corner" && layer.shape[0] != cornerCount)
+        refuse("corner layer has " + std::to_string(layer.shape[0]) + " rows but the mesh has " + std::to_string(cornerCount) +
+               " triangle corners");
 
     if (!record.contains("bufferView")) {
         bool external = layer.params.contains("uri") && layer.params["uri"].is_string();

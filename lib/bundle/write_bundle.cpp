@@ -127,6 +127,10 @@ static void checkLayers(const std::string& path, const Bundle& bundle, int versi
         if (layer.domain == "vertex" && layer.shape[0] != vertexCount)
             refuse("vertex layer has " + std::to_string(layer.shape[0]) + " rows for " + std::to_string(vertexCount) +
                    " vertices of object '" + objectName(bundle, layer.object) + "'");
+        size_t cornerCount = objectMesh(bundle, layer.object).indices.size();
+        if (layer.domain == "corner" && layer.shape[0] != cornerCount)
+            refuse("corner layer has " + std::to_string(layer.shape[0]) + " rows for " + std::to_string(cornerCount) +
+                   " triangle corners of object '" + objectName(bundle, layer.object) + "'");
     }
 }
 

@@ -107,7 +107,7 @@ std::vector<StageSpec> makeCatalogue() {
     // Shards are ranges of covered texels ("texel_range" layers). Gutter fill and seam stitching couple the whole
     // atlas, so the merge is `prt bake ... --merge SHARD...`, which joins the rows and finishes as one bake does.
     // 3: spawn rule, content-addressed textures; 4: texel_surface and texel_transfer_bounce layers (texel hybrid)
-    StageSpec bake{"bake", 4, "per-texel SH transfer into atlas textures"};
+    StageSpec bake{"bake", 5, "per-texel SH transfer into atlas textures"};
     bake.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"high", FileKind::Mesh, "--high", "", true}};
     // The textures land next to the bundle (bundle.transfer.exr, ...), listed in its layers' params.files; `prt run`
     // copies them along with the bundle.

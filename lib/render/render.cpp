@@ -76,6 +76,21 @@ RenderedImage castPrimaryRays(const TriMesh& mesh, const PinholeCamera& camera,
 
 } // namespace
 
+// A scene bake's layer "lightmap_uv": [3 T][2] uv per triangle corner (docs/bundle.md "Scene bakes"), checked.
+std::vector<float> lightmapCorners(const Bundle& bundle, const std::string& source) {
+    const Layer* layer = findLayer(bundle, "lightmap_uv");
+    if (!layer)
+        throw Error(source, "PRT_bundle", "a scene's texels need the layer \"lightmap_uv\": bake the scene again");
+    if (layer->domain != "corner" || layer->componentType != "float32" ||
+        layer->shape != std::vector<uint64_t>{uint64_t(bundle.mesh.indices.size()), 2} ||
+        layer->data.size() != bundle.mesh.indices.size() * 2)
+        throw Error(source, "layer \"lightmap_uv\"", "is not a float32 corner layer of shape [" +
+                                                         std::to_string(bundle.mesh.indices.size()) + ", 2]");
+    for (float value : layer->data)
+        if (!std::isfinite(value)) throw Error(source, "layer \"lightmap_uv\"", "holds a value that is not finite");
+    return layer->data;
+}
+
 RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera,
                                    const Surface* surface) {
     if (radiance.size() != mesh.vertexCount() * 3)
@@ -96,24 +111,32 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
         surface);
 }
 
-RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera) {
-    if (mesh.texcoords.size() != mesh.vertexCount() * 2)
+RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera,
+                                  const float* cornerUv, const Surface* surface) {
+    if (!cornerUv && mesh.texcoords.size() != mesh.vertexCount() * 2)
         throw Error("", "render", "the mesh has no TEXCOORD_0 for its texels (prt bake adds an atlas)");
     if (atlas.width <= 0 || atlas.height <= 0 || atlas.rgb.size() != size_t(atlas.width) * atlas.height * 3)
         throw Error("", "render", "the relit atlas has no texels or a wrong size");
-    return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
-        const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
-        float w = 1.0f - hit.u - hit.v;
-        float uv[2];
-        for (int a = 0; a < 2; ++a)
-            uv[a] = w * mesh.texcoords[corner[0] * 2 + a] + hit.u * mesh.texcoords[corner[1] * 2 + a] +
-                    hit.v * mesh.texcoords[corner[2] * 2 + a];
-        // The nearest texel: texel (x, y) covers u in [x, x + 1) / width, v in [y, y + 1) / height.
-        int x = std::clamp(int(std::floor(uv[0] * float(atlas.width))), 0, atlas.width - 1);
-        int y = std::clamp(int(std::floor(uv[1] * float(atlas.height))), 0, atlas.height - 1);
-        const float* texel = &atlas.rgb[(size_t(y) * atlas.width + x) * 3];
-        std::copy(texel, texel + 3, out);
-    });
+    return castPrimaryRays(
+        mesh, camera,
+        [&](const PrimaryHit& hit, float* out) {
+            const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
+            auto uvOf = [&](int k, int a) {
+                return cornerUv ? cornerUv[(size_t(hit.triangle) * 3 + k) * 2 + a] : mesh.texcoords[corner[k] * 2 + a];
+            };
+            float w = 1.0f - hit.u - hit.v;
+            float uv[2];
+            for (int a = 0; a < 2; ++a) uv[a] = w * uvOf(0, a) + hit.u * uvOf(1, a) + hit.v * uvOf(2, a);
+            // The nearest texel: texel (x, y) covers u in [x, x + 1) / width, v in [y, y + 1) / height.
+            int x = std::clamp(int(std::floor(uv[0] * float(atlas.width))), 0, atlas.width - 1);
+            int y = std::clamp(int(std::floor(uv[1] * float(atlas.height))), 0, atlas.height - 1);
+            const float* texel = &atlas.rgb[(size_t(y) * atlas.width + x) * 3];
+            std::copy(texel, texel + 3, out);
+            if (!surface) return;
+            std::array<float, 3> albedo = diffuseAlbedoAt(*surface, hit.triangle, hit.u, hit.v);
+            for (int c = 0; c < 3; ++c) out[c] *= albedo[c];
+        },
+        surface);
 }
 
 void writeRenderedExr(const std::string& path, const Image& image, const std::vector<float>& coverage) {

@@ -31,9 +31,18 @@ struct RenderedImage {
 RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera,
                                    const Surface* surface = nullptr);
 
-// Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0.
-// Needs mesh.uvs for every vertex, atlas.rgb sized width * height * 3. Throws prt::Error otherwise.
-RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera);
+// Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0, or
+// through `cornerUv` ([3 T][2], a scene bake's layer "lightmap_uv": corner k of triangle t at 3 t + k) when given.
+// With a scene's `surface` the atlas holds E / pi (a scene bake's irradiance transfer) and each pixel multiplies it
+// by the material's diffuse albedo at the hit, as renderVertexRadiance does; primary rays pass through cut-outs.
+// Needs texcoords for every vertex (or cornerUv for every corner), atlas.rgb sized width * height * 3. Throws
+// prt::Error otherwise.
+RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera,
+                                  const float* cornerUv = nullptr, const Surface* surface = nullptr);
+
+// The atlas of a scene bake, its layer "lightmap_uv": [3 T][2], uv per triangle corner of bundle.mesh. Throws
+// prt::Error(source, ...) when the layer is absent, not a float32 corner layer of that shape, or not finite.
+std::vector<float> lightmapCorners(const Bundle& bundle, const std::string& source);
 
 // Writes `image` atomically as a linear float RGBA OpenEXR, A = coverage (empty coverage: 1). For a tone-mapped
 // PNG, `prt render` passes the radiance through compare.h's toneMap, the one tone map of prt's pictures.

@@ -27,6 +27,7 @@ void checkFiniteRows(const std::vector<float>& data, size_t rowValues, const std
 // Throws prt::Error(source, ...) naming the bad param or the row count otherwise.
 struct TexelLayerShape {
     int width = 0, height = 0, order = 0;
+    bool albedoExcluded = false; // params.albedo "excluded": a scene bake's irradiance transfer, relit as E / pi
 };
 TexelLayerShape texelLayerShape(const Layer& layer, const std::string& source);
 // The texel-domain adaptive layers of an adapted bake (`prt adapt` of a `prt bake` bundle) as a texel model.

@@ -140,6 +140,7 @@ TexelRelightModel texelModelOf(Bundle bundle, const std::string& bundlePath) {
     model.height = shape.height;
     model.rows.vertexCount = uint32_t(size_t(shape.width) * shape.height);
     model.rows.order = shape.order;
+    model.rows.albedoExcluded = shape.albedoExcluded;
     model.rows.transfer = texelLayerRows(bundlePath, *layer, shape.width, shape.height, shape.order * shape.order);
     return model;
 }
@@ -210,6 +211,9 @@ TexelHybridModel texelHybridModel(Bundle bundle, const std::string& bundlePath) 
         }
         model.covered[t] = row[9] > 0.5f;
     }
+    // A scene bake's texels are irradiance transfer, relit as E / pi (an engine multiplies by its base colour per
+    // pixel): the cone lights and the bounce part then shade a white surface too.
+    if (total.rows.albedoExcluded) std::fill(model.rows.albedo.begin(), model.rows.albedo.end(), 1.0f);
     if (bounce) {
         if (bounce->domain != "texel" || bounce->semantic != "sh_transfer_bounce_rgb" ||
             bounce->shape != std::vector<uint64_t>{texels, uint64_t(coefficients), 3})

@@ -28,6 +28,8 @@ TexelLayerShape texelLayerShape(const Layer& layer, const std::string& source) {
     shape.order = transferLayerOrder(layer, source, place);
     shape.width = sizeParam(layer.params, "width", source, place + ", params");
     shape.height = sizeParam(layer.params, "height", source, place + ", params");
+    const nlohmann::json albedo = layer.params.value("albedo", nlohmann::json());
+    shape.albedoExcluded = albedo.is_string() && albedo.get<std::string>() == "excluded";
     uint64_t texels = uint64_t(shape.width) * uint64_t(shape.height);
     if (layer.shape[0] != texels || texels > std::numeric_limits<uint32_t>::max())
         throw Error(source, place, "has " + std::to_string(layer.shape[0]) + " rows for a " +
@@ -71,6 +73,7 @@ TexelRelightModel texelRelightModel(Bundle bundle, const std::string& source) {
     model.height = shape.height;
     model.rows.vertexCount = uint32_t(size_t(shape.width) * shape.height);
     model.rows.order = shape.order;
+    model.rows.albedoExcluded = shape.albedoExcluded;
     model.rows.transfer = std::move(layer.data);
     checkFiniteRows(model.rows.transfer, rowValues, source, "layer \"texel_transfer\"", "texel");
     return model;
