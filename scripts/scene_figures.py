@@ -6,8 +6,8 @@ usage: scripts/scene_figures.py [--prt build/prt] [--data .cache/data] [--work .
                                 [--asset assets/OBJ/spider.obj] [--env courtyard] [--size 200,150]
                                 [--samples 1024] [--reference-samples 4096] [--bounces 2]
 
-Writes docs/strips/scene.png (result | reference | error), docs/strips/scene.diff.png and
-docs/charts/scene_figures.json. Every step is a prt command; the reference is cached in --work."""
+Writes docs/strips/scene.png (result | reference | error), docs/strips/scene.diff.png, the same for the lightmap
+bake (docs/strips/scene.bake.png) and docs/charts/scene_figures.json, with the references' own noise. Every step is a prt command; the reference is cached in --work."""
 import argparse
 import json
 import struct
@@ -73,10 +73,26 @@ def main():
     eye = [centre[0] + 0.6 * extent, centre[1] + 0.55 * extent, centre[2] + 1.1 * extent]
     camera = ",".join(f"{v:.6g}" for v in eye + centre + [0, 1, 0, 40])
     figures["camera"] = camera
+    # The image reference is the mean of two half-sample runs (seeds 1 and 2), so that its own noise is measured:
+    # the RMS of their difference / 2 is the noise of the mean.
+    import OpenImageIO as oiio
+    import numpy as np
+    halves = []
+    for seed in (1, 2):
+        half = work / f"reference.image.{args.size.replace(',', 'x')}.seed{seed}.exr"
+        if not half.exists():
+            run(prt, "--quiet", "reference", prepared, "--env", env, "--bounces", args.bounces, "--samples",
+                args.reference_samples // 8, "--seed", seed, "--image", args.size, "--camera", camera, "-o", half)
+        halves.append(oiio.ImageBuf(str(half)).get_pixels(oiio.FLOAT))
     reference_image = work / f"reference.image.{args.size.replace(',', 'x')}.exr"
-    if not reference_image.exists():
-        run(prt, "--quiet", "reference", prepared, "--env", env, "--bounces", args.bounces, "--samples",
-            args.reference_samples // 4, "--seed", 1, "--image", args.size, "--camera", camera, "-o", reference_image)
+    mean = (halves[0] + halves[1]) / 2
+    out_buf = oiio.ImageBuf(oiio.ImageSpec(mean.shape[1], mean.shape[0], mean.shape[2], oiio.FLOAT))
+    out_buf.set_pixels(oiio.ROI(), mean)
+    out_buf.write(str(reference_image))
+    vertex_reference = np.load(reference)
+    vertex_noise = np.load(reference_error)
+    figures["reference_vertex_noise_relative_rms"] = float(np.sqrt(np.mean(vertex_noise ** 2)) /
+                                                           np.sqrt(np.mean(vertex_reference ** 2)))
     for order in (3, 5, 8):
         render = work / f"render.o{order}.exr"
         run(prt, "--quiet", "render", work / f"transfer.o{order}.glb", "--env", env, "--camera", camera, "--size",
@@ -89,6 +105,26 @@ def main():
         metrics = json.loads(metrics_file.read_text())
         figures["orders"][order]["image"] = metrics
         print(f"order {order}: per image relative RMSE {100 * metrics['relative_rmse']:.2f}%")
+    # The reference's noise over the pixels the compare counts (the render's coverage).
+    covered = oiio.ImageBuf(str(work / "render.o8.exr")).get_pixels(oiio.FLOAT)[..., 3] > 0.5
+    noise = np.sqrt(np.mean(((halves[0] - halves[1])[covered][:, :3] / 2) ** 2))
+    level = np.sqrt(np.mean(mean[covered][:, :3] ** 2))
+    figures["reference_image_noise_relative_rms"] = float(noise / level)
+    print(f"image reference: {args.reference_samples // 4} paths per pixel, noise {100 * noise / level:.2f}% (relative RMS)")
+    # The lightmap: one atlas over the whole asset at order 5, rendered per texel times the base colour per pixel.
+    bake = work / "bake.o5.glb"
+    run(prt, "--quiet", "bake", prepared, "-o", bake, "--resolution", 1024, "--order", 5, "--samples", 256,
+        "--bounces", args.bounces, "--seed", 1)
+    render = work / "render.bake.o5.exr"
+    run(prt, "--quiet", "render", bake, "--texels", "--env", env, "--camera", camera, "--size", args.size, "-o", render)
+    out = root / "docs/strips" / "scene.bake"
+    metrics_file = work / "image.bake.o5.json"
+    subprocess.run([str(prt), "--quiet", "compare", "--image", str(render), str(reference_image), "-o",
+                    f"{out}.diff.png", "--strip", f"{out}.png", "--metrics", str(metrics_file)], check=True,
+                   stdout=subprocess.DEVNULL)
+    figures["bake"] = {"order": 5, "resolution": 1024, "samples": 256,
+                       "image": json.loads(metrics_file.read_text())}
+    print(f"bake order 5: per image relative RMSE {100 * figures['bake']['image']['relative_rmse']:.2f}%")
     (root / "docs/charts/scene_figures.json").write_text(json.dumps(figures, indent=1) + "\n")
 
 

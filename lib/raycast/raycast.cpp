@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstring>
 #include <cmath>
 #include <numbers>
@@ -173,6 +174,15 @@ bool buildInstanced(EmbreeScene& embree, const TriMesh& mesh, const SceneAsset& 
     return true;
 }
 
+// Bytes Embree holds on this process's devices, from its memory monitor: what a scene's log reports as the size
+// of its ray-tracing structures (BVH and geometry), instanced or not.
+std::atomic<int64_t> embreeBytes{0};
+
+bool countEmbreeBytes(void*, ssize_t bytes, bool) {
+    embreeBytes += int64_t(bytes);
+    return true;
+}
+
 } // namespace
 
 EmbreeScene::EmbreeScene(const TriMesh& mesh, const Surface* surface) {
@@ -180,6 +190,8 @@ EmbreeScene::EmbreeScene(const TriMesh& mesh, const Surface* surface) {
     if (!device)
         throw Error("", "embree device",
                     "cannot create (error code " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")", kExitFailure);
+    rtcSetDeviceMemoryMonitorFunction(device, countEmbreeBytes, nullptr);
+    const int64_t bytesBefore = embreeBytes;
     try {
         scene = rtcNewScene(device);
         rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
@@ -192,6 +204,12 @@ EmbreeScene::EmbreeScene(const TriMesh& mesh, const Surface* surface) {
             attachTriangles(device, scene, mesh, nullptr, mesh.triangleCount(), 0, uint32_t(mesh.vertexCount()), filter);
         rtcCommitScene(scene);
         throwIfEmbreeFailed(device, "scene build");
+        if (surface && surface->asset)
+            logInfo("ray tracing: " + std::to_string(surface->asset->receivers.size()) + " receivers, " +
+                    (instances ? std::to_string(prototypes.size()) + " meshes built once and placed as instances"
+                               : std::string("every triangle in one BVH")) +
+                    ": " + std::to_string(double(embreeBytes - bytesBefore) / (1024.0 * 1024.0)) +
+                    " MiB of Embree structures");
     } catch (...) {
         if (scene) rtcReleaseScene(scene);
         for (RTCScene prototype : prototypes) rtcReleaseScene(prototype);

@@ -85,3 +85,26 @@ TEST(SceneRender, PrimaryRaysPassThroughCutOuts) {
     EXPECT_NEAR(pixel[0], grey, 1e-5f);
     EXPECT_NEAR(pixel[2], grey, 1e-5f);
 }
+
+TEST(SceneRender, ASceneBakeIsLookedUpThroughItsCornerUvsAndTimesTheAlbedo) {
+    Bundle bundle = texturedScene(false);
+    Surface surface = decodeSurface(bundle, "scene.gltf");
+    // A 2 x 1 relit atlas, E / pi = 1 on its left texel and 3 on its right, addressed through corner uvs that
+    // mirror u: so the plane's +X half (the picture's right) reads the left texel. TEXCOORD_0 would read the other.
+    Image atlas;
+    atlas.width = 2;
+    atlas.height = 1;
+    atlas.rgb = {1, 1, 1, 3, 3, 3};
+    std::vector<float> cornerUv(2 * bundle.mesh.indices.size());
+    for (size_t c = 0; c < bundle.mesh.indices.size(); ++c) {
+        cornerUv[2 * c] = 1.0f - bundle.mesh.texcoords[2 * bundle.mesh.indices[c]];
+        cornerUv[2 * c + 1] = 0.5f;
+    }
+    RenderedImage image = renderTexelRadiance(bundle.mesh, atlas, topCamera(), cornerUv.data(), &surface);
+    const float* left = &image.radiance.rgb[3 * (size_t(12) * 40 + 12)];  // texture red, atlas 3
+    const float* right = &image.radiance.rgb[3 * (size_t(12) * 40 + 27)]; // texture green, atlas 1
+    EXPECT_NEAR(left[0], 3.0f, 1e-5f);
+    EXPECT_NEAR(left[1], 0.0f, 1e-5f);
+    EXPECT_NEAR(right[0], 0.0f, 1e-5f);
+    EXPECT_NEAR(right[1], 1.0f, 1e-5f);
+}
