@@ -94,10 +94,11 @@ static tinygltf::Model loadModel(const std::string& path, std::string& jsonText)
     checkJsonShape(binary ? std::string_view(bytes).substr(std::min<size_t>(20, bytes.size()), jsonChunk) : bytes,
                    path, place, std::numeric_limits<unsigned int>::max());
 
-    size_t slash = path.find_last_of('/');
-    std::string folder = slash == std::string::npos ? "." : path.substr(0, slash); // for external buffers of a .gltf
+    // External buffers and images of a .gltf lie next to the file, or, when it is a symbolic link (as `prt run`
+    // links inputs into a job's folder), next to its target.
     std::error_code folderError;
-    ExternalFiles files{std::filesystem::weakly_canonical(std::filesystem::absolute(folder), folderError), ""};
+    ExternalFiles files{std::filesystem::weakly_canonical(std::filesystem::absolute(path), folderError).parent_path(), ""};
+    const std::string folder = files.folder.string();
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks({externalFileExists, externalExpand, readExternalFile, refuseWrite, &files});
     loader.SetStoreOriginalJSONForExtrasAndExtensions(true);

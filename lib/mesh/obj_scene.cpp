@@ -92,9 +92,11 @@ bool objHasMaterials(const std::string& path) {
 Bundle readObjScene(const std::string& path) {
     const std::string text = readFileBytes(path);
     detail::checkObj(text, path); // counts, numbers and text checked before tinyobjloader sees the bytes
-    const std::filesystem::path folder = std::filesystem::path(path).parent_path().empty()
-                                             ? std::filesystem::path(".")
-                                             : std::filesystem::path(path).parent_path();
+    // The MTL and its maps lie next to the OBJ, or, when it is a symbolic link (as `prt run` links inputs into a
+    // job's folder), next to its target.
+    std::error_code linkError;
+    const std::filesystem::path folder =
+        std::filesystem::weakly_canonical(std::filesystem::absolute(path), linkError).parent_path();
     const std::string mtlName = mtllibName(text);
     const std::filesystem::path mtlPath = insideFolder(folder, mtlName, path, "mtllib");
     if (std::filesystem::file_size(mtlPath) > (uint64_t(64) << 20))
