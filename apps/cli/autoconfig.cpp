@@ -88,10 +88,11 @@ void runAutoconfig(const AutoconfigArgs& args, const CLI::App& command) {
     const autoconfig::Candidate& c = result.chosen;
     char line[320];
     std::snprintf(line, sizeof line,
-                  "autoconfig: chose order %d, %d samples, %d bounces, %s, %d lights: predicted %.4g, held out %.4g "
-                  "(target %.4g); wrote %s in %.1f s",
+                  "autoconfig: chose order %d, %d samples, %d bounces, %s, %d lights: predicted %.4g, held out %.4g, "
+                  "final check %.4g (target %.4g); wrote %s in %.1f s",
                   c.config.order, c.config.samples, c.config.bounces, adapt::formatName(c.config.format), c.config.lights,
-                  c.pilotError, c.heldOutError, args.targetError, args.output.c_str(), nowSeconds() - start);
+                  c.pilotError, c.heldOutError, c.checkError, args.targetError, args.output.c_str(),
+                  nowSeconds() - start);
     logInfo(line);
 
     StageCost cost;
@@ -126,7 +127,8 @@ void addAutoconfigCommand(CLI::App& app) {
                         "Extracted cone lights to search, the most per map (comma list; 0: plain SH; default 0,4)")
         ->delimiter(',');
     command->add_option("--pilot-vertices", args->pilotVertices,
-                        "Pilot vertices, and as many held out (default 256, at most half the mesh each)");
+                        "Pilot vertices, and as many held out and as many for the final check (default 256, at most a third "
+                        "of the mesh each)");
     command->add_option("--reference-bounces", args->referenceBounces, "Bounces of the reference (default 3)");
     command->add_option("--max-reference-samples", args->maxReferenceSamples,
                         "Most paths per vertex of the pilot reference (default 65536)");

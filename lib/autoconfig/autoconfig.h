@@ -1,6 +1,7 @@
 // Auto-configuration to a target error (`prt autoconfig`, issue 12): the cheapest bake and the smallest bundle
 // whose relative error against the path-traced reference stays under a target, chosen from cheap pilot runs on a
-// vertex subset and checked on held-out vertices. docs/autoconfig.md has the decisions; results.md the figures.
+// vertex subset, verified on held-out vertices, and reported on a final check set that no choice ever looked at.
+// docs/autoconfig.md has the decisions; results.md the figures.
 //
 // A configuration is (SH order L, transfer samples S, bounces B, storage format, extracted lights K). Its error is the relative RMSE
 // `prt compare` reports (RMS over vertices and RGB channels of relit - reference, over the reference's RMS), with
@@ -40,7 +41,7 @@ struct Config {
     int lights = 0;
 };
 
-// One configuration with its modelled costs and its errors on the pilot and held-out vertices.
+// One configuration with its modelled costs and its errors on the pilot, held-out and check vertices.
 struct Candidate {
     Config config;
     double bakeCost = 0.0;      // modelled work of the bake on the whole mesh, in ray equivalents (kCoefficientCost)
@@ -48,6 +49,9 @@ struct Candidate {
     uint64_t bundleBytes = 0;   // bytes of the transfer layers the bundle stores (bundleLayerBytes)
     double pilotError = 0.0;    // largest over the maps, noise-corrected, on the pilot vertices
     double heldOutError = -1.0; // the same on the held-out vertices; < 0 until verified
+    // The same on the final check vertices, measured once for the chosen configuration only: the held-out set
+    // stops being unseen once a candidate has failed on it and the next is tried, so this is the unbiased figure.
+    double checkError = -1.0;
 };
 
 struct Options {
@@ -61,7 +65,7 @@ struct Options {
     int lightSamples = 64;                     // cone visibility rays per vertex and light, as `prt relight`'s
     std::array<double, 3> albedo = {0.8, 0.8, 0.8}; // transfer and reference (overrides per-vertex albedo), as typed
     uint64_t seed = 0;                         // transfer directions, reference paths and the vertex subsets
-    size_t pilotVertices = 256;                // and as many held out (at most half the mesh each)
+    size_t pilotVertices = 256;                // and as many held out and as many for the check (at most a third each)
     int referenceBounces = 3;                  // the ground truth the error is measured against
     int referenceMinSamples = 1024;            // the first reference pass, which measures the noise
     int referenceMaxSamples = 16384;           // the most paths per vertex autoconfig may spend on its reference
@@ -77,6 +81,9 @@ struct Options {
 // 0.110 to 0.140 s; one bounce 0.011 of the direct pass on the bunny at order 5, 0.104 hits per direction).
 inline constexpr double kCoefficientCost = 0.004;
 inline constexpr double kGatherCost = 0.005;
+// A hybrid candidate also pays, per map and extracted light, for the decomposition (`prt envlight`: kEnvlightTexelCost
+// per map texel) and for its cone visibility (`prt relight --lights`: lightSamples rays at every vertex).
+inline constexpr double kEnvlightTexelCost = 1.0;
 
 // The reference noise that makes a target untestable: below kNoiseRefusalRatio times the noise the reference
 // would have at referenceMaxSamples paths the pilot cannot tell a configuration's error from the noise.
@@ -87,20 +94,20 @@ struct Result {
     std::vector<Candidate> candidates;  // every configuration, pilot errors and costs
     std::vector<size_t> pareto;         // indices into candidates: not dominated in (seconds, bytes, pilot error)
     std::vector<size_t> tried;          // indices verified on held-out vertices, in order (the last is chosen)
-    std::vector<uint32_t> pilot, heldOut; // the vertex subsets
+    std::vector<uint32_t> pilot, heldOut, check; // the vertex subsets
     int referenceSamples = 0;           // paths per vertex of the pilot reference
-    std::vector<double> referenceNoise; // per map: RMS standard error over RMS radiance on the pilot+held-out rows
+    std::vector<double> referenceNoise; // per map: RMS standard error over RMS radiance on all three subsets' rows
     double pilotTransferSeconds = 0.0, referenceSeconds = 0.0, seconds = 0.0;
 };
 
 // ---- the pieces (each in its own file) ------------------------------------------------------------------------
 
-// Two disjoint deterministic vertex subsets of `count` vertices each (count clipped to V / 2): vertices sorted
+// Three disjoint deterministic vertex subsets of `count` vertices each (count clipped to V / 3): vertices sorted
 // along a Morton curve over the bounding box, cut into `count` runs of equal length, and from each run one vertex
-// for the pilot and another for the held-out set, picked by a hash of (seed, run). So both sets cover the mesh
-// evenly. Needs V >= 2. Both returned sorted.
+// for the pilot, another for the held-out set and a third for the final check, picked by a hash of (seed, run).
+// So every set covers the mesh evenly. Needs V >= 3. All returned sorted.
 void splitVertices(const TriMesh& mesh, size_t count, uint64_t seed, std::vector<uint32_t>& pilot,
-                   std::vector<uint32_t>& heldOut);
+                   std::vector<uint32_t>& heldOut, std::vector<uint32_t>& check);
 
 // Bytes of the transfer layers a bundle of V vertices at uniform order L stores in `format` (the mesh's own bytes,
 // the same for every configuration, left out). Float without bounces is the transfer stage's [V][L^2][3] float32
@@ -125,7 +132,9 @@ std::vector<float> storedRows(const float* rows, size_t count, int strideOrder, 
 // error se [count][3] (see the top of this file); 0 where the noise exceeds the measured difference.
 double noiseCorrectedError(const float* radiance, const float* reference, const float* standardError, size_t count);
 
-// Runs the whole search (pilot reference, pilot transfers, prediction, Pareto front, choice, held-out check).
+// Runs the whole search (pilot reference, pilot transfers, prediction, Pareto front, choice, held-out check, final
+// check). A chosen configuration over the target on the final check is still returned, with a warning: choosing
+// again on that set would make it a selection set too.
 // Needs a mesh with normals, at least one map, options.targetError > 0. Throws prt::Error(kExitUsage) for a
 // target <= 0 or below kNoiseRefusalRatio x the reference's noise (saying so and what would be needed), and for
 // a target no configuration reaches (naming the best one found); nothing is written either way.

@@ -46,6 +46,7 @@ nlohmann::json candidateJson(const Candidate& c) {
                         {"bundle_bytes", c.bundleBytes},
                         {"pilot_error", c.pilotError}};
     if (c.heldOutError >= 0.0) j["held_out_error"] = c.heldOutError;
+    if (c.checkError >= 0.0) j["check_error"] = c.checkError;
     return j;
 }
 
@@ -71,6 +72,7 @@ std::string pipelineToml(const Result& result, const Options& options, const std
                   "lights %d\n"
                   "#   predicted (pilot)      %.6g on %zu vertices\n"
                   "#   verified (held out)    %.6g on %zu other vertices\n"
+                  "#   final check            %.6g on %zu vertices no choice looked at\n"
                   "#   reference              %d paths per vertex; relative noise %s\n"
                   "#   modelled cost          bake %.4g Mray equivalents, transfer layers %llu bytes\n"
                   "#   searched               %zu configurations, %zu on the Pareto front, %zu verified\n"
@@ -78,7 +80,8 @@ std::string pipelineToml(const Result& result, const Options& options, const std
                   options.referenceBounces, number(options.albedo[0]).c_str(), number(options.albedo[1]).c_str(),
                   number(options.albedo[2]).c_str(), options.targetError, c.order, c.samples, c.bounces,
                   adapt::formatName(c.format), c.adaptiveError, c.lights, result.chosen.pilotError, result.pilot.size(),
-                  result.chosen.heldOutError, result.heldOut.size(), result.referenceSamples, noise.c_str(),
+                  result.chosen.heldOutError, result.heldOut.size(), result.chosen.checkError, result.check.size(),
+                  result.referenceSamples, noise.c_str(),
                   result.chosen.bakeCost * 1e-6, (unsigned long long)result.chosen.bundleBytes, result.candidates.size(),
                   result.pareto.size(), result.tried.size());
     std::string t = head;
@@ -102,11 +105,14 @@ std::string pipelineToml(const Result& result, const Options& options, const std
     t += "albedo = [" + number(options.albedo[0]) + ", " + number(options.albedo[1]) + ", " +
          number(options.albedo[2]) + "]\nseed = " + std::to_string(options.seed) + "\n";
     std::string bundleStage = "transfer";
-    if (c.adaptiveError > 0.0) { // the pilot predicted the budget's orders ungraded: max-step = order keeps them
+    // Adaptive: `prt adapt`'s graded orders (max-step 1, its default), re-checked against the per-vertex bound. The
+    // pilot predicted the ungraded orders; grading only raises orders where the bound allows, so the error stays
+    // within the budget and the bytes are at least the predicted ones.
+    if (c.adaptiveError > 0.0) {
         bundleStage = "adapt";
         t += "\n[stages.adapt]\nrun = \"adapt\"\ninputs = { bundle = \"transfer\", env = \"" + envKeys[0] +
              "\" }\nmax-error = " + number(c.adaptiveError) + "\nformat = " + quoted(adapt::formatName(c.format)) +
-             "\nmax-step = " + std::to_string(std::max(1, c.order)) + "\n";
+             "\n";
     } else if (c.lights == 0 && (c.format != adapt::Format::Float || c.bounces > 0)) { // drops transfer_bounce
         bundleStage = "adapt";
         t += "\n[stages.adapt]\nrun = \"adapt\"\ninputs = { bundle = \"transfer\" }\norder = " +
@@ -149,6 +155,7 @@ std::string reportJson(const Result& result, const Options& options) {
                              {"configurations", result.candidates.size()},
                              {"pilot_vertices", result.pilot.size()},
                              {"held_out_vertices", result.heldOut.size()},
+                             {"check_vertices", result.check.size()},
                              {"reference_samples", result.referenceSamples},
                              {"reference_bounces", options.referenceBounces},
                              {"reference_noise", result.referenceNoise},

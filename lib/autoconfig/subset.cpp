@@ -1,4 +1,5 @@
-// The pilot and held-out vertex subsets: stratified along a Morton curve so that both cover the whole mesh.
+// The pilot, held-out and final check vertex subsets: stratified along a Morton curve so that each covers the whole
+// mesh.
 #include "autoconfig.h"
 
 #include "core.h"
@@ -31,10 +32,11 @@ uint64_t mix(uint64_t x) { // splitmix64's finaliser
 } // namespace
 
 void splitVertices(const TriMesh& mesh, size_t count, uint64_t seed, std::vector<uint32_t>& pilot,
-                   std::vector<uint32_t>& heldOut) {
+                   std::vector<uint32_t>& heldOut, std::vector<uint32_t>& check) {
     const size_t V = mesh.vertexCount();
-    if (V < 2) throw Error("", "mesh", "needs at least 2 vertices for a pilot and a held-out vertex", kExitInput);
-    count = std::clamp<size_t>(count, 1, V / 2);
+    if (V < 3)
+        throw Error("", "mesh", "needs at least 3 vertices for a pilot, a held-out and a check vertex", kExitInput);
+    count = std::clamp<size_t>(count, 1, V / 3);
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; v < V; ++v)
         for (int a = 0; a < 3; ++a) {
@@ -58,17 +60,24 @@ void splitVertices(const TriMesh& mesh, size_t count, uint64_t seed, std::vector
     });
     pilot.clear();
     heldOut.clear();
+    check.clear();
     for (size_t run = 0; run < count; ++run) {
-        const size_t begin = run * V / count, end = (run + 1) * V / count; // >= 2 vertices, as count <= V / 2
+        const size_t begin = run * V / count, end = (run + 1) * V / count; // >= 3 vertices, as count <= V / 3
         const size_t length = end - begin;
         const uint64_t h = mix(seed ^ mix(run));
         const size_t a = size_t(h % length);
         const size_t b = (a + 1 + size_t((h >> 32) % (length - 1))) % length; // any other vertex of the run
+        // The k-th vertex of the run that is neither a nor b.
+        size_t k = size_t(mix(h) % (length - 2)), c = 0;
+        for (;; ++c)
+            if (c != a && c != b && k-- == 0) break;
         pilot.push_back(order[begin + a]);
         heldOut.push_back(order[begin + b]);
+        check.push_back(order[begin + c]);
     }
     std::sort(pilot.begin(), pilot.end());
     std::sort(heldOut.begin(), heldOut.end());
+    std::sort(check.begin(), check.end());
 }
 
 } // namespace prt::autoconfig

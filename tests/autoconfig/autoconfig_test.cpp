@@ -18,28 +18,34 @@ namespace {
 
 TEST(Autoconfig, SubsetsAreDisjointDeterministicAndCoverTheMesh) {
     TriMesh sphere = makeSphere(1.0f, 16, 32);
-    std::vector<uint32_t> pilot, heldOut, again, againHeld;
-    splitVertices(sphere, 40, 7, pilot, heldOut);
-    splitVertices(sphere, 40, 7, again, againHeld);
+    std::vector<uint32_t> pilot, heldOut, check, again, againHeld, againCheck;
+    splitVertices(sphere, 40, 7, pilot, heldOut, check);
+    splitVertices(sphere, 40, 7, again, againHeld, againCheck);
     EXPECT_EQ(pilot, again);
     EXPECT_EQ(heldOut, againHeld);
+    EXPECT_EQ(check, againCheck);
     ASSERT_EQ(pilot.size(), 40u);
     ASSERT_EQ(heldOut.size(), 40u);
+    ASSERT_EQ(check.size(), 40u);
     std::set<uint32_t> all(pilot.begin(), pilot.end());
     all.insert(heldOut.begin(), heldOut.end());
-    EXPECT_EQ(all.size(), 80u); // disjoint, no repeats
-    // Stratified: both sets reach both hemispheres.
-    for (const std::vector<uint32_t>* set : {&pilot, &heldOut}) {
+    all.insert(check.begin(), check.end());
+    EXPECT_EQ(all.size(), 120u); // disjoint, no repeats
+    // Stratified: every set reaches both hemispheres.
+    for (const std::vector<uint32_t>* set : {&pilot, &heldOut, &check}) {
         int up = 0;
         for (uint32_t v : *set) up += sphere.positions[v * 3 + 1] > 0.0f;
         EXPECT_GT(up, 10);
         EXPECT_LT(up, 30);
     }
-    // Asking for more than half the mesh gives half.
+    // Asking for more than a third of the mesh gives a third.
     TriMesh tiny = makeSphere(1.0f, 2, 3); // 5 vertices
-    splitVertices(tiny, 100, 0, pilot, heldOut);
-    EXPECT_EQ(pilot.size(), 2u);
-    EXPECT_EQ(heldOut.size(), 2u);
+    splitVertices(tiny, 100, 0, pilot, heldOut, check);
+    EXPECT_EQ(pilot.size(), 1u);
+    EXPECT_EQ(heldOut.size(), 1u);
+    EXPECT_EQ(check.size(), 1u);
+    EXPECT_NE(pilot[0], check[0]);
+    EXPECT_NE(heldOut[0], check[0]);
 }
 
 TEST(Autoconfig, StoredRowsKeepEachFormatsPrecisionAndTheBytesMatchItsLayers) {

@@ -78,6 +78,10 @@ TEST_F(AutoconfigCli, PicksOrderTwoTheFewestSamplesAndNoBouncesAndItsPipelineMee
     EXPECT_EQ(chosen["bounces"], 0);
     EXPECT_LE(chosen["pilot_error"].get<double>(), 0.9 * target);
     EXPECT_LE(chosen["held_out_error"].get<double>(), target);
+    // The final check is measured once on vertices no choice looked at, and reported.
+    ASSERT_TRUE(chosen.contains("check_error"));
+    EXPECT_GE(chosen["check_error"].get<double>(), 0.0);
+    EXPECT_LE(chosen["check_error"].get<double>(), target);
     EXPECT_GT(report["pareto"].size(), 1u);
     // The pipeline parses and runs, and its radiance is within the target of the closed form.
     CliRun pipeline = runPrt("run " + path("auto.toml") + " --cache-dir " + path("cache"), dir);
