@@ -62,9 +62,12 @@ std::vector<PrimitiveTriangles> primitivesWithoutNormals(const Bundle& bundle, c
     std::set<std::pair<int, int>> seen;
     for (const SceneReceiver& receiver : bundle.asset->receivers) {
         const tinygltf::Primitive& primitive = model.meshes[size_t(receiver.mesh)].primitives[size_t(receiver.primitive)];
-        if (primitive.attributes.count("NORMAL") || !seen.insert({receiver.mesh, receiver.primitive}).second) continue;
-        out.push_back({receiver.mesh, receiver.primitive,
-                       detail::readGltfPrimitive(model, receiver.mesh, receiver.primitive, file)});
+        if (!seen.insert({receiver.mesh, receiver.primitive}).second) continue;
+        TriMesh triangles = detail::readGltfPrimitive(model, receiver.mesh, receiver.primitive, file);
+        bool usable = primitive.attributes.count("NORMAL") > 0;
+        for (size_t i = 0; usable && i + 2 < triangles.normals.size(); i += 3)
+            usable = triangles.normals[i] != 0.0f || triangles.normals[i + 1] != 0.0f || triangles.normals[i + 2] != 0.0f;
+        if (!usable) out.push_back({receiver.mesh, receiver.primitive, std::move(triangles)});
     }
     return out;
 }

@@ -133,8 +133,8 @@ struct PrimitiveTriangles {
     TriMesh triangles; // accessor order; normals, when filled by the caller, one per vertex
 };
 
-// Every primitive the scene's receivers use that has no NORMAL attribute, each once however many nodes place it.
-// Needs bundle.asset. Throws as readBundle for malformed accessors.
+// Every primitive the scene's receivers use whose NORMAL is absent or holds a zero vector (then kept in normals),
+// each once however many nodes place it. Needs bundle.asset. Throws as readBundle for malformed accessors.
 std::vector<PrimitiveTriangles> primitivesWithoutNormals(const Bundle& bundle, const std::string& file);
 
 // The scene with a NORMAL accessor (float VEC3) added to each listed primitive, holding its triangles' normals

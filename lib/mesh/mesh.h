@@ -176,8 +176,8 @@ PreparedMesh prepareMesh(const MeshprepOptions& options);
 
 // Scenes. A glTF or GLB input is kept as the asset it is (a version 3 scene bundle, asset.h), unless
 // options.flatten: every receiver is validated (indices inside its own vertices, finite values, colours in
-// [0, 1]), primitives without NORMAL get angle-weighted normals (computeNormals, in their own space, stored as a
-// new NORMAL accessor), and nothing is welded, removed or reordered, so rows stay the asset's vertices.
+// [0, 1]), primitives without NORMAL (or vertices whose NORMAL is a zero vector) get angle-weighted normals in a
+// new NORMAL accessor (computeNormals, own space), and nothing is welded or reordered: rows stay the asset's.
 struct PreparedScene {
     Bundle bundle;         // the scene, no layers
     nlohmann::json report; // input, scene counts, counts, bounds, boundary, vertex_order

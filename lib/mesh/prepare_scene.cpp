@@ -65,20 +65,33 @@ PreparedScene prepareScene(const MeshprepOptions& options, Bundle bundle) {
     validateScene(bundle, options.input);
     decodeSurface(bundle, options.input); // every texture decodes, within the size limits
 
-    // Primitives without NORMAL get angle-weighted normals in their own space, stored in the asset.
+    // Primitives without NORMAL get angle-weighted normals in their own space, stored in the asset; in primitives
+    // whose NORMAL holds zero vectors (exporters write them for degenerate corners), those vertices get them and
+    // every authored normal is kept.
     std::vector<PrimitiveTriangles> missing = primitivesWithoutNormals(bundle, options.input);
+    size_t repairedVertices = 0;
     for (PrimitiveTriangles& p : missing) {
         TriMesh& triangles = p.triangles;
+        const std::vector<float> authored = triangles.normals;
         for (uint32_t& index : triangles.indices)
             if (index >= triangles.vertexCount()) index = 0; // validateScene has refused these already
         removeDegenerateFaces(triangles);
         computeNormals(triangles);
         for (size_t v = 0; v < triangles.vertexCount(); ++v) {
             float* n = &triangles.normals[3 * v];
+            const float* a = authored.empty() ? nullptr : &authored[3 * v];
+            if (a && (a[0] != 0.0f || a[1] != 0.0f || a[2] != 0.0f)) {
+                std::copy(a, a + 3, n);
+                continue;
+            }
+            repairedVertices += a != nullptr;
             if (!(std::fabs(n[0]) + std::fabs(n[1]) + std::fabs(n[2]) > 0.0f) || !std::isfinite(n[0] + n[1] + n[2]))
                 n[0] = 0.0f, n[1] = 1.0f, n[2] = 0.0f; // a vertex on no triangle
         }
     }
+    if (repairedVertices > 0)
+        logWarn("meshprep: " + options.input + ": " + std::to_string(repairedVertices) +
+                " authored normals were zero vectors; computed from their triangles instead");
     if (!missing.empty()) bundle = withPrimitiveNormals(bundle, missing, options.input);
 
     const SceneAsset& asset = *bundle.asset;
@@ -108,7 +121,8 @@ PreparedScene prepareScene(const MeshprepOptions& options, Bundle bundle) {
           {"cutout_materials", cutout},
           {"textures", asset.textures.size()},
           {"images", asset.images.size()},
-          {"normals_computed_for_primitives", missing.size()}}},
+          {"normals_computed_for_primitives", missing.size()},
+          {"zero_normals_repaired", repairedVertices}}},
         {"counts",
          {{"vertices_in", mesh.vertexCount()},
           {"faces_in", mesh.triangleCount()},
