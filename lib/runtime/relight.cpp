@@ -2,10 +2,9 @@
 #include "runtime.h"
 
 #include "core.h"
+#include "runtime_internal.h"
 
 #include <algorithm>
-#include <atomic>
-#include <thread>
 #include <vector>
 
 namespace prt {
@@ -50,33 +49,48 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
     }
 }
 
-void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance) {
+namespace {
+
+// What each task of relight(model, ...) needs: the same for every task, so tasks differ only by their block.
+struct RelightTasks {
+    const RelightModel* model;
+    const float* lighting;
+    const float* projections; // Cpca: [clusters][components + 1][3]
+    size_t begin, end;
+    float* radiance;
+};
+
+void relightTask(void* data, size_t index) {
+    const RelightTasks& tasks = *static_cast<const RelightTasks*>(data);
+    const RelightModel& model = *tasks.model;
+    const size_t first = tasks.begin + index * kRelightBlock, last = std::min(tasks.end, first + kRelightBlock);
+    float* out = tasks.radiance + (first - tasks.begin) * 3;
+    if (model.storage == TransferStorage::Cpca)
+        relightCpcaRange(model, tasks.projections, first, last, out);
+    else if (!model.offsets.empty())
+        relightRaggedRange(model, tasks.lighting, first, last, out);
+    else
+        relight(model.transfer.data() + first * size_t(model.order) * model.order * 3, last - first,
+                model.order * model.order, tasks.lighting, out);
+    if (!model.albedo.empty())
+        for (size_t i = 0; i < (last - first) * 3; ++i) out[i] *= model.albedo[first * 3 + i];
+}
+
+} // namespace
+
+void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance,
+             const JobSystem& jobs) {
     if (begin > end || end > model.vertexCount)
         throw Error("", "relight", "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
                                        ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
                     kExitFailure);
-    if (!model.offsets.empty()) return relightAdaptive(model, lighting, begin, end, radiance);
-    const int coefficients = sh::coefficientCount(model.order);
-    const size_t rowValues = size_t(coefficients) * 3;
-    // Blocks of a few thousand vertices keep the scheduling overhead far below the memory traffic; std::threads
-    // rather than TBB keep the installed runtime free of it.
-    constexpr size_t kBlock = 4096;
-    const size_t count = end - begin, blocks = (count + kBlock - 1) / kBlock;
-    std::atomic<size_t> nextBlock{0};
-    auto relightBlocks = [&] {
-        for (size_t block; (block = nextBlock.fetch_add(1)) < blocks;) {
-            size_t first = begin + block * kBlock, last = std::min(end, first + kBlock);
-            float* out = radiance + (first - begin) * 3;
-            relight(model.transfer.data() + first * rowValues, last - first, coefficients, lighting, out);
-            if (!model.albedo.empty())
-                for (size_t i = 0; i < (last - first) * 3; ++i) out[i] *= model.albedo[first * 3 + i];
-        }
-    };
-    size_t workers = std::min<size_t>(blocks, std::max(1u, std::thread::hardware_concurrency()));
-    std::vector<std::thread> pool;
-    for (size_t i = 1; i < workers; ++i) pool.emplace_back(relightBlocks);
-    relightBlocks();
-    for (std::thread& thread : pool) thread.join();
+    // Cpca: each cluster's mean and directions projected on the lighting once, before any task runs.
+    std::vector<float> projections;
+    if (model.storage == TransferStorage::Cpca) projections = cpcaProjections(model, lighting);
+    RelightTasks tasks{&model, lighting, projections.data(), begin, end, radiance};
+    // Blocks of kRelightBlock vertices keep the scheduling overhead far below the memory traffic; the caller's job
+    // system (or the calling thread) runs them, so the runtime itself never starts a thread.
+    runTasks(jobs, (end - begin + kRelightBlock - 1) / kRelightBlock, relightTask, &tasks);
 }
 
 } // namespace prt
