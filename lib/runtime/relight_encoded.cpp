@@ -16,14 +16,23 @@ namespace {
 // Floats per decode tile: 16 KiB, half a typical L1 data cache, so decoding and relighting share it.
 constexpr size_t kTileValues = 4096;
 
-// An IEEE binary16 value as float, exact for every finite half (normal or subnormal): the half's exponent and
-// mantissa moved into a float's and rescaled by 2^112, which a float multiply does exactly. Branch-free, so it
-// vectorises.
+// An IEEE binary16 value as float, exact for every finite half: exponent and mantissa moved into a float's and
+// rebiased; a subnormal (or zero) half, whose exponent field is 0, is rebiased one step further and 2^-14 taken
+// off, which a float subtraction does exactly (ryg's half_to_float_fast). No operand is ever a float subnormal
+// (which would cost a microcode assist each) and there is no branch, so it vectorises.
 inline float halfValue(uint16_t half) {
-    uint32_t bits = (uint32_t(half & 0x8000u) << 16) | (uint32_t(half & 0x7fffu) << 13);
-    float value;
+    const uint32_t magnitude = uint32_t(half & 0x7fffu) << 13;
+    const uint32_t subnormal = (magnitude & 0x0f800000u) == 0 ? 1u : 0u;
+    const uint32_t bits = magnitude + (112u << 23) + (subnormal << 23), offsetBits = subnormal * 0x38800000u; // 2^-14
+    float value, offset;
     std::memcpy(&value, &bits, sizeof value);
-    return value * 0x1p112f;
+    std::memcpy(&offset, &offsetBits, sizeof offset);
+    value -= offset;
+    uint32_t signed_;
+    std::memcpy(&signed_, &value, sizeof signed_);
+    signed_ |= uint32_t(half & 0x8000u) << 16;
+    std::memcpy(&value, &signed_, sizeof value);
+    return value;
 }
 
 // The band-scale index of vertex `first`'s band 0 (per-vertex scales), from the block table.
@@ -35,23 +44,43 @@ size_t bandStart(const RelightModel& model, size_t first) {
     return start;
 }
 
-// Decodes vertex rows [first, last) (n bands each, codes from row offsets[first]) into `tile`: value i of band l
-// is float(int(q) - C) * sigma_l, as decodedTransfer writes it. `band` is the scale index of `first`'s band 0.
-template <class Code>
+// Decodes vertex rows [first, last), a run of n bands each (so their codes are contiguous from row
+// offsets[first]), into `tile`: value i of band l is float(int(q) - C) * sigma_l, as decodedTransfer writes it.
+// `band` is the scale index of `first`'s band 0. kN = n known at compile time (0: take n) lets the compiler
+// unroll the band loops; the first pass, codes to floats, is one contiguous loop over the whole tile.
+template <class Code, int kN>
 void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
                  float* tile) {
+    if constexpr (kN != 0) n = kN;
     constexpr int C = sizeof(Code) == 1 ? 127 : 32767;
-    const size_t values = size_t(n) * n * 3;
+    const size_t values = size_t(n) * n * 3, total = (last - first) * values;
+    const Code* q = codes + size_t(model.offsets[first]) * 3;
+    for (size_t i = 0; i < total; ++i) tile[i] = float(int(q[i]) - C);
     const bool perCluster = !model.scaleCluster.empty();
     for (size_t v = first; v < last; ++v, band += n) {
-        const Code* q = codes + size_t(model.offsets[v]) * 3;
         float* out = tile + (v - first) * values;
         const float* sigma = perCluster ? model.bandScales.data() + size_t(model.scaleCluster[v]) * model.order
                                         : model.bandScales.data() + band;
         for (int l = 0; l < n; ++l) {
             const float s = sigma[l];
-            for (size_t i = size_t(l) * l * 3; i < size_t(l + 1) * (l + 1) * 3; ++i) out[i] = float(int(q[i]) - C) * s;
+            for (int i = l * l * 3; i < (l + 1) * (l + 1) * 3; ++i) out[i] *= s;
         }
+    }
+}
+
+template <class Code>
+void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
+                 float* tile) {
+    switch (n) {
+    case 1: return decodeCodes<Code, 1>(model, codes, n, first, last, band, tile);
+    case 2: return decodeCodes<Code, 2>(model, codes, n, first, last, band, tile);
+    case 3: return decodeCodes<Code, 3>(model, codes, n, first, last, band, tile);
+    case 4: return decodeCodes<Code, 4>(model, codes, n, first, last, band, tile);
+    case 5: return decodeCodes<Code, 5>(model, codes, n, first, last, band, tile);
+    case 6: return decodeCodes<Code, 6>(model, codes, n, first, last, band, tile);
+    case 7: return decodeCodes<Code, 7>(model, codes, n, first, last, band, tile);
+    case 8: return decodeCodes<Code, 8>(model, codes, n, first, last, band, tile);
+    default: return decodeCodes<Code, 0>(model, codes, n, first, last, band, tile);
     }
 }
 
