@@ -9,6 +9,14 @@
 #include <cmath>
 #include <cstring>
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PRT_HAVE_AVX2_CLONE 1
+#define PRT_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define PRT_HAVE_AVX2_CLONE 0
+#define PRT_ALWAYS_INLINE
+#endif
+
 namespace prt {
 
 namespace {
@@ -49,8 +57,8 @@ size_t bandStart(const RelightModel& model, size_t first) {
 // `band` is the scale index of `first`'s band 0. kN = n known at compile time (0: take n) lets the compiler
 // unroll the band loops; the first pass, codes to floats, is one contiguous loop over the whole tile.
 template <class Code, int kN>
-void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
-                 float* tile) {
+PRT_ALWAYS_INLINE inline void decodeBody(const RelightModel& model, const Code* codes, int n, size_t first,
+                                         size_t last, size_t band, float* tile) {
     if constexpr (kN != 0) n = kN;
     constexpr int C = sizeof(Code) == 1 ? 127 : 32767;
     const size_t values = size_t(n) * n * 3, total = (last - first) * values;
@@ -68,19 +76,42 @@ void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t fir
     }
 }
 
+// The same decode compiled twice: for the baseline and, where the processor has it, for AVX2 (wider integer to
+// float conversion). Conversion and multiply round exactly either way and FMA is not enabled, so both write the
+// same bits.
+template <class Code, int kN>
+void decodeCodesBase(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
+                     float* tile) {
+    decodeBody<Code, kN>(model, codes, n, first, last, band, tile);
+}
+#if PRT_HAVE_AVX2_CLONE
+template <class Code, int kN>
+__attribute__((target("avx2"))) void decodeCodesAvx2(const RelightModel& model, const Code* codes, int n,
+                                                     size_t first, size_t last, size_t band, float* tile) {
+    decodeBody<Code, kN>(model, codes, n, first, last, band, tile);
+}
+bool hasAvx2() {
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+}
+#define PRT_DECODE(N) (hasAvx2() ? decodeCodesAvx2<Code, N> : decodeCodesBase<Code, N>)
+#else
+#define PRT_DECODE(N) decodeCodesBase<Code, N>
+#endif
+
 template <class Code>
 void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
                  float* tile) {
     switch (n) {
-    case 1: return decodeCodes<Code, 1>(model, codes, n, first, last, band, tile);
-    case 2: return decodeCodes<Code, 2>(model, codes, n, first, last, band, tile);
-    case 3: return decodeCodes<Code, 3>(model, codes, n, first, last, band, tile);
-    case 4: return decodeCodes<Code, 4>(model, codes, n, first, last, band, tile);
-    case 5: return decodeCodes<Code, 5>(model, codes, n, first, last, band, tile);
-    case 6: return decodeCodes<Code, 6>(model, codes, n, first, last, band, tile);
-    case 7: return decodeCodes<Code, 7>(model, codes, n, first, last, band, tile);
-    case 8: return decodeCodes<Code, 8>(model, codes, n, first, last, band, tile);
-    default: return decodeCodes<Code, 0>(model, codes, n, first, last, band, tile);
+    case 1: return PRT_DECODE(1)(model, codes, n, first, last, band, tile);
+    case 2: return PRT_DECODE(2)(model, codes, n, first, last, band, tile);
+    case 3: return PRT_DECODE(3)(model, codes, n, first, last, band, tile);
+    case 4: return PRT_DECODE(4)(model, codes, n, first, last, band, tile);
+    case 5: return PRT_DECODE(5)(model, codes, n, first, last, band, tile);
+    case 6: return PRT_DECODE(6)(model, codes, n, first, last, band, tile);
+    case 7: return PRT_DECODE(7)(model, codes, n, first, last, band, tile);
+    case 8: return PRT_DECODE(8)(model, codes, n, first, last, band, tile);
+    default: return PRT_DECODE(0)(model, codes, n, first, last, band, tile);
     }
 }
 
