@@ -47,14 +47,14 @@ const char* statusName(StatusCode code) noexcept {
     return "internal";
 }
 
-Result<RelightModel> tryLoadRelightModel(const std::string& bundlePath) noexcept {
+Expected<RelightModel> tryLoadRelightModel(const std::string& bundlePath) noexcept {
     RelightModel model;
     Status status = guarded(StatusCode::Corrupt, &bundlePath, [&] { model = loadRelightModel(bundlePath); });
     if (!status) return status;
     return model;
 }
 
-Result<TexelRelightModel> tryLoadTexelRelightModel(const std::string& bundlePath) noexcept {
+Expected<TexelRelightModel> tryLoadTexelRelightModel(const std::string& bundlePath) noexcept {
     TexelRelightModel model;
     Status status =
         guarded(StatusCode::Corrupt, &bundlePath, [&] { model = texelRelightModel(readBundle(bundlePath), bundlePath); });
@@ -62,7 +62,7 @@ Result<TexelRelightModel> tryLoadTexelRelightModel(const std::string& bundlePath
     return model;
 }
 
-Result<std::vector<float>> tryReadLightingJson(const std::string& path, int* order) noexcept {
+Expected<std::vector<float>> tryReadLightingJson(const std::string& path, int* order) noexcept {
     std::vector<float> lighting;
     Status status = guarded(StatusCode::Corrupt, &path, [&] { lighting = readLightingJson(path, order); });
     if (!status) return status;

@@ -313,7 +313,7 @@ TEST(NoThrow, StatusForMissingCorruptAndGoodFilesAndBadRanges) {
     const std::string good = (dir / "good.glb").string(), bad = (dir / "bad.glb").string();
     writeBundle(good, bundle);
 
-    Result<RelightModel> missing = tryLoadRelightModel((dir / "absent.glb").string());
+    Expected<RelightModel> missing = tryLoadRelightModel((dir / "absent.glb").string());
     EXPECT_EQ(missing.status().code, StatusCode::NotFound);
     EXPECT_NE(missing.status().message.find("absent.glb"), std::string::npos);
 
@@ -325,13 +325,13 @@ TEST(NoThrow, StatusForMissingCorruptAndGoodFilesAndBadRanges) {
     }
     bytes[bytes.size() - 5] ^= 0x40;
     std::ofstream(bad, std::ios::binary) << bytes;
-    Result<RelightModel> corrupt = tryLoadRelightModel(bad);
+    Expected<RelightModel> corrupt = tryLoadRelightModel(bad);
     EXPECT_EQ(corrupt.status().code, StatusCode::Corrupt) << corrupt.status().message;
     EXPECT_NE(corrupt.status().message.find("bad.glb"), std::string::npos);
     std::ofstream(bad, std::ios::binary) << bytes.substr(0, bytes.size() / 2); // truncated
     EXPECT_EQ(tryLoadRelightModel(bad).status().code, StatusCode::Corrupt);
 
-    Result<RelightModel> loaded = tryLoadRelightModel(good);
+    Expected<RelightModel> loaded = tryLoadRelightModel(good);
     ASSERT_TRUE(loaded.ok()) << loaded.status().message;
     const float lighting[3] = {1, 2, 3};
     float radiance[9];

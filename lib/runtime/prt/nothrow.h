@@ -16,11 +16,11 @@
 
 namespace prt {
 
-Result<RelightModel> tryLoadRelightModel(const std::string& bundlePath) noexcept;
+Expected<RelightModel> tryLoadRelightModel(const std::string& bundlePath) noexcept;
 // The in-bundle texel rows (texelRelightModel's reach: no image library).
-Result<TexelRelightModel> tryLoadTexelRelightModel(const std::string& bundlePath) noexcept;
+Expected<TexelRelightModel> tryLoadTexelRelightModel(const std::string& bundlePath) noexcept;
 // readLightingJson: [L*L][3] coefficients; *order set to L on success.
-Result<std::vector<float>> tryReadLightingJson(const std::string& path, int* order) noexcept;
+Expected<std::vector<float>> tryReadLightingJson(const std::string& path, int* order) noexcept;
 // relight(model, ...); also InvalidInput for a null lighting or radiance pointer.
 Status tryRelight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance,
                   const JobSystem& jobs = {}) noexcept;

@@ -1,7 +1,7 @@
 // prt/status.h: how the runtime reports errors. Two ways, the same information:
 //  - the throwing API (prt/relight.h, prt/hybrid.h, ...) throws prt::Error, a std::runtime_error whose what() is
 //    "SOURCE: PLACE: PROBLEM" (catch std::exception; the class itself is lib/core's and is not installed);
-//  - the no-throw API (prt/nothrow.h) returns a Status, or a Result<T> holding a value or a Status, and never
+//  - the no-throw API (prt/nothrow.h) returns a Status, or an Expected<T> holding a value or a Status, and never
 //    throws, so an engine built with -fno-exceptions can call it. Every function there catches whatever the
 //    library threw (std::bad_alloc included) and turns it into a code and the same message.
 // std only: no logging, no process hooks.
@@ -31,12 +31,12 @@ struct Status {
     explicit operator bool() const noexcept { return ok(); }
 };
 
-// A value or the Status saying why there is none (an expected-style result, C++17).
+// A value or the Status saying why there is none: std::expected in spirit, in C++17.
 template <class T>
-class Result {
+class Expected {
 public:
-    Result(T value) : value_(std::move(value)) {}
-    Result(Status status) : status_(std::move(status)) {}
+    Expected(T value) : value_(std::move(value)) {}
+    Expected(Status status) : status_(std::move(status)) {}
     bool ok() const noexcept { return status_.ok(); }
     explicit operator bool() const noexcept { return ok(); }
     const Status& status() const noexcept { return status_; }

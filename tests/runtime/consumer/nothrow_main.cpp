@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "usage: consumer_nothrow GOOD.glb MISSING.glb CORRUPT.glb\n");
         return 2;
     }
-    prt::Result<prt::RelightModel> model = prt::tryLoadRelightModel(argv[1]);
+    prt::Expected<prt::RelightModel> model = prt::tryLoadRelightModel(argv[1]);
     if (!model) {
         std::fprintf(stderr, "%s: %s\n", prt::statusName(model.status().code), model.status().message.c_str());
         return 1;
