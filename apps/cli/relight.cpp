@@ -10,6 +10,7 @@
 #include "raycast.h"
 #include "render.h"
 #include "runtime.h"
+#include "runtime_jobs.h"
 
 #include <nlohmann/json.hpp>
 
@@ -318,7 +319,7 @@ void runRelight(const RelightOptions& options) {
 
     double relightStart = nowSeconds();
     std::vector<float> radiance(size_t(model.vertexCount) * 3);
-    relight(model, lighting.data(), 0, model.vertexCount, radiance.data());
+    relight(model, lighting.data(), 0, model.vertexCount, radiance.data(), cli::tbbJobs());
     double relightSeconds = nowSeconds() - relightStart;
     char rate[160];
     const char* rows = options.texels ? "texels" : "vertices";

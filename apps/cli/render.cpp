@@ -9,6 +9,7 @@
 #include "raycast.h"
 #include "render.h"
 #include "runtime.h"
+#include "runtime_jobs.h"
 
 #include <memory>
 #include <optional>
@@ -70,7 +71,7 @@ void runRender(const RenderOptions& options) {
     if (options.order > 0)
         for (size_t i = size_t(options.order) * options.order * 3; i < lighting.size(); ++i) lighting[i] = 0.0f;
     std::vector<float> radiance(size_t(model.vertexCount) * 3);
-    relight(model, lighting.data(), 0, model.vertexCount, radiance.data());
+    relight(model, lighting.data(), 0, model.vertexCount, radiance.data(), cli::tbbJobs());
 
     RenderedImage image;
     if (options.texels) {

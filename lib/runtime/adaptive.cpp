@@ -109,7 +109,13 @@ RelightModel raggedModel(Bundle& bundle, const std::string& source) {
             throw Error(source, place, "semantic \"" + data.semantic + "\", expected sh_transfer_rgb");
         requireShape(data, {rows, 3}, "", source);
         checkFiniteRows(data.data, 3, source, place, "row");
-        model.transfer = std::move(data.data);
+        if (type == "float32") {
+            model.transfer = std::move(data.data);
+        } else { // kept as the halves the file stores (the reader widened them exactly, so this is exact too)
+            model.storage = TransferStorage::Float16;
+            model.halves.resize(data.data.size());
+            for (size_t i = 0; i < data.data.size(); ++i) model.halves[i] = floatToHalf(data.data[i]);
+        }
     } else if (type == "uint8" || type == "uint16") {
         if (data.semantic != "sh_transfer_rgb_quantised")
             throw Error(source, place, "semantic \"" + data.semantic + "\", expected sh_transfer_rgb_quantised");
@@ -139,21 +145,24 @@ RelightModel raggedModel(Bundle& bundle, const std::string& source) {
                                                               "_bands or cluster");
         }
         checkFiniteRows(scales.data, 1, source, "layer \"" + scales.name + "\"", "scale");
-        model.transfer.resize(rows * 3);
-        const float c = float(centre);
-        size_t bandOffset = 0;
-        for (size_t v = 0; v < V; ++v) {
-            const size_t base = size_t(offsets[v]) * 3;
-            const int n = int(std::lround(std::sqrt(double(offsets[v + 1] - offsets[v]))));
-            for (int l = 0; l < n; ++l) {
-                const float scale = cluster ? scales.data[size_t((*cluster)[v]) * order + l] : scales.data[bandOffset + l];
-                for (size_t i = base + size_t(l) * l * 3; i < base + size_t(l + 1) * (l + 1) * 3; ++i) {
-                    if (data.integers[i] > 2 * centre)
-                        throw Error(source, place + ", row " + std::to_string(i / 3), "code above " + std::to_string(2 * centre));
-                    model.transfer[i] = (float(data.integers[i]) - c) * scale / c; // as lib/adapt's dequantise
-                }
+        // Codes stay codes (1 or 2 bytes each); the scales become sigma = scale / C, as relight() uses them.
+        for (size_t i = 0; i < data.integers.size(); ++i)
+            if (data.integers[i] > 2 * centre)
+                throw Error(source, place + ", row " + std::to_string(i / 3), "code above " + std::to_string(2 * centre));
+        model.storage = bits == 8 ? TransferStorage::Uint8 : TransferStorage::Uint16;
+        if (bits == 8) model.codes8.assign(data.integers.begin(), data.integers.end());
+        else model.codes16.assign(data.integers.begin(), data.integers.end());
+        model.bandScales.resize(scales.data.size());
+        for (size_t i = 0; i < scales.data.size(); ++i) model.bandScales[i] = scales.data[i] / float(centre);
+        if (cluster) {
+            model.scaleCluster = *cluster;
+        } else {
+            uint32_t band = 0;
+            for (size_t v = 0; v < V; ++v) {
+                if (v % kRelightBlock == 0) model.bandBlockStarts.push_back(band);
+                band += uint32_t(std::lround(std::sqrt(double(offsets[v + 1] - offsets[v]))));
             }
-            bandOffset += n;
+            model.bandBlockStarts.push_back(band);
         }
     } else {
         throw Error(source, place, "component type " + type + " is not one this runtime decodes");
@@ -182,20 +191,21 @@ RelightModel cpcaModel(Bundle& bundle, const std::string& source) {
             throw Error(source, "layer \"" + layer->name + "\"", "domain \"" + layer->domain + "\" is not the basis's");
     checkFiniteRows(basis.data, dim, source, place, "row");
     checkFiniteRows(weights.data, components ? components : 1, source, "layer \"" + weights.name + "\"", "vertex");
+    for (size_t v = 0; v < V; ++v)
+        if (cluster.integers[v] >= clusters)
+            throw Error(source, "layer \"" + cluster.name + "\", vertex " + std::to_string(v), "cluster index out of range");
+    if (clusters > std::numeric_limits<uint32_t>::max() || components > uint64_t(std::numeric_limits<int>::max()))
+        throw Error(source, place, "too many clusters or components");
+    // Kept in the basis: relight() projects each cluster on the lighting once and sums M weights per vertex.
     RelightModel model;
     model.vertexCount = uint32_t(V);
     model.order = order;
-    model.transfer.resize(V * dim);
-    for (size_t v = 0; v < V; ++v) {
-        if (cluster.integers[v] >= clusters)
-            throw Error(source, "layer \"" + cluster.name + "\", vertex " + std::to_string(v), "cluster index out of range");
-        const float* block = basis.data.data() + size_t(cluster.integers[v]) * (components + 1) * dim;
-        for (size_t d = 0; d < dim; ++d) { // the same sums, in the same order, as lib/adapt's reconstruct
-            float value = block[d];
-            for (size_t i = 0; i < components; ++i) value += weights.data[v * components + i] * block[(i + 1) * dim + d];
-            model.transfer[v * dim + d] = value;
-        }
-    }
+    model.storage = TransferStorage::Cpca;
+    model.cpcaComponents = int(components);
+    model.cpcaClusters = uint32_t(clusters);
+    model.cpcaBasis = basis.data;
+    model.cpcaWeights = weights.data;
+    model.cpcaCluster = cluster.integers;
     return model;
 }
 
@@ -220,17 +230,9 @@ RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source) {
 }
 
 void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance) {
-    const uint32_t* offsets = model.offsets.data();
-    for (size_t v = begin; v < end;) {
-        const uint32_t count = offsets[v + 1] - offsets[v];
-        size_t run = v + 1;
-        while (run < end && offsets[run + 1] - offsets[run] == count) ++run;
-        float* out = radiance + (v - begin) * 3;
-        relight(model.transfer.data() + size_t(offsets[v]) * 3, run - v, int(count), lighting, out);
-        if (!model.albedo.empty())
-            for (size_t i = 0; i < (run - v) * 3; ++i) out[i] *= model.albedo[v * 3 + i];
-        v = run;
-    }
+    relightRaggedRange(model, lighting, begin, end, radiance);
+    if (!model.albedo.empty())
+        for (size_t i = 0; i < (end - begin) * 3; ++i) radiance[i] *= model.albedo[begin * 3 + i];
 }
 
 } // namespace prt

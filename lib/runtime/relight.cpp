@@ -2,11 +2,18 @@
 #include "runtime.h"
 
 #include "core.h"
+#include "runtime_internal.h"
 
 #include <algorithm>
-#include <atomic>
-#include <thread>
 #include <vector>
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PRT_HAVE_AVX2_CLONE 1
+#define PRT_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define PRT_HAVE_AVX2_CLONE 0
+#define PRT_ALWAYS_INLINE
+#endif
 
 namespace prt {
 
@@ -20,7 +27,8 @@ constexpr int kLanes = 12;
 // `kValues` (coefficients * 3) known at compile time lets the compiler unroll the common orders completely;
 // 0 means take it from `values`. Every instantiation adds in the same order, so they agree bit for bit.
 template <int kValues>
-void relightRows(const float* transfer, size_t vertexCount, int values, const float* lighting, float* radiance) {
+PRT_ALWAYS_INLINE inline void relightRowsBody(const float* transfer, size_t vertexCount, int values,
+                                              const float* lighting, float* radiance) {
     if constexpr (kValues != 0) values = kValues;
     for (size_t v = 0; v < vertexCount; ++v) {
         const float* row = transfer + v * size_t(values);
@@ -34,6 +42,31 @@ void relightRows(const float* transfer, size_t vertexCount, int values, const fl
         for (int c = 0; c < 3; ++c) radiance[v * 3 + c] = sum[c] + sum[c + 3];
     }
 }
+
+// The kernel compiled for the baseline and, where the processor has it, for AVX2: wider registers over the same
+// lanes, each lane the same multiplies and adds in the same order (AVX2 without FMA, so nothing is contracted), so
+// both give the same bits on every input.
+template <int kValues>
+void relightRowsBase(const float* transfer, size_t vertexCount, int values, const float* lighting, float* radiance) {
+    relightRowsBody<kValues>(transfer, vertexCount, values, lighting, radiance);
+}
+#if PRT_HAVE_AVX2_CLONE
+template <int kValues>
+__attribute__((target("avx2"))) void relightRowsAvx2(const float* transfer, size_t vertexCount, int values,
+                                                     const float* lighting, float* radiance) {
+    relightRowsBody<kValues>(transfer, vertexCount, values, lighting, radiance);
+}
+template <int kValues>
+void relightRows(const float* transfer, size_t vertexCount, int values, const float* lighting, float* radiance) {
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    (avx2 ? relightRowsAvx2<kValues> : relightRowsBase<kValues>)(transfer, vertexCount, values, lighting, radiance);
+}
+#else
+template <int kValues>
+void relightRows(const float* transfer, size_t vertexCount, int values, const float* lighting, float* radiance) {
+    relightRowsBase<kValues>(transfer, vertexCount, values, lighting, radiance);
+}
+#endif
 
 } // namespace
 
@@ -50,33 +83,48 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
     }
 }
 
-void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance) {
+namespace {
+
+// What each task of relight(model, ...) needs: the same for every task, so tasks differ only by their block.
+struct RelightTasks {
+    const RelightModel* model;
+    const float* lighting;
+    const float* projections; // Cpca: [clusters][components + 1][3]
+    size_t begin, end;
+    float* radiance;
+};
+
+void relightTask(void* data, size_t index) {
+    const RelightTasks& tasks = *static_cast<const RelightTasks*>(data);
+    const RelightModel& model = *tasks.model;
+    const size_t first = tasks.begin + index * kRelightBlock, last = std::min(tasks.end, first + kRelightBlock);
+    float* out = tasks.radiance + (first - tasks.begin) * 3;
+    if (model.storage == TransferStorage::Cpca)
+        relightCpcaRange(model, tasks.projections, first, last, out);
+    else if (!model.offsets.empty())
+        relightRaggedRange(model, tasks.lighting, first, last, out);
+    else
+        relight(model.transfer.data() + first * size_t(model.order) * model.order * 3, last - first,
+                model.order * model.order, tasks.lighting, out);
+    if (!model.albedo.empty())
+        for (size_t i = 0; i < (last - first) * 3; ++i) out[i] *= model.albedo[first * 3 + i];
+}
+
+} // namespace
+
+void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance,
+             const JobSystem& jobs) {
     if (begin > end || end > model.vertexCount)
         throw Error("", "relight", "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
                                        ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
                     kExitFailure);
-    if (!model.offsets.empty()) return relightAdaptive(model, lighting, begin, end, radiance);
-    const int coefficients = sh::coefficientCount(model.order);
-    const size_t rowValues = size_t(coefficients) * 3;
-    // Blocks of a few thousand vertices keep the scheduling overhead far below the memory traffic; std::threads
-    // rather than TBB keep the installed runtime free of it.
-    constexpr size_t kBlock = 4096;
-    const size_t count = end - begin, blocks = (count + kBlock - 1) / kBlock;
-    std::atomic<size_t> nextBlock{0};
-    auto relightBlocks = [&] {
-        for (size_t block; (block = nextBlock.fetch_add(1)) < blocks;) {
-            size_t first = begin + block * kBlock, last = std::min(end, first + kBlock);
-            float* out = radiance + (first - begin) * 3;
-            relight(model.transfer.data() + first * rowValues, last - first, coefficients, lighting, out);
-            if (!model.albedo.empty())
-                for (size_t i = 0; i < (last - first) * 3; ++i) out[i] *= model.albedo[first * 3 + i];
-        }
-    };
-    size_t workers = std::min<size_t>(blocks, std::max(1u, std::thread::hardware_concurrency()));
-    std::vector<std::thread> pool;
-    for (size_t i = 1; i < workers; ++i) pool.emplace_back(relightBlocks);
-    relightBlocks();
-    for (std::thread& thread : pool) thread.join();
+    // Cpca: each cluster's mean and directions projected on the lighting once, before any task runs.
+    std::vector<float> projections;
+    if (model.storage == TransferStorage::Cpca) projections = cpcaProjections(model, lighting);
+    RelightTasks tasks{&model, lighting, projections.data(), begin, end, radiance};
+    // Blocks of kRelightBlock vertices keep the scheduling overhead far below the memory traffic; the caller's job
+    // system (or the calling thread) runs them, so the runtime itself never starts a thread.
+    runTasks(jobs, (end - begin + kRelightBlock - 1) / kRelightBlock, relightTask, &tasks);
 }
 
 } // namespace prt

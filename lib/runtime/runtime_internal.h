@@ -38,4 +38,12 @@ TexelRelightModel adaptiveTexelModel(Bundle& bundle, const std::string& source);
 // irradiance transfer) and the bundle's "diffuse_albedo" layer, checked: [vertexCount, 3], values in [0, 1].
 void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::string& source, RelightModel& model);
 
+// Relight kernels of the encoded storages (relight_encoded.cpp), vertices [first, last) into out ([last - first][3]),
+// without the albedo. relightRaggedRange: a model with offsets, any storage but Cpca, each row bit-identical to
+// the float kernel on decodedTransfer. cpcaProjections: [clusters][components + 1][3], each cluster's mean and
+// directions dotted with the lighting by the float kernel; relightCpcaRange sums them with the vertex's weights.
+void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out);
+std::vector<float> cpcaProjections(const RelightModel& model, const float* lighting);
+void relightCpcaRange(const RelightModel& model, const float* projections, size_t first, size_t last, float* out);
+
 } // namespace prt

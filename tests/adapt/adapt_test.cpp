@@ -322,8 +322,10 @@ TEST(Adapt, CpcaBundleRelightsLikeItsReconstruction) {
     std::vector<float> full = bundle.layers[0].data;
     adapt::adaptBundle(bundle, {lighting}, options, "test");
     RelightModel model = relightModel(bundle, "cpca");
-    ASSERT_EQ(model.transfer.size(), full.size());
-    for (size_t i = 0; i < full.size(); ++i) EXPECT_NEAR(model.transfer[i], full[i], 1e-5f);
+    EXPECT_EQ(model.storage, TransferStorage::Cpca) << "kept in its basis, not decoded at load";
+    std::vector<float> rows = decodedTransfer(model);
+    ASSERT_EQ(rows.size(), full.size());
+    for (size_t i = 0; i < full.size(); ++i) EXPECT_NEAR(rows[i], full[i], 1e-5f);
 }
 
 TEST(Adapt, RuntimeRefusesBandsItLacks) {

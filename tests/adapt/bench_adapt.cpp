@@ -26,7 +26,7 @@ Workload prepare(prt::RelightModel model) {
     w.lighting.resize(size_t(w.model.order) * w.model.order * 3);
     for (float& value : w.lighting) value = uniform(random);
     w.radiance.resize(size_t(w.model.vertexCount) * 3);
-    w.bytesPerRelight = double(w.model.transfer.size()) * 4 + double(w.model.offsets.size()) * 4;
+    w.bytesPerRelight = double(prt::relightBytes(w.model));
     return w;
 }
 

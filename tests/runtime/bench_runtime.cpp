@@ -1,122 +1,205 @@
-// Relighting throughput in vertices per second at orders 3, 5 and 8, next to a memory-bandwidth yardstick: a
-// plain sum over the same transfer array in the same run. The kernel reads each transfer value once, so the sum
-// is the speed it can at best approach; the table at the end gives the ratio.
-#include "runtime.h"
+// Relighting throughput at orders 3, 5 and 8 for every storage the runtime relights from (float32, half, u16 and u8
+// codes, clustered PCA), each next to a memory yardstick measured in the same run: a plain read (64-bit word sum)
+// of exactly the bytes that relight reads (relightBytes). The table at the end gives bytes per vertex, Mvert/s,
+// each storage against float32, and each relight against streaming its own bytes. Single-threaded: relight()
+// runs on the calling thread without a job system. Run by hand: build/tests/runtime/bench_runtime [--vertices N].
+#include "prt/relight.h"
 
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <map>
-#include <random>
+#include <memory>
+#include <string>
 
 namespace {
 
-constexpr size_t kVertices = 100000;
+size_t gVertices = 1000000;
+
+constexpr const char* kStorages[] = {"float32", "half", "u16", "u8", "cpca"};
+
+// A fast deterministic fill (the values do not matter to the speed, only that they are not all alike).
+struct Lcg {
+    uint64_t state;
+    uint32_t next() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return uint32_t(state >> 33);
+    }
+    float unit() { return float(next() & 0xffffff) / float(0x800000) - 1.0f; }
+};
+
+prt::RelightModel makeModel(const std::string& storage, int order) {
+    Lcg random{uint64_t(order) * 977 + storage.size()};
+    prt::RelightModel model;
+    model.vertexCount = uint32_t(gVertices);
+    model.order = order;
+    const size_t n = size_t(order) * order, values = gVertices * n * 3;
+    if (storage == "float32") {
+        model.transfer.resize(values);
+        for (float& value : model.transfer) value = random.unit();
+        return model;
+    }
+    if (storage == "cpca") { // 64 clusters of 8 directions, as `prt adapt --format cpca` might choose
+        const uint32_t K = 64, M = 8;
+        model.storage = prt::TransferStorage::Cpca;
+        model.cpcaClusters = K;
+        model.cpcaComponents = M;
+        model.cpcaBasis.resize(size_t(K) * (M + 1) * n * 3);
+        for (float& value : model.cpcaBasis) value = random.unit();
+        model.cpcaWeights.resize(gVertices * M);
+        for (float& value : model.cpcaWeights) value = random.unit();
+        model.cpcaCluster.resize(gVertices);
+        for (uint32_t& k : model.cpcaCluster) k = random.next() % K;
+        return model;
+    }
+    // The adaptive layout at one uniform order: offsets, and for codes one scale per (vertex, band).
+    model.offsets.resize(gVertices + 1);
+    for (size_t v = 0; v <= gVertices; ++v) model.offsets[v] = uint32_t(v * n);
+    if (storage == "half") {
+        model.storage = prt::TransferStorage::Float16;
+        model.halves.resize(values);
+        for (uint16_t& half : model.halves) half = uint16_t(random.next() & 0xbbff); // finite, mixed signs
+        return model;
+    }
+    const uint32_t C = storage == "u8" ? 127 : 32767;
+    model.storage = storage == "u8" ? prt::TransferStorage::Uint8 : prt::TransferStorage::Uint16;
+    if (storage == "u8") {
+        model.codes8.resize(values);
+        for (uint8_t& code : model.codes8) code = uint8_t(random.next() % (2 * C + 1));
+    } else {
+        model.codes16.resize(values);
+        for (uint16_t& code : model.codes16) code = uint16_t(random.next() % (2 * C + 1));
+    }
+    model.bandScales.resize(gVertices * order);
+    for (float& sigma : model.bandScales) sigma = (1.0f + random.unit()) / float(C);
+    for (size_t v = 0; v < gVertices; v += prt::kRelightBlock) model.bandBlockStarts.push_back(uint32_t(v * order));
+    model.bandBlockStarts.push_back(uint32_t(gVertices * order));
+    return model;
+}
 
 struct Workload {
     prt::RelightModel model;
-    std::vector<float> lighting;
-    std::vector<float> radiance;
+    std::vector<float> lighting, radiance;
+    std::vector<std::pair<const void*, size_t>> buffers; // what relight reads, for the yardstick
 };
 
-Workload& workload(int order) {
-    static std::map<int, Workload> workloads;
-    Workload& w = workloads[order];
-    if (w.model.order == 0) {
-        std::mt19937 random(order);
-        std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
-        w.model.vertexCount = kVertices;
-        w.model.order = order;
-        w.model.transfer.resize(kVertices * order * order * 3);
-        for (float& value : w.model.transfer) value = uniform(random);
+// One workload at a time (the largest is about 0.8 GB), built on first use and dropped when the next is asked for.
+Workload& workload(const std::string& storage, int order) {
+    static std::unique_ptr<Workload> current;
+    static std::string key;
+    const std::string wanted = storage + "/" + std::to_string(order);
+    if (!current || key != wanted) {
+        current.reset();
+        current = std::make_unique<Workload>();
+        key = wanted;
+        Workload& w = *current;
+        w.model = makeModel(storage, order);
+        Lcg random{7};
         w.lighting.resize(size_t(order) * order * 3);
-        for (float& value : w.lighting) value = uniform(random);
-        w.radiance.resize(kVertices * 3);
+        for (float& value : w.lighting) value = random.unit();
+        w.radiance.resize(gVertices * 3);
+        const prt::RelightModel& m = w.model;
+        auto add = [&](const auto& array) {
+            if (!array.empty()) w.buffers.push_back({array.data(), array.size() * sizeof(array[0])});
+        };
+        add(m.transfer), add(m.halves), add(m.codes8), add(m.codes16), add(m.bandScales), add(m.scaleCluster);
+        add(m.offsets), add(m.bandBlockStarts), add(m.cpcaBasis), add(m.cpcaWeights), add(m.cpcaCluster);
     }
-    return w;
+    return *current;
 }
 
-void setCounters(benchmark::State& state, int order) {
-    state.SetItemsProcessed(int64_t(state.iterations()) * kVertices);
-    state.SetBytesProcessed(int64_t(state.iterations()) * kVertices * order * order * 3 * sizeof(float));
-}
-
-void relightKernel(benchmark::State& state) {
-    int order = int(state.range(0));
-    Workload& w = workload(order);
+void relightStorage(benchmark::State& state, std::string storage, int order) {
+    Workload& w = workload(storage, order);
     for (auto _ : state) {
-        prt::relight(w.model.transfer.data(), kVertices, order * order, w.lighting.data(), w.radiance.data());
+        prt::relight(w.model, w.lighting.data(), 0, w.model.vertexCount, w.radiance.data());
         benchmark::ClobberMemory();
     }
-    setCounters(state, order);
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(gVertices));
+    state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(prt::relightBytes(w.model)));
+    state.counters["bytes_per_vertex"] = double(prt::relightBytes(w.model)) / double(gVertices);
 }
 
-void relightParallel(benchmark::State& state) {
-    int order = int(state.range(0));
-    Workload& w = workload(order);
+// The yardstick: every byte relight reads, read once as 64-bit words and summed in independent lanes.
+void streamStorage(benchmark::State& state, std::string storage, int order) {
+    Workload& w = workload(storage, order);
     for (auto _ : state) {
-        prt::relight(w.model, w.lighting.data(), 0, kVertices, w.radiance.data());
-        benchmark::ClobberMemory();
-    }
-    setCounters(state, order);
-}
-
-// The yardstick: every transfer value read once and added, in independent lanes so it vectorises.
-void sumTransfer(benchmark::State& state) {
-    int order = int(state.range(0));
-    const std::vector<float>& transfer = workload(order).model.transfer;
-    for (auto _ : state) {
-        benchmark::ClobberMemory(); // the array may have changed, so the sum cannot be hoisted out of the loop
-        const float* values = transfer.data();
-        float lanes[16] = {};
-        for (size_t i = 0; i + 16 <= transfer.size(); i += 16) // 100000 rows: no remainder
-            for (int k = 0; k < 16; ++k) lanes[k] += values[i + k];
-        float sum = 0.0f;
-        for (float lane : lanes) sum += lane;
+        benchmark::ClobberMemory(); // the arrays may have changed, so the sums cannot be hoisted
+        uint64_t lanes[8] = {};
+        for (const auto& [data, bytes] : w.buffers) {
+            const unsigned char* p = static_cast<const unsigned char*>(data);
+            size_t i = 0;
+            for (; i + 64 <= bytes; i += 64) {
+                uint64_t words[8];
+                std::memcpy(words, p + i, 64);
+                for (int k = 0; k < 8; ++k) lanes[k] += words[k];
+            }
+            for (; i < bytes; ++i) lanes[0] += p[i];
+        }
+        uint64_t sum = 0;
+        for (uint64_t lane : lanes) sum += lane;
         benchmark::DoNotOptimize(sum);
     }
-    setCounters(state, order);
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(gVertices));
+    state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(prt::relightBytes(w.model)));
 }
 
-// Console output as usual, plus vertices/s per benchmark kept for the ratio table.
+// Console output as usual, plus vertices/s and bytes per vertex kept for the table.
 class RatioReporter : public benchmark::ConsoleReporter {
 public:
     void ReportRuns(const std::vector<Run>& runs) override {
         ConsoleReporter::ReportRuns(runs);
         for (const Run& run : runs)
-            if (run.run_type == Run::RT_Iteration) verticesPerSecond[run.benchmark_name()] = run.counters.at("items_per_second");
+            if (run.run_type == Run::RT_Iteration) {
+                const std::string name = run.benchmark_name().substr(0, run.benchmark_name().find("/min_time"));
+                rate[name] = run.counters.at("items_per_second");
+                auto found = run.counters.find("bytes_per_vertex");
+                if (found != run.counters.end()) bytesPerVertex[name] = found->second;
+            }
     }
-    std::map<std::string, double> verticesPerSecond;
+    std::map<std::string, double> rate, bytesPerVertex;
 };
 
 } // namespace
 
 int main(int argc, char** argv) {
-    // Per order, kernel and yardstick run back to back, so both see the same machine load.
-    for (int order : {3, 5, 8}) {
-        benchmark::RegisterBenchmark("relightKernel", relightKernel)->Arg(order)->Unit(benchmark::kMicrosecond);
-        benchmark::RegisterBenchmark("relightParallel", relightParallel)
-            ->Arg(order)
-            ->Unit(benchmark::kMicrosecond)
-            ->UseRealTime();
-        benchmark::RegisterBenchmark("sumTransfer", sumTransfer)->Arg(order)->Unit(benchmark::kMicrosecond);
-    }
+    for (int i = 1; i + 1 < argc; ++i)
+        if (std::strcmp(argv[i], "--vertices") == 0) {
+            gVertices = std::strtoull(argv[i + 1], nullptr, 10);
+            for (int j = i; j + 2 <= argc; ++j) argv[j] = argv[j + 2];
+            argc -= 2;
+            break;
+        }
+    // Per storage and order, relight and yardstick run back to back on one workload, so both see the same load.
+    for (int order : {3, 5, 8})
+        for (const char* storage : kStorages) {
+            const std::string name = std::string(storage) + "/" + std::to_string(order);
+            benchmark::RegisterBenchmark(("relight/" + name).c_str(), relightStorage, storage, order)
+                ->Unit(benchmark::kMillisecond)
+                ->MinTime(0.3);
+            benchmark::RegisterBenchmark(("stream/" + name).c_str(), streamStorage, storage, order)
+                ->Unit(benchmark::kMillisecond)
+                ->MinTime(0.3);
+        }
     benchmark::Initialize(&argc, argv);
     RatioReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
-    std::printf("\n%-6s %16s %16s %16s %10s\n", "order", "kernel Mvert/s", "parallel Mvert/s", "sum Mvert/s",
-                "kernel/sum");
-    for (int order : {3, 5, 8}) {
-        std::string arg = std::to_string(order);
-        auto rate = [&](const std::string& name) {
-            auto found = reporter.verticesPerSecond.find(name);
-            return found == reporter.verticesPerSecond.end() ? 0.0 : found->second;
-        };
-        double kernel = rate("relightKernel/" + arg), parallel = rate("relightParallel/" + arg + "/real_time"),
-               sum = rate("sumTransfer/" + arg);
-        std::printf("%-6d %16.1f %16.1f %16.1f %10.2f\n", order, kernel / 1e6, parallel / 1e6, sum / 1e6,
-                    sum > 0.0 ? kernel / sum : 0.0);
-    }
+    std::printf("\n%zu vertices, single thread\n%-6s %-8s %10s %14s %14s %12s %14s\n", gVertices, "order", "storage",
+                "B/vertex", "relight Mv/s", "stream Mv/s", "vs float32", "relight/stream");
+    for (int order : {3, 5, 8})
+        for (const char* storage : kStorages) {
+            const std::string name = std::string(storage) + "/" + std::to_string(order);
+            auto get = [](const std::map<std::string, double>& table, const std::string& key) {
+                auto found = table.find(key);
+                return found == table.end() ? 0.0 : found->second;
+            };
+            const double relightRate = get(reporter.rate, "relight/" + name), streamRate = get(reporter.rate, "stream/" + name),
+                         floatRate = get(reporter.rate, "relight/float32/" + std::to_string(order));
+            std::printf("%-6d %-8s %10.1f %14.1f %14.1f %12.2f %14.2f\n", order, storage,
+                        get(reporter.bytesPerVertex, "relight/" + name), relightRate / 1e6, streamRate / 1e6,
+                        floatRate > 0 ? relightRate / floatRate : 0.0, streamRate > 0 ? relightRate / streamRate : 0.0);
+        }
     benchmark::Shutdown();
     return 0;
 }

@@ -21,6 +21,20 @@ run(configure ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -G ${GENERA
     -DEXPECTED_PRT_DIR=${WORK_DIR}/prefix/lib/cmake/prt)
 run(build ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(relight ${WORK_DIR}/build/consumer ${WORK_DIR}/consumer.glb)
+# The -fno-exceptions consumer: the bundle the first one wrote, a missing file, and that bundle cut in half.
+file(SIZE ${WORK_DIR}/consumer.glb bundle_bytes)
+math(EXPR half "${bundle_bytes} / 2")
+execute_process(COMMAND head -c ${half} ${WORK_DIR}/consumer.glb OUTPUT_FILE ${WORK_DIR}/truncated.glb)
+run(relight_nothrow ${WORK_DIR}/build/consumer_nothrow ${WORK_DIR}/consumer.glb ${WORK_DIR}/absent.glb
+    ${WORK_DIR}/truncated.glb)
+# Headers install under include/prt/ and nothing of prt sits directly in include/, so none shadows an engine's.
+file(GLOB flat_headers ${WORK_DIR}/prefix/include/*.h)
+if(flat_headers)
+  message(FATAL_ERROR "headers installed outside include/prt/: ${flat_headers}")
+endif()
+if(EXISTS ${WORK_DIR}/prefix/include/prt/core.h)
+  message(FATAL_ERROR "core.h (logging, kill hooks) is installed; the runtime's headers must not need it")
+endif()
 
 # The thin runtime's promise: the consumer needs the C++ standard library and tinygltf, nothing of the rest of prt.
 execute_process(COMMAND ldd ${WORK_DIR}/build/consumer RESULT_VARIABLE result OUTPUT_VARIABLE libraries

@@ -1,9 +1,12 @@
 // Writes a small bundle, loads its transfer with the installed runtime and relights it: exit 0 when the
-// radiance is the hand-computed one, per vertex and per texel (texels in the bundle, no image library).
-#include <runtime.h>
+// radiance is the hand-computed one, per vertex and per texel (texels in the bundle, no image library), serially
+// and through a job-system hook of its own.
+#include <prt/runtime.h> // the umbrella; <prt/relight.h>, <prt/texels.h>, ... one feature each
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <exception>
 
 int main(int argc, char** argv) {
     if (argc != 2) {
@@ -28,6 +31,19 @@ int main(int argc, char** argv) {
         const float lighting[3] = {1, 2, 3};
         float radiance[9];
         prt::relight(model, lighting, 0, model.vertexCount, radiance);
+        // The engine's job system: here a counter that runs the tasks in reverse, to show any order will do.
+        int hookCalls = 0;
+        prt::JobSystem jobs{[](void* context, size_t count, prt::TaskFunction task, void* data) {
+                                ++*static_cast<int*>(context);
+                                for (size_t i = count; i-- > 0;) task(data, i);
+                            },
+                            &hookCalls};
+        float hooked[9];
+        prt::relight(model, lighting, 0, model.vertexCount, hooked, jobs);
+        if (hookCalls != 1 || std::memcmp(hooked, radiance, sizeof radiance) != 0) {
+            std::fprintf(stderr, "the job hook was called %d times or changed the radiance\n", hookCalls);
+            return 1;
+        }
         for (int v = 0; v < 3; ++v)
             for (int c = 0; c < 3; ++c)
                 if (std::fabs(radiance[v * 3 + c] - float((v + 1) * (c + 1))) > 1e-6f) {
@@ -51,7 +67,7 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "texel radiance %g, expected 6\n", texelRadiance[5]);
             return 1;
         }
-    } catch (const prt::Error& e) {
+    } catch (const std::exception& e) { // prt::Error is a std::runtime_error
         std::fprintf(stderr, "%s\n", e.what());
         return 1;
     }

@@ -1,0 +1,105 @@
+// prt/relight.h: per-vertex relighting of a bundle's precomputed transfer under new distant lighting. std only:
+// prt::runtime needs the C++ standard library and tinygltf alone (no OpenImageIO, TBB, Embree, Ceres, OpenCL), and
+// starts no threads of its own (prt/jobs.h). Loaders throw prt::Error (prt/status.h); prt/nothrow.h has the same
+// functions returning status codes.
+//
+// Outgoing radiance of vertex v in channel c is radiance[v][c] = sum_j transfer[v][j][c] * lighting[j][c]
+// (docs/conventions.md), with lighting as RGB SH radiance coefficients [coefficient][3].
+#pragma once
+
+#include "jobs.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+struct Bundle; // bundle.h
+
+// How a model's transfer rows are held in memory. Float32 rows are in RelightModel::transfer; the others stay as
+// the bundle stores them (docs/bundle.md, "Adaptive transfer") and relight() reads them as they are.
+enum class TransferStorage : uint8_t {
+    Float32, // transfer
+    Float16, // halves: IEEE binary16 bits, [rows][3]
+    Uint16,  // codes16 [rows][3] with bandScales
+    Uint8,   // codes8 [rows][3] with bandScales
+    Cpca,    // cpcaBasis, cpcaWeights, cpcaCluster: every vertex at the full order
+};
+
+// Per-vertex transfer ready to relight: the "transfer" layer of a bundle (semantic "sh_transfer_rgb"), or the
+// adaptive layers of `prt adapt`.
+struct RelightModel {
+    uint32_t vertexCount = 0;
+    int order = 0;               // SH bands; order * order coefficients per vertex (the most any vertex has)
+    TransferStorage storage = TransferStorage::Float32;
+    std::vector<float> transfer; // Float32: [vertexCount][order * order][3], the mesh's vertex order
+    // Adaptive models (`prt adapt`, prt/adaptive.h): when not empty, vertex v has its own order n_v <= order and its
+    // n_v^2 coefficients are rows offsets[v] .. offsets[v+1] - 1 of the rows ([offsets[vertexCount]][3]).
+    std::vector<uint32_t> offsets;
+    // Float16 rows.
+    std::vector<uint16_t> halves;
+    // Uint8 / Uint16 codes: band l of vertex v decodes q to float(int(q) - C) * sigma, C = 127 or 32767, sigma =
+    // the band's scale / C (float). Per-vertex scales: sigma = bandScales[bandStart(v) + l], bandStart(v) = n_0 +
+    // ... + n_{v-1}, with bandBlockStarts[b] = bandStart(b * kRelightBlock). Per-cluster scales (scaleCluster
+    // not empty): sigma = bandScales[scaleCluster[v] * order + l].
+    std::vector<uint8_t> codes8;
+    std::vector<uint16_t> codes16;
+    std::vector<float> bandScales;
+    std::vector<uint32_t> bandBlockStarts;
+    std::vector<uint32_t> scaleCluster;
+    // Cpca: T[v] = mean[k] + sum_i cpcaWeights[v][i] basis[k][i], k = cpcaCluster[v]; cpcaBasis is [K][M + 1]
+    // [order^2][3] (row 0 the mean), cpcaWeights [vertexCount][M].
+    int cpcaComponents = 0;
+    uint32_t cpcaClusters = 0;
+    std::vector<float> cpcaBasis, cpcaWeights;
+    std::vector<uint32_t> cpcaCluster;
+    // A scene's transfer is irradiance transfer (params.albedo "excluded", docs/bundle.md "Scene bundles"): the
+    // rows give what a white surface reflects, E / pi. Then albedo holds each vertex's diffuse albedo ([vertexCount]
+    // [3], layer "diffuse_albedo") and relight() multiplies by it, so it returns outgoing radiance for every bundle;
+    // clear it to get E / pi (an engine multiplies by its base colour per pixel instead).
+    bool albedoExcluded = false;
+    std::vector<float> albedo;
+};
+
+// Vertices per task of relight(model, ...): the split is fixed, so results never depend on the job system.
+inline constexpr size_t kRelightBlock = 4096;
+
+// Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying), or, in a bundle without
+// one, the adaptive layers `prt adapt` writes (adaptiveRelightModel, prt/adaptive.h), kept encoded. `source` names
+// the bundle in errors. Needs a vertex-domain layer of semantic "sh_transfer_rgb", shape [V, L*L, 3] with L =
+// params.order when that is set, V equal to the mesh's vertex count, finite values. Throws prt::Error naming
+// `source` otherwise.
+RelightModel relightModel(Bundle bundle, const std::string& source);
+
+// Reads a bundle file and takes its transfer layer, as relightModel does.
+RelightModel loadRelightModel(const std::string& bundlePath);
+
+// The real-time kernel: radiance[v][c] = sum_j transfer[v][j][c] * lighting[j][c] for v < vertexCount.
+// transfer is [vertexCount][coefficientCount][3], lighting [coefficientCount][3], radiance [vertexCount][3].
+// Single-threaded and allocation-free; sums in float in a fixed order, so results do not depend on how callers
+// split the vertices. To stream a range [begin, end), pass transfer + begin * coefficientCount * 3 and
+// end - begin vertices.
+void relight(const float* transfer, size_t vertexCount, int coefficientCount, const float* lighting,
+             float* radiance);
+
+// Relights vertices [begin, end) of `model`, whatever its storage, times model.albedo per vertex when that is not
+// empty, in tasks of kRelightBlock vertices run through `jobs` (default: in order on the calling thread).
+// Float32, Float16 and code rows are bit-identical to the kernel on decodedTransfer(model); Cpca projects each
+// cluster's mean and directions on the lighting once per call, then sums M weights per vertex, which agrees
+// with the kernel on the decoded rows within float rounding (tests/runtime). Bit-identical for every job system.
+// Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
+// radiance sized (end - begin) * 3: row 0 of radiance is vertex `begin`. Throws prt::Error for a range outside
+// the model. Allocates only for Cpca (the per-call projections).
+void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance,
+             const JobSystem& jobs = {});
+
+// The model's rows as float32 ([offsets[V] or V * order^2][3]), decoded exactly as relight() decodes them.
+std::vector<float> decodedTransfer(const RelightModel& model);
+
+// Bytes relight() reads from the model to relight all its vertices once (rows, codes, scales, offsets, weights,
+// cluster indices, albedo; not the lighting).
+size_t relightBytes(const RelightModel& model);
+
+} // namespace prt

@@ -1,0 +1,234 @@
+// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes and half rows
+// are decoded a few vertices at a time into a tile that stays in the L1 cache and relit there by the float kernel,
+// so memory carries only the compressed bytes; clustered PCA is relit in its own basis (Sloan et al. 2003).
+#include "runtime.h"
+
+#include "runtime_internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PRT_HAVE_AVX2_CLONE 1
+#define PRT_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define PRT_HAVE_AVX2_CLONE 0
+#define PRT_ALWAYS_INLINE
+#endif
+
+namespace prt {
+
+namespace {
+
+// Floats per decode tile: 16 KiB, half a typical L1 data cache, so decoding and relighting share it.
+constexpr size_t kTileValues = 4096;
+
+// An IEEE binary16 value as float, exact for every finite half: exponent and mantissa moved into a float's and
+// rebiased; a subnormal (or zero) half, whose exponent field is 0, is rebiased one step further and 2^-14 taken
+// off, which a float subtraction does exactly (ryg's half_to_float_fast). No operand is ever a float subnormal
+// (which would cost a microcode assist each) and there is no branch, so it vectorises.
+inline float halfValue(uint16_t half) {
+    const uint32_t magnitude = uint32_t(half & 0x7fffu) << 13;
+    const uint32_t subnormal = (magnitude & 0x0f800000u) == 0 ? 1u : 0u;
+    const uint32_t bits = magnitude + (112u << 23) + (subnormal << 23), offsetBits = subnormal * 0x38800000u; // 2^-14
+    float value, offset;
+    std::memcpy(&value, &bits, sizeof value);
+    std::memcpy(&offset, &offsetBits, sizeof offset);
+    value -= offset;
+    uint32_t signed_;
+    std::memcpy(&signed_, &value, sizeof signed_);
+    signed_ |= uint32_t(half & 0x8000u) << 16;
+    std::memcpy(&value, &signed_, sizeof value);
+    return value;
+}
+
+// The band-scale index of vertex `first`'s band 0 (per-vertex scales), from the block table.
+size_t bandStart(const RelightModel& model, size_t first) {
+    const size_t block = first / kRelightBlock;
+    size_t start = model.bandBlockStarts[block];
+    for (size_t v = block * kRelightBlock; v < first; ++v)
+        start += size_t(std::lround(std::sqrt(double(model.offsets[v + 1] - model.offsets[v]))));
+    return start;
+}
+
+// Decodes vertex rows [first, last), a run of n bands each (so their codes are contiguous from row
+// offsets[first]), into `tile`: value i of band l is float(int(q) - C) * sigma_l, as decodedTransfer writes it.
+// `band` is the scale index of `first`'s band 0. kN = n known at compile time (0: take n) lets the compiler
+// unroll the band loops; the first pass, codes to floats, is one contiguous loop over the whole tile.
+template <class Code, int kN>
+PRT_ALWAYS_INLINE inline void decodeBody(const RelightModel& model, const Code* codes, int n, size_t first,
+                                         size_t last, size_t band, float* tile) {
+    if constexpr (kN != 0) n = kN;
+    constexpr int C = sizeof(Code) == 1 ? 127 : 32767;
+    const size_t values = size_t(n) * n * 3, total = (last - first) * values;
+    const Code* q = codes + size_t(model.offsets[first]) * 3;
+    for (size_t i = 0; i < total; ++i) tile[i] = float(int(q[i]) - C);
+    const bool perCluster = !model.scaleCluster.empty();
+    for (size_t v = first; v < last; ++v, band += n) {
+        float* out = tile + (v - first) * values;
+        const float* sigma = perCluster ? model.bandScales.data() + size_t(model.scaleCluster[v]) * model.order
+                                        : model.bandScales.data() + band;
+        for (int l = 0; l < n; ++l) {
+            const float s = sigma[l];
+            for (int i = l * l * 3; i < (l + 1) * (l + 1) * 3; ++i) out[i] *= s;
+        }
+    }
+}
+
+// The same decode compiled twice: for the baseline and, where the processor has it, for AVX2 (wider integer to
+// float conversion). Conversion and multiply round exactly either way and FMA is not enabled, so both write the
+// same bits.
+template <class Code, int kN>
+void decodeCodesBase(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
+                     float* tile) {
+    decodeBody<Code, kN>(model, codes, n, first, last, band, tile);
+}
+#if PRT_HAVE_AVX2_CLONE
+template <class Code, int kN>
+__attribute__((target("avx2"))) void decodeCodesAvx2(const RelightModel& model, const Code* codes, int n,
+                                                     size_t first, size_t last, size_t band, float* tile) {
+    decodeBody<Code, kN>(model, codes, n, first, last, band, tile);
+}
+bool hasAvx2() {
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+}
+#define PRT_DECODE(N) (hasAvx2() ? decodeCodesAvx2<Code, N> : decodeCodesBase<Code, N>)
+#else
+#define PRT_DECODE(N) decodeCodesBase<Code, N>
+#endif
+
+template <class Code>
+void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
+                 float* tile) {
+    switch (n) {
+    case 1: return PRT_DECODE(1)(model, codes, n, first, last, band, tile);
+    case 2: return PRT_DECODE(2)(model, codes, n, first, last, band, tile);
+    case 3: return PRT_DECODE(3)(model, codes, n, first, last, band, tile);
+    case 4: return PRT_DECODE(4)(model, codes, n, first, last, band, tile);
+    case 5: return PRT_DECODE(5)(model, codes, n, first, last, band, tile);
+    case 6: return PRT_DECODE(6)(model, codes, n, first, last, band, tile);
+    case 7: return PRT_DECODE(7)(model, codes, n, first, last, band, tile);
+    case 8: return PRT_DECODE(8)(model, codes, n, first, last, band, tile);
+    default: return PRT_DECODE(0)(model, codes, n, first, last, band, tile);
+    }
+}
+
+} // namespace
+
+void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out) {
+    const uint32_t* offsets = model.offsets.data();
+    const bool coded = model.storage == TransferStorage::Uint8 || model.storage == TransferStorage::Uint16;
+    size_t band = coded && model.scaleCluster.empty() ? bandStart(model, first) : 0;
+    float tile[kTileValues];
+    for (size_t v = first; v < last;) {
+        const uint32_t count = offsets[v + 1] - offsets[v];
+        size_t run = v + 1;
+        while (run < last && offsets[run + 1] - offsets[run] == count) ++run;
+        const int n = int(std::lround(std::sqrt(double(count))));
+        if (model.storage == TransferStorage::Float32) {
+            relight(model.transfer.data() + size_t(offsets[v]) * 3, run - v, int(count), lighting, out + (v - first) * 3);
+            v = run;
+            continue;
+        }
+        // Tiles of whole vertices: decode, then the float kernel on the tile.
+        const size_t perTile = std::max<size_t>(1, kTileValues / (size_t(count) * 3));
+        for (size_t t = v; t < run; t += perTile) {
+            const size_t tileEnd = std::min(run, t + perTile);
+            if (model.storage == TransferStorage::Float16) {
+                const uint16_t* halves = model.halves.data() + size_t(offsets[t]) * 3;
+                for (size_t i = 0; i < (tileEnd - t) * count * 3; ++i) tile[i] = halfValue(halves[i]);
+            } else if (model.storage == TransferStorage::Uint8) {
+                decodeCodes(model, model.codes8.data(), n, t, tileEnd, band, tile);
+            } else {
+                decodeCodes(model, model.codes16.data(), n, t, tileEnd, band, tile);
+            }
+            band += (tileEnd - t) * size_t(n);
+            relight(tile, tileEnd - t, int(count), lighting, out + (t - first) * 3);
+        }
+        v = run;
+    }
+}
+
+std::vector<float> cpcaProjections(const RelightModel& model, const float* lighting) {
+    const size_t rows = size_t(model.cpcaClusters) * (model.cpcaComponents + 1);
+    std::vector<float> projections(rows * 3);
+    relight(model.cpcaBasis.data(), rows, model.order * model.order, lighting, projections.data());
+    return projections;
+}
+
+void relightCpcaRange(const RelightModel& model, const float* projections, size_t first, size_t last, float* out) {
+    const size_t M = size_t(model.cpcaComponents);
+    for (size_t v = first; v < last; ++v) {
+        const float* p = projections + size_t(model.cpcaCluster[v]) * (M + 1) * 3;
+        const float* w = model.cpcaWeights.data() + v * M;
+        float r = p[0], g = p[1], b = p[2]; // the mean, then each direction i = 0, 1, ... in order
+        for (size_t i = 0; i < M; ++i) {
+            r += w[i] * p[(i + 1) * 3];
+            g += w[i] * p[(i + 1) * 3 + 1];
+            b += w[i] * p[(i + 1) * 3 + 2];
+        }
+        out[(v - first) * 3] = r;
+        out[(v - first) * 3 + 1] = g;
+        out[(v - first) * 3 + 2] = b;
+    }
+}
+
+std::vector<float> decodedTransfer(const RelightModel& model) {
+    const size_t dim = size_t(model.order) * model.order * 3;
+    switch (model.storage) {
+    case TransferStorage::Float32: return model.transfer;
+    case TransferStorage::Float16: {
+        std::vector<float> rows(model.halves.size());
+        for (size_t i = 0; i < rows.size(); ++i) rows[i] = halfValue(model.halves[i]);
+        return rows;
+    }
+    case TransferStorage::Uint8:
+    case TransferStorage::Uint16: {
+        std::vector<float> rows(size_t(model.offsets[model.vertexCount]) * 3);
+        size_t band = 0;
+        for (size_t v = 0; v < model.vertexCount; ++v) {
+            const int n = int(std::lround(std::sqrt(double(model.offsets[v + 1] - model.offsets[v]))));
+            float* out = rows.data() + size_t(model.offsets[v]) * 3; // decodeCodes writes vertex v at out + 0
+            if (model.storage == TransferStorage::Uint8)
+                decodeCodes(model, model.codes8.data(), n, v, v + 1, band, out);
+            else
+                decodeCodes(model, model.codes16.data(), n, v, v + 1, band, out);
+            band += size_t(n);
+        }
+        return rows;
+    }
+    case TransferStorage::Cpca: {
+        const size_t M = size_t(model.cpcaComponents);
+        std::vector<float> rows(size_t(model.vertexCount) * dim);
+        for (size_t v = 0; v < model.vertexCount; ++v) {
+            const float* block = model.cpcaBasis.data() + size_t(model.cpcaCluster[v]) * (M + 1) * dim;
+            for (size_t d = 0; d < dim; ++d) { // the same sums, in the same order, as lib/adapt's reconstruct
+                float value = block[d];
+                for (size_t i = 0; i < M; ++i) value += model.cpcaWeights[v * M + i] * block[(i + 1) * dim + d];
+                rows[v * dim + d] = value;
+            }
+        }
+        return rows;
+    }
+    }
+    return {};
+}
+
+size_t relightBytes(const RelightModel& model) {
+    auto bytes = [](const auto& array) { return array.size() * sizeof(array[0]); };
+    size_t total = bytes(model.offsets) + bytes(model.albedo) + bytes(model.bandBlockStarts);
+    switch (model.storage) {
+    case TransferStorage::Float32: return total + bytes(model.transfer);
+    case TransferStorage::Float16: return total + bytes(model.halves);
+    case TransferStorage::Uint8:
+    case TransferStorage::Uint16:
+        return total + bytes(model.codes8) + bytes(model.codes16) + bytes(model.bandScales) + bytes(model.scaleCluster);
+    case TransferStorage::Cpca:
+        return total + bytes(model.cpcaBasis) + bytes(model.cpcaWeights) + bytes(model.cpcaCluster);
+    }
+    return total;
+}
+
+} // namespace prt

@@ -1,0 +1,346 @@
+// Relighting straight from encoded transfer (u8 / u16 codes, halves, clustered PCA), the job-system hook and the
+// no-throw API. Oracles: the float kernel on the decoded rows, exact sums in double, and closed-form float rounding
+// bounds (gamma_n = n u / (1 - n u), u = 2^-24; Higham, "Accuracy and Stability of Numerical Algorithms", 3.1).
+#include "prt/nothrow.h"
+#include "prt/runtime.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <thread>
+
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace prt;
+
+namespace {
+
+double roundingGamma(double n) {
+    const double u = std::ldexp(1.0, -24);
+    return n * u / (1.0 - n * u);
+}
+
+std::vector<float> randomLighting(int order, uint32_t seed) {
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<float> uniform(-2.0f, 2.0f);
+    std::vector<float> lighting(size_t(order) * order * 3);
+    for (float& value : lighting) value = uniform(random);
+    return lighting;
+}
+
+// A bundle of V vertices (positions only; relightModel needs the count) and no layers.
+Bundle vertexBundle(size_t V) {
+    Bundle bundle;
+    bundle.mesh.positions.assign(V * 3, 0.0f);
+    bundle.mesh.indices = {0, 1, 2};
+    return bundle;
+}
+
+Layer layer(const std::string& name, const std::string& domain, const std::string& semantic,
+            std::vector<uint64_t> shape, const std::string& type) {
+    Layer out;
+    out.name = name;
+    out.domain = domain;
+    out.semantic = semantic;
+    out.shape = std::move(shape);
+    out.componentType = type;
+    return out;
+}
+
+// Ragged orders 1..order (vertex v has 1 + (v * 7) % order bands) as `prt adapt` stores them, quantised to `bits`
+// with per-vertex or per-cluster half scales. `original` receives the float rows the codes stand for.
+struct Quantised {
+    Bundle bundle;
+    std::vector<float> original;          // [offsets[V]][3]
+    std::vector<double> scaleOfValue;     // s of each value's band, [offsets[V] * 3]
+    std::vector<uint32_t> offsets;
+};
+
+Quantised quantisedBundle(size_t V, int order, int bits, bool perCluster, uint32_t seed) {
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    const uint32_t C = (1u << (bits - 1)) - 1, K = 3;
+    Quantised q;
+    q.bundle = vertexBundle(V);
+    q.offsets.push_back(0);
+    std::vector<int> bands(V);
+    for (size_t v = 0; v < V; ++v) {
+        bands[v] = 1 + int((v * 7) % order);
+        q.offsets.push_back(q.offsets.back() + uint32_t(bands[v] * bands[v]));
+    }
+    // Scales: exact halves in [0.25, 4), per (vertex, band) or per (cluster, band).
+    auto halfScale = [&] { return halfToFloat(floatToHalf(std::ldexp(1.0f + 0.5f * (unit(random) + 1.0f), int(random() % 4) - 2))); };
+    std::vector<float> scales;
+    std::vector<uint32_t> clusterOf(V);
+    if (perCluster) {
+        for (uint32_t i = 0; i < K * order; ++i) scales.push_back(halfScale());
+        for (size_t v = 0; v < V; ++v) clusterOf[v] = uint32_t(random() % K);
+    } else {
+        for (size_t v = 0; v < V; ++v)
+            for (int l = 0; l < bands[v]; ++l) scales.push_back(halfScale());
+    }
+    Layer data = layer("transfer_ragged", "vertex_ragged", "sh_transfer_rgb_quantised", {q.offsets[V], 3},
+                       bits == 8 ? "uint8" : "uint16");
+    size_t band = 0;
+    for (size_t v = 0; v < V; ++v) {
+        for (int l = 0; l < bands[v]; ++l) {
+            const double s = perCluster ? scales[clusterOf[v] * order + l] : scales[band + l];
+            for (size_t i = (q.offsets[v] + size_t(l) * l) * 3; i < (q.offsets[v] + size_t(l + 1) * (l + 1)) * 3; ++i) {
+                const float t = float(s) * unit(random); // |t| <= s, so the code is in 0 .. 2C
+                const uint32_t code = uint32_t(std::lround(double(t) * C / s) + C);
+                q.original.push_back(t);
+                q.scaleOfValue.push_back(s);
+                data.integers.push_back(code);
+            }
+        }
+        band += bands[v];
+    }
+    data.params = {{"order", order}, {"offsets", "transfer_offsets"}, {"format", bits == 8 ? "u8" : "u16"},
+                   {"bits", bits}, {"scale_layer", "transfer_band_scales"}};
+    Layer offsets = layer("transfer_offsets", "vertex_offsets", "sh_coefficient_offsets", {V + 1}, "uint32");
+    offsets.integers = q.offsets;
+    Layer scaleLayer = perCluster ? layer("transfer_band_scales", "cluster", "sh_band_scales", {K, uint64_t(order)}, "float16")
+                                  : layer("transfer_band_scales", "vertex_bands", "sh_band_scales", {scales.size()}, "float16");
+    scaleLayer.data = scales;
+    q.bundle.layers = {data, offsets, scaleLayer};
+    if (perCluster) {
+        q.bundle.layers[0].params["cluster_layer"] = "transfer_scale_cluster";
+        Layer cluster = layer("transfer_scale_cluster", "vertex", "cluster_index", {V}, "uint16");
+        cluster.integers = clusterOf;
+        q.bundle.layers.push_back(cluster);
+    }
+    return q;
+}
+
+std::vector<float> relightAll(const RelightModel& model, const float* lighting, const JobSystem& jobs = {}) {
+    std::vector<float> radiance(size_t(model.vertexCount) * 3);
+    relight(model, lighting, 0, model.vertexCount, radiance.data(), jobs);
+    return radiance;
+}
+
+bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+} // namespace
+
+TEST(EncodedRelight, CodesRelightLikeTheirDecodeAndWithinTheQuantisationBound) {
+    const int order = 5;
+    const size_t V = 9001; // more than two relight blocks, so band scales cross block starts
+    for (int bits : {8, 16})
+        for (bool perCluster : {false, true}) {
+            SCOPED_TRACE(std::to_string(bits) + " bits, " + (perCluster ? "per-cluster" : "per-vertex") + " scales");
+            Quantised q = quantisedBundle(V, order, bits, perCluster, 17 + bits + perCluster);
+            RelightModel model = relightModel(q.bundle, "q.glb");
+            ASSERT_EQ(model.storage, bits == 8 ? TransferStorage::Uint8 : TransferStorage::Uint16);
+            ASSERT_TRUE(model.transfer.empty()) << "codes stay codes";
+            EXPECT_EQ(relightBytes(model) < q.original.size() * sizeof(float) * (bits == 8 ? 0.5 : 0.75), true);
+            std::vector<float> lighting = randomLighting(order, 3);
+            std::vector<float> radiance = relightAll(model, lighting.data());
+
+            // 1. Bit for bit the float kernel on the decoded rows: the tile decode reads the codes directly.
+            std::vector<float> decoded = decodedTransfer(model);
+            ASSERT_EQ(decoded.size(), q.original.size());
+            std::vector<float> viaDecode(V * 3), viaOriginal(V * 3);
+            for (size_t v = 0; v < V; ++v) {
+                const int count = int(q.offsets[v + 1] - q.offsets[v]);
+                relight(decoded.data() + size_t(q.offsets[v]) * 3, 1, count, lighting.data(), &viaDecode[v * 3]);
+                relight(q.original.data() + size_t(q.offsets[v]) * 3, 1, count, lighting.data(), &viaOriginal[v * 3]);
+            }
+            EXPECT_TRUE(sameBits(radiance, viaDecode));
+
+            // 2. Within the analytic bound of the float relight of the values the codes stand for: per value
+            // |t - x| <= s / 2C (x = (q - C) s / C, exact; the test's rounding in double adds at most 2^-50
+            // relatively), |decoded - x| <= gamma_2 |x| (s / C and the product rounded), and each float dot product
+            // of n terms within gamma_n sum |a_j b_j| of its exact value.
+            const double C = (1u << (bits - 1)) - 1;
+            size_t failures = 0;
+            for (size_t v = 0; v < V; ++v) {
+                const size_t n = q.offsets[v + 1] - q.offsets[v];
+                for (int c = 0; c < 3; ++c) {
+                    double dotDecoded = 0, dotOriginal = 0, quantisation = 0;
+                    for (size_t j = 0; j < n; ++j) {
+                        const size_t i = (q.offsets[v] + j) * 3 + c;
+                        const double L = std::fabs(lighting[j * 3 + c]), s = q.scaleOfValue[i];
+                        const double x = std::round(double(q.original[i]) * C / s) * s / C;
+                        dotDecoded += std::fabs(decoded[i]) * L;
+                        dotOriginal += std::fabs(q.original[i]) * L;
+                        quantisation += L * (s / (2 * C) * (1 + std::ldexp(1.0, -50)) + roundingGamma(2) * std::fabs(x));
+                    }
+                    const double bound = roundingGamma(double(n)) * (dotDecoded + dotOriginal) + quantisation;
+                    if (std::fabs(double(radiance[v * 3 + c]) - viaOriginal[v * 3 + c]) > bound) ++failures;
+                }
+            }
+            EXPECT_EQ(failures, 0u);
+        }
+}
+
+TEST(EncodedRelight, HalfRowsRelightBitForBitLikeTheirFloats) {
+    Quantised shape = quantisedBundle(5000, 4, 8, false, 5); // only its offsets
+    Bundle bundle = vertexBundle(5000);
+    std::mt19937 random(9);
+    Layer data = layer("transfer_ragged", "vertex_ragged", "sh_transfer_rgb", {shape.offsets.back(), 3}, "float16");
+    for (size_t i = 0; i < size_t(shape.offsets.back()) * 3; ++i) // every half pattern but infinities and NaNs
+        data.data.push_back(halfToFloat(uint16_t(random() % 0x10000u & 0xfbffu)));
+    data.data[0] = halfToFloat(0x0001); // the smallest subnormal
+    data.data[1] = halfToFloat(0x83ff); // a negative subnormal
+    data.params = {{"order", 4}, {"offsets", "transfer_offsets"}, {"format", "half"}};
+    bundle.layers = {data, shape.bundle.layers[1]};
+    RelightModel model = relightModel(bundle, "h.glb");
+    ASSERT_EQ(model.storage, TransferStorage::Float16);
+    EXPECT_TRUE(sameBits(decodedTransfer(model), data.data)) << "halves widen exactly";
+    RelightModel floats = model;
+    floats.storage = TransferStorage::Float32;
+    floats.transfer = data.data;
+    floats.halves.clear();
+    std::vector<float> lighting = randomLighting(4, 2);
+    EXPECT_TRUE(sameBits(relightAll(model, lighting.data()), relightAll(floats, lighting.data())));
+}
+
+namespace {
+
+Bundle cpcaBundle(size_t V, int order, uint64_t K, uint64_t M, uint32_t seed) {
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    const uint64_t dim = uint64_t(order) * order * 3;
+    Bundle bundle = vertexBundle(V);
+    Layer basis = layer("transfer_cpca_basis", "cluster", "cpca_mean_basis", {K, M + 1, uint64_t(order) * order, 3}, "float32");
+    for (uint64_t i = 0; i < K * (M + 1) * dim; ++i) basis.data.push_back(unit(random));
+    basis.params = {{"order", order}, {"weights_layer", "transfer_cpca_weights"}, {"cluster_layer", "transfer_cpca_cluster"}};
+    Layer weights = layer("transfer_cpca_weights", "vertex", "cpca_weights", {V, M}, "float32");
+    for (uint64_t i = 0; i < V * M; ++i) weights.data.push_back(unit(random));
+    Layer cluster = layer("transfer_cpca_cluster", "vertex", "cluster_index", {V}, "uint16");
+    for (size_t v = 0; v < V; ++v) cluster.integers.push_back(uint32_t(random() % K));
+    bundle.layers = {basis, weights, cluster};
+    return bundle;
+}
+
+} // namespace
+
+TEST(EncodedRelight, CpcaRelightsInItsBasisWithinRoundingOfItsReconstruction) {
+    const int order = 5;
+    const size_t V = 5000, K = 4, M = 6;
+    Bundle bundle = cpcaBundle(V, order, K, M, 21);
+    RelightModel model = relightModel(bundle, "cpca.glb");
+    ASSERT_EQ(model.storage, TransferStorage::Cpca);
+    EXPECT_LT(relightBytes(model), V * order * order * 3 * sizeof(float) / 2);
+    std::vector<float> lighting = randomLighting(order, 4);
+    std::vector<float> radiance = relightAll(model, lighting.data());
+    std::vector<float> decoded = decodedTransfer(model), viaDecode(V * 3);
+    relight(decoded.data(), V, order * order, lighting.data(), viaDecode.data());
+    // Both agree with the exact sum_j L_j (mean_j + sum_i w_i b_ij) within gamma_{n + M + 1} S, S = sum_j |L_j|
+    // (|mean_j| + sum_i |w_i b_ij|), n = L^2: the projections are n-term dot products, the weighted sum M + 1
+    // terms, and the reconstruction M + 1 terms then an n-term dot product. So they differ by at most twice that.
+    const std::vector<float>& b = bundle.layers[0].data;
+    const std::vector<float>& w = bundle.layers[1].data;
+    const std::vector<uint32_t>& k = bundle.layers[2].integers;
+    const size_t n = size_t(order) * order, dim = n * 3;
+    size_t failures = 0;
+    for (size_t v = 0; v < V; ++v)
+        for (int c = 0; c < 3; ++c) {
+            double S = 0;
+            for (size_t j = 0; j < n; ++j) {
+                const float* block = b.data() + k[v] * (M + 1) * dim;
+                double row = std::fabs(block[j * 3 + c]);
+                for (size_t i = 0; i < M; ++i) row += std::fabs(w[v * M + i] * block[(i + 1) * dim + j * 3 + c]);
+                S += std::fabs(lighting[j * 3 + c]) * row;
+            }
+            if (std::fabs(double(radiance[v * 3 + c]) - viaDecode[v * 3 + c]) > 2 * roundingGamma(double(n + M + 1)) * S) ++failures;
+        }
+    EXPECT_EQ(failures, 0u);
+}
+
+namespace {
+
+// A job system that runs the tasks backwards, spread over three std::threads: as unlike the serial order as it gets.
+void scrambledParallelFor(void* context, size_t count, TaskFunction task, void* data) {
+    ++*static_cast<size_t*>(context);
+    std::vector<std::thread> threads;
+    for (size_t t = 0; t < 3; ++t)
+        threads.emplace_back([=] {
+            for (size_t i = count; i-- > 0;)
+                if (i % 3 == t) task(data, i);
+        });
+    for (std::thread& thread : threads) thread.join();
+}
+
+} // namespace
+
+TEST(EncodedRelight, JobHookGivesTheSerialResultBitForBit) {
+    size_t calls = 0;
+    JobSystem jobs{scrambledParallelFor, &calls};
+    std::vector<float> lighting = randomLighting(5, 8);
+    RelightModel floats;
+    floats.vertexCount = 20000;
+    floats.order = 5;
+    floats.transfer.resize(size_t(20000) * 75);
+    std::mt19937 random(1);
+    for (float& value : floats.transfer) value = std::uniform_real_distribution<float>(-1, 1)(random);
+    floats.albedo.assign(size_t(20000) * 3, 0.75f);
+    std::vector<RelightModel> models;
+    models.push_back(floats);
+    models.push_back(relightModel(quantisedBundle(20000, 5, 8, false, 3).bundle, "q"));
+    models.push_back(relightModel(cpcaBundle(20000, 5, 3, 4, 2), "c"));
+    for (const RelightModel& model : models) {
+        // A range that starts and ends inside blocks.
+        const size_t begin = 1234, end = 19000;
+        std::vector<float> serial((end - begin) * 3), hooked((end - begin) * 3);
+        relight(model, lighting.data(), begin, end, serial.data());
+        relight(model, lighting.data(), begin, end, hooked.data(), jobs);
+        EXPECT_TRUE(sameBits(serial, hooked)) << int(model.storage);
+        // And each part of it is the same rows of the whole.
+        std::vector<float> whole = relightAll(model, lighting.data());
+        EXPECT_EQ(std::memcmp(serial.data(), whole.data() + begin * 3, serial.size() * sizeof(float)), 0);
+    }
+    EXPECT_EQ(calls, models.size());
+}
+
+TEST(NoThrow, StatusForMissingCorruptAndGoodFilesAndBadRanges) {
+    fs::path dir = fs::temp_directory_path() / ("prt_nothrow_test_" + std::to_string(getpid()));
+    fs::create_directories(dir);
+    Bundle bundle = vertexBundle(3);
+    bundle.mesh.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    Layer transfer = layer("transfer", "vertex", "sh_transfer_rgb", {3, 1, 3}, "float32");
+    transfer.data = {1, 1, 1, 2, 2, 2, 3, 3, 3};
+    transfer.params = {{"order", 1}};
+    bundle.layers.push_back(transfer);
+    const std::string good = (dir / "good.glb").string(), bad = (dir / "bad.glb").string();
+    writeBundle(good, bundle);
+
+    Expected<RelightModel> missing = tryLoadRelightModel((dir / "absent.glb").string());
+    EXPECT_EQ(missing.status().code, StatusCode::NotFound);
+    EXPECT_NE(missing.status().message.find("absent.glb"), std::string::npos);
+
+    // The same file with one byte of its binary chunk flipped: the checksum refuses it.
+    std::string bytes;
+    {
+        std::ifstream in(good, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    bytes[bytes.size() - 5] ^= 0x40;
+    std::ofstream(bad, std::ios::binary) << bytes;
+    Expected<RelightModel> corrupt = tryLoadRelightModel(bad);
+    EXPECT_EQ(corrupt.status().code, StatusCode::Corrupt) << corrupt.status().message;
+    EXPECT_NE(corrupt.status().message.find("bad.glb"), std::string::npos);
+    std::ofstream(bad, std::ios::binary) << bytes.substr(0, bytes.size() / 2); // truncated
+    EXPECT_EQ(tryLoadRelightModel(bad).status().code, StatusCode::Corrupt);
+
+    Expected<RelightModel> loaded = tryLoadRelightModel(good);
+    ASSERT_TRUE(loaded.ok()) << loaded.status().message;
+    const float lighting[3] = {1, 2, 3};
+    float radiance[9];
+    EXPECT_TRUE(tryRelight(loaded.value(), lighting, 0, 3, radiance).ok());
+    EXPECT_EQ(radiance[8], 9.0f);
+    EXPECT_EQ(tryRelight(loaded.value(), lighting, 2, 4, radiance).code, StatusCode::InvalidInput);
+    EXPECT_EQ(tryRelight(loaded.value(), nullptr, 0, 3, radiance).code, StatusCode::InvalidInput);
+    int order = 0;
+    EXPECT_EQ(tryReadLightingJson(good, &order).status().code, StatusCode::Corrupt);
+    EXPECT_STREQ(statusName(StatusCode::Corrupt), "corrupt");
+    fs::remove_all(dir);
+}
