@@ -10,7 +10,9 @@ namespace prt {
 
 // Per-texel transfer ready to relight: the "texel_transfer" layer of a bundle and the coefficient texture it
 // references. Rows are texels, row-major with row 0 at the top of the atlas (docs/bundle.md, "Texel layers"), so
-// the per-vertex kernel relights them unchanged.
+// the per-vertex kernel relights them unchanged. A scene's bake (docs/bundle.md "Scene bakes") holds irradiance
+// transfer: rows.albedoExcluded is set and rows.albedo left empty, so its texels relight to E / pi, what a white
+// surface reflects, which an engine multiplies by its base colour per pixel (the layer "lightmap_uv" addresses them).
 struct TexelRelightModel {
     int width = 0, height = 0;
     RelightModel rows; // rows.vertexCount = width * height texels
