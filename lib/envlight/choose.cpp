@@ -1,6 +1,7 @@
 // K per map from the decomposition's own error: the lighting error each configuration leaves (what K cones and an
-// order-L residual do not say, against what plain order-P SH does not say), weighted per SH band by a diffuse
-// transfer's falling spectrum, and the smallest-error K; plain SH when no K beats it.
+// order-L residual do not say, against what plain order-P SH does not say), per SH band up to order 32, weighted by
+// a Gaussian band window standing for a shadowed diffuse transfer's spectrum; the smallest-error K, or plain SH
+// when no K beats it.
 #include "envlight.h"
 
 #include "core.h"
@@ -14,16 +15,19 @@ namespace {
 
 double luminanceOf(const double* rgb) { return kLuminance[0] * rgb[0] + kLuminance[1] * rgb[1] + kLuminance[2] * rgb[2]; }
 
-// Band-weighted energy of luminance SH coefficients `e` ([order^2]) over bands from..order-1, plus `tail` (the
-// energy above the last band) at the last band's weight + 1.
-double weightedEnergy(const std::vector<double>& e, int from, int order, double tail, double exponent) {
+// Energy per SH band of luminance coefficients `e` ([order^2]), bands from..order-1 (0 below from).
+std::vector<double> bandEnergies(const std::vector<double>& e, int from, int order) {
+    std::vector<double> bands(size_t(order), 0.0);
+    for (int l = from; l < order; ++l)
+        for (int j = l * l; j < (l + 1) * (l + 1); ++j) bands[size_t(l)] += e[j] * e[j];
+    return bands;
+}
+
+// sqrt(sum_l exp(-(l / width)^2) bands[l] / energy).
+double weightedError(const std::vector<double>& bands, double width, double energy) {
     double sum = 0.0;
-    for (int l = from; l < order; ++l) {
-        double band = 0.0;
-        for (int j = l * l; j < (l + 1) * (l + 1); ++j) band += e[j] * e[j];
-        sum += band * std::pow(1.0 + l, -exponent);
-    }
-    return sum + std::max(0.0, tail) * std::pow(1.0 + order, -exponent);
+    for (size_t l = 0; l < bands.size(); ++l) sum += std::exp(-(double(l) / width) * (double(l) / width)) * bands[l];
+    return std::sqrt(sum / energy);
 }
 
 } // namespace
@@ -43,47 +47,25 @@ Decomposition decomposeChoosingLights(const EnvironmentMap& env, const Options& 
     Texels texels = environmentTexels(env, options.rotation);
     std::vector<double> rgbProjection = projectTexels(texels, M), projection(size_t(M) * M);
     for (size_t j = 0; j < projection.size(); ++j) projection[j] = luminanceOf(&rgbProjection[j * 3]);
-    std::vector<double> remainder(texels.count()); // luminance of E minus the lights so far
     double energy = 0.0;
     for (size_t i = 0; i < texels.count(); ++i) {
         double rgb[3] = {texels.rgb[i * 3], texels.rgb[i * 3 + 1], texels.rgb[i * 3 + 2]};
-        remainder[i] = luminanceOf(rgb);
-        energy += remainder[i] * remainder[i] * texels.solidAngles[i];
+        energy += luminanceOf(rgb) * luminanceOf(rgb) * texels.solidAngles[i];
     }
-    auto projectedEnergy = [&](const std::vector<double>& e) {
-        double s = 0.0;
-        for (double v : e) s += v * v;
-        return s;
-    };
-    // Plain SH at plainOrder: the bands from plainOrder up, and everything above M.
-    result.plainError = std::sqrt(weightedEnergy(projection, choice.plainOrder, M, energy - projectedEnergy(projection),
-                                                 choice.spectrumExponent) / energy);
-
+    // Plain SH at plainOrder leaves the bands from plainOrder up.
+    result.plainBands = bandEnergies(projection, choice.plainOrder, M);
+    result.plainError = weightedError(result.plainBands, choice.bandWidth, energy);
     // Hybrid with the first k lights (by power): e = P(E) - P(lights), its bands from the residual's order up.
-    std::vector<double> e = projection, basis(size_t(M) * M);
+    std::vector<double> e = projection, cap(size_t(M) * M);
     for (size_t k = 0; k <= full.lights.size(); ++k) {
         if (k > 0) {
             const ConeLight& light = full.lights[k - 1];
-            double lum = luminanceOf(light.radiance.data()), cosRadius = std::cos(light.angularRadius);
-            std::vector<double> cap(basis.size());
-            sh::capProjection(M, light.direction.data(), cosRadius, cap.data());
+            sh::capProjection(M, light.direction.data(), std::cos(light.angularRadius), cap.data());
+            double lum = luminanceOf(light.radiance.data());
             for (size_t j = 0; j < e.size(); ++j) e[j] -= lum * cap[j];
-            // The cone's coverage of each texel, by 4x4 points would be exact; a texel-centre test with the
-            // texel's own size as edge is within a texel of it, which is what the weights below can see.
-            for (size_t i = 0; i < texels.count(); ++i) {
-                const double* w = &texels.directions[i * 3];
-                double c = w[0] * light.direction[0] + w[1] * light.direction[1] + w[2] * light.direction[2];
-                double halfTexel = 0.5 * std::sqrt(texels.solidAngles[i]);
-                double angle = std::acos(std::clamp(c, -1.0, 1.0));
-                if (angle > light.angularRadius + halfTexel) continue;
-                double coverage = std::clamp((light.angularRadius + halfTexel - angle) / (2.0 * halfTexel), 0.0, 1.0);
-                remainder[i] -= lum * coverage;
-            }
         }
-        double rest = 0.0;
-        for (size_t i = 0; i < texels.count(); ++i) rest += remainder[i] * remainder[i] * texels.solidAngles[i];
-        result.errors.push_back(
-            std::sqrt(weightedEnergy(e, options.order, M, rest - projectedEnergy(e), choice.spectrumExponent) / energy));
+        result.bands.push_back(bandEnergies(e, options.order, M));
+        result.errors.push_back(weightedError(result.bands.back(), choice.bandWidth, energy));
     }
     size_t best = 0;
     for (size_t k = 1; k < result.errors.size(); ++k)

@@ -205,8 +205,8 @@ Decomposition decomposeCoherent(const EnvironmentMap& env, const Options& option
 // ---- choosing K -----------------------------------------------------------------------------------------------
 struct ChoiceOptions {
     int plainOrder = 8;            // the plain SH the hybrid has to beat
-    int errorOrder = 16;           // the error is measured band by band below this order, as one tail above it
-    double spectrumExponent = 3.0; // band l weighs (1 + l)^-exponent: a shadowed diffuse transfer's spectrum
+    int errorOrder = 32;           // the error is measured band by band below this order
+    double bandWidth = 5.0;        // band l weighs exp(-(l / bandWidth)^2): the transfer's falling spectrum
     double margin = 0.9;           // lights pay when the hybrid's error is below margin * plain SH's
 };
 struct LightChoice {
@@ -214,15 +214,18 @@ struct LightChoice {
     bool plainSh = false;          // lights do not pay: relight with plain SH at plainOrder instead
     std::vector<double> errors;    // the hybrid's error with the first k lights, k = 0 .. lights found
     double plainError = 0.0;       // plain SH's error at plainOrder
+    std::vector<std::vector<double>> bands; // per k: the hybrid's unweighted error energy per band
+    std::vector<double> plainBands;         // plain SH's
     std::string reason;            // one line for the log and the document
 };
 // K per map, from the decomposition's own error. Decomposes with up to options.maxLights lights (the elbow's
-// count); for each prefix of k lights (by power), the lighting error e = E - lights - residual is measured as
-// sqrt(sum_l (1 + l)^-p |e_l|^2 / |E|^2) over SH bands l (the residual removes bands below options.order; band
-// energies up to errorOrder, the rest of |e|^2 at the last weight), and plain SH's the same way over bands from
-// plainOrder. Picks the k of least error; when that is 0, or not below margin * plain's, lights do not pay: 0
-// lights, plainSh. Returns the decomposition with the chosen K (refitted when it differs from the count found) and
-// the choice in *report. Needs what decompose() needs, and errorOrder above both orders.
+// count); for each prefix of k lights (by power), the lighting error e = E - lights - residual is measured by its
+// SH band energies |e_l|^2 (exact: the map's projection minus the cones' cap projections, bands from options.order
+// up, below errorOrder) as sqrt(sum_l exp(-(l / bandWidth)^2) |e_l|^2 / |E|^2), and plain SH's the same way over
+// bands from plainOrder; bands from errorOrder up are left out (weight below exp(-16) at the defaults). Picks the
+// k of least error; when that is 0, or not below margin * plain's, lights do not pay: 0 lights, plainSh. Returns
+// the decomposition with the chosen K (refitted when it differs from the count found) and the choice in *report.
+// Needs what decompose() needs, and errorOrder above both orders and <= sh::kMaxOrder.
 Decomposition decomposeChoosingLights(const EnvironmentMap& env, const Options& options, const ChoiceOptions& choice,
                                       LightChoice* report);
 
