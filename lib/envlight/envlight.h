@@ -207,7 +207,7 @@ struct ChoiceOptions {
     int plainOrder = 8;            // the plain SH the hybrid has to beat
     int errorOrder = 32;           // the error is measured band by band below this order
     double bandWidth = 5.0;        // band l weighs exp(-(l / bandWidth)^2): the transfer's falling spectrum
-    double margin = 0.9;           // lights pay when the hybrid's error is below margin * plain SH's
+    double margin = 0.95;          // lights pay when the hybrid's error is below margin * plain SH's
 };
 struct LightChoice {
     int lights = 0;                // K chosen (0 with plainSh)
