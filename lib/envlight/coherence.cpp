@@ -77,12 +77,20 @@ Decomposition decomposeCoherent(const EnvironmentMap& env, const Options& option
             next.weights.push_back(weight);
         }
     }
-    // Unmatched lights of the enter set take free slots, strongest first; on the first frame at full weight.
-    for (size_t k = 0; k < enter && next.lights.size() < size_t(options.maxLights); ++k)
-        if (!lightMatched[k]) {
+    // Unmatched lights of the enter set take free slots, strongest first, once they were in the enter set the
+    // frame before too (pending; on the first frame at once, at full weight). The others wait as pending.
+    for (size_t k = 0; k < enter; ++k) {
+        if (lightMatched[k]) continue;
+        bool waited = !state.started;
+        for (const auto& p : state.pending)
+            if (angleBetween(p, frame.lights[k].direction) <= coherence.matchRadius) waited = true;
+        if (waited && next.lights.size() < size_t(options.maxLights)) {
             next.lights.push_back(frame.lights[k]);
             next.weights.push_back(state.started ? step : 1.0);
+        } else {
+            next.pending.push_back(frame.lights[k].direction);
         }
+    }
     next.started = true;
 
     // The lights as emitted: each slot's light at its weight. The residual is the map's projection minus exactly

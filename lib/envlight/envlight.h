@@ -182,6 +182,7 @@ struct CoherenceState {
     std::vector<ConeLight> lights; // at full radiance, in slot order
     std::vector<double> weights;   // fade weight per slot, in (0, 1]
     bool started = false;          // false before the first frame: lights then enter at full weight
+    std::vector<std::array<double, 3>> pending; // enter-set lights of the last frame that took no slot
 };
 struct CoherenceOptions {
     double keepFraction = 0.5;     // a held light stays while it passes the elbow at threshold * keepFraction
@@ -193,8 +194,9 @@ struct CoherenceOptions {
 // spareLights lights at the lower (keeping) threshold; slots are matched to those lights by direction, closest
 // pairs first; a matched slot follows its light and its weight rises by 1/fadeFrames to 1, an unmatched slot
 // keeps its last light and its weight falls by 1/fadeFrames, and is freed at 0 (the other slots keep their order);
-// a light of the enter set (the lead lights the strict elbow and K keep) that no slot holds takes a free slot,
-// at weight 1/fadeFrames (1 on the first frame). Returns the lights in slot order (not sorted by power), each at
+// a light of the enter set (the lead lights the strict elbow and K keep) that no slot holds takes a free slot
+// when it was in the enter set the frame before too (within matchRadius of a pending direction), at weight
+// 1/fadeFrames (1 on the first frame), so a one-frame candidate never blips in. Returns the lights in slot order (not sorted by power), each at
 // its weight (Decomposition::weights), never more than options.maxLights, and the residual = the map's projection
 // minus exactly these lights, so light + residual is the map's projection at every frame (energy conserved, to
 // rounding), and a fading light's remainder is carried by the residual. Same needs and throws as decompose(), and
