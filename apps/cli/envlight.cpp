@@ -28,6 +28,8 @@ struct EnvlightArgs {
     std::string detectionWindow = "hann";
     bool thesisLights = false;
     double fixedRadiusDegrees = 3.0;
+    bool chooseLights = false;
+    int plainOrder = 8;
 };
 
 void runEnvlight(const EnvlightArgs& args) {
@@ -60,14 +62,30 @@ void runEnvlight(const EnvlightArgs& args) {
             std::to_string(env.radiance.height) + "), order " + std::to_string(args.order) + ", at most " +
             std::to_string(args.maxLights) + " lights");
     envlight::Decomposition decomposition;
+    envlight::LightChoice choice;
+    envlight::ChoiceOptions choiceOptions;
+    choiceOptions.plainOrder = args.plainOrder;
     try {
-        decomposition = envlight::decompose(env, options);
+        decomposition = args.chooseLights ? envlight::decomposeChoosingLights(env, options, choiceOptions, &choice)
+                                          : envlight::decompose(env, options);
     } catch (const Error& e) {
         if (!e.file().empty() || e.exitCode() != kExitInput) throw;
         throw Error(args.input, e.place(), e.problem(), e.exitCode());
     }
     nlohmann::ordered_json document = envlight::lightsDocument(decomposition, options, args.input, hashFile(args.input));
     document["rotate_y_degrees"] = args.rotateYDegrees;
+    if (args.chooseLights) {
+        document["choice"] = {{"lights", choice.lights},
+                              {"plain_sh", choice.plainSh},
+                              {"plain_order", args.plainOrder},
+                              {"errors", choice.errors},
+                              {"plain_error", choice.plainError},
+                              {"band_width", choiceOptions.bandWidth},
+                              {"bands", choice.bands},
+                              {"plain_bands", choice.plainBands},
+                              {"reason", choice.reason}};
+        logInfo("envlight: " + choice.reason);
+    }
     writeBytesAtomic(args.output, document.dump(2) + "\n");
     for (const envlight::ConeLight& light : decomposition.lights) {
         char line[200];
@@ -108,6 +126,10 @@ void addEnvlightCommand(CLI::App& app) {
     command->add_flag("--thesis-lights", args->thesisLights,
                       "The thesis's lights instead of the bounded fit: fixed radius, peak residual radiance");
     command->add_option("--fixed-radius", args->fixedRadiusDegrees, "Cone half-angle of --thesis-lights, degrees (default 3)");
+    command->add_flag("--choose-lights", args->chooseLights,
+                      "Choose K per map (at most --max-lights; up to 16 is sensible) from the decomposition's own "
+                      "band-weighted error; 0 lights and a 'plain SH' verdict when no K beats plain SH at --plain-order");
+    command->add_option("--plain-order", args->plainOrder, "The plain SH order --choose-lights compares with (default 8)");
     command->callback([args] { runEnvlight(*args); });
 }
 

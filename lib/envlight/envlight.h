@@ -9,6 +9,9 @@
 //   elbow.cpp      the Weber-law elbow threshold on the sorted candidates
 //   fit.cpp        bounded Ceres refinement of each light's direction, radiance and angular radius
 //   decompose.cpp  the whole chain, and the residual SH: the projection of what the lights do not explain
+//   coherence.cpp  the chain frame after frame: hysteresis on K and the elbow, lights matched into stable slots,
+//                  entering and leaving lights cross-faded through the residual
+//   choose.cpp     K per map from the decomposition's own (band-weighted) error, or plain SH when lights do not pay
 //   document.cpp   the prt-lights JSON document
 //   render.cpp     the decomposed lighting back as an equirectangular map (for `prt reference --lights`)
 //   visibility.cpp each light's soft (cone-sampled) visibility at surface points, by Embree rays (lib/raycast):
@@ -158,6 +161,10 @@ struct Decomposition {
     double meanLuminance = 0.0;          // of the map
     double environmentPower = 0.0;       // luminance integral of E over the sphere
     FitReport fit;
+    // Set by decomposeCoherent only: each light's fade weight in (0, 1] (its radiance is already scaled by it),
+    // and the map's projection [order^2][3], which residual + lightsProjection(lights) equals to rounding.
+    std::vector<double> weights;
+    std::vector<double> projection;
 };
 
 // Splits the environment into cone lights and an SH residual.
@@ -168,6 +175,61 @@ struct Decomposition {
 // residual energy plus lights' energy equals the map's (sqrt(4 pi) residual_00 + sum radiance * solid angle =
 // integral of E, per channel, to rounding); deterministic (same input, same bits; single-threaded Ceres).
 Decomposition decompose(const EnvironmentMap& env, const Options& options);
+
+// ---- temporal coherence --------------------------------------------------------------------------------------
+// The previous frame's lights, in slots: a flat state the caller keeps between frames (start from {}).
+struct CoherenceState {
+    std::vector<ConeLight> lights; // at full radiance, in slot order
+    std::vector<double> weights;   // fade weight per slot, in (0, 1]
+    bool started = false;          // false before the first frame: lights then enter at full weight
+    std::vector<std::array<double, 3>> pending; // enter-set lights of the last frame that took no slot
+};
+struct CoherenceOptions {
+    double keepFraction = 0.5;     // a held light stays while it passes the elbow at threshold * keepFraction
+    int spareLights = 2;           // ... and ranks within K + spareLights; a new light enters within K, threshold
+    int fadeFrames = 8;            // an entering or leaving light crosses over in this many frames
+    double matchRadius = 0.1745;   // 10 degrees: a slot follows this frame's nearest light within this angle
+};
+// decompose() frame after frame, coherent with `state` (updated in place). Each frame decomposes with K +
+// spareLights lights at the lower (keeping) threshold; slots are matched to those lights by direction, closest
+// pairs first; a matched slot follows its light and its weight rises by 1/fadeFrames to 1, an unmatched slot
+// keeps its last light and its weight falls by 1/fadeFrames, and is freed at 0 (the other slots keep their order);
+// a light of the enter set (the lead lights the strict elbow and K keep) that no slot holds takes a free slot
+// when it was in the enter set the frame before too (within matchRadius of a pending direction), at weight
+// 1/fadeFrames (1 on the first frame), so a one-frame candidate never blips in. Returns the lights in slot order (not sorted by power), each at
+// its weight (Decomposition::weights), never more than options.maxLights, and the residual = the map's projection
+// minus exactly these lights, so light + residual is the map's projection at every frame (energy conserved, to
+// rounding), and a fading light's remainder is carried by the residual. Same needs and throws as decompose(), and
+// kExitUsage for options out of range or a state that does not fit K. Deterministic.
+Decomposition decomposeCoherent(const EnvironmentMap& env, const Options& options, const CoherenceOptions& coherence,
+                                CoherenceState& state);
+
+// ---- choosing K -----------------------------------------------------------------------------------------------
+struct ChoiceOptions {
+    int plainOrder = 8;            // the plain SH the hybrid has to beat
+    int errorOrder = 32;           // the error is measured band by band below this order
+    double bandWidth = 5.0;        // band l weighs exp(-(l / bandWidth)^2): the transfer's falling spectrum
+    double margin = 0.95;          // lights pay when the hybrid's error is below margin * plain SH's
+};
+struct LightChoice {
+    int lights = 0;                // K chosen (0 with plainSh)
+    bool plainSh = false;          // lights do not pay: relight with plain SH at plainOrder instead
+    std::vector<double> errors;    // the hybrid's error with the first k lights, k = 0 .. lights found
+    double plainError = 0.0;       // plain SH's error at plainOrder
+    std::vector<std::vector<double>> bands; // per k: the hybrid's unweighted error energy per band
+    std::vector<double> plainBands;         // plain SH's
+    std::string reason;            // one line for the log and the document
+};
+// K per map, from the decomposition's own error. Decomposes with up to options.maxLights lights (the elbow's
+// count); for each prefix of k lights (by power), the lighting error e = E - lights - residual is measured by its
+// SH band energies |e_l|^2 (exact: the map's projection minus the cones' cap projections, bands from options.order
+// up, below errorOrder) as sqrt(sum_l exp(-(l / bandWidth)^2) |e_l|^2 / |E|^2), and plain SH's the same way over
+// bands from plainOrder; bands from errorOrder up are left out (weight below exp(-16) at the defaults). Picks the
+// k of least error; when that is 0, or not below margin * plain's, lights do not pay: 0 lights, plainSh. Returns
+// the decomposition with the chosen K (refitted when it differs from the count found) and the choice in *report.
+// Needs what decompose() needs, and errorOrder above both orders and <= sh::kMaxOrder.
+Decomposition decomposeChoosingLights(const EnvironmentMap& env, const Options& options, const ChoiceOptions& choice,
+                                      LightChoice* report);
 
 // The exact SH projection of uniform cone lights onto `order` bands (sh::capProjection), [order^2][3].
 std::vector<double> lightsProjection(const std::vector<ConeLight>& lights, int order);

@@ -1,7 +1,9 @@
 // Temporal stability of the hybrid under a turning environment, run by scripts/envlight_figures.py (not a ctest
 // test): the map turns about +Y in `step`-degree steps; each frame is decomposed afresh (envlight::decompose with
 // the rotation, so detection, elbow and fit all see the turned map) and relit, hybrid and plain order-L SH.
-//   envlight_temporal BUNDLE ENV ORDER MAX_LIGHTS FRAMES STEP_DEGREES [LIGHT_SAMPLES]
+//   envlight_temporal BUNDLE ENV ORDER MAX_LIGHTS FRAMES STEP_DEGREES [LIGHT_SAMPLES] [coherent|fresh]
+// `coherent` decomposes through envlight::decomposeCoherent (hysteresis, matched slots, cross-fades), carrying its
+// state from frame to frame; `fresh` (the default) decomposes each frame afresh.
 // Prints one JSON object: light counts per frame, the largest light-direction jump between frames (raw, and
 // against the light carried along by the turn), the number of light-count changes, and the largest frame-to-frame
 // change of relit radiance (RMS over vertices and max over vertices, over the mean radiance) for both methods.
@@ -13,7 +15,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -44,7 +48,7 @@ Change change(const std::vector<float>& a, const std::vector<float>& b, double m
 
 int main(int argc, char** argv) {
     if (argc < 7) {
-        std::fprintf(stderr, "usage: %s BUNDLE ENV ORDER MAX_LIGHTS FRAMES STEP_DEGREES [LIGHT_SAMPLES]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s BUNDLE ENV ORDER MAX_LIGHTS FRAMES STEP_DEGREES [LIGHT_SAMPLES] [coherent|fresh]\n", argv[0]);
         return 2;
     }
     try {
@@ -59,6 +63,11 @@ int main(int argc, char** argv) {
         const int frames = std::atoi(argv[5]);
         const double step = std::atof(argv[6]);
         const int samples = argc > 7 ? std::atoi(argv[7]) : 64;
+        const std::string mode = argc > 8 ? argv[8] : "fresh";
+        if (mode != "coherent" && mode != "fresh") throw prt::Error("", "mode", "must be coherent or fresh");
+        prt::envlight::CoherenceState state;
+        prt::envlight::CoherenceOptions coherence;
+        nlohmann::json hybridSeries = nlohmann::json::array(), plainSeries = nlohmann::json::array();
         if (options.order != model.total.order) throw prt::Error(argv[1], "order", "differs from ORDER");
         const size_t rows = model.total.vertexCount;
         std::vector<float> projection = prt::sh::projectEnvironment(env, options.order);
@@ -76,7 +85,9 @@ int main(int argc, char** argv) {
             prt::sh::rotationY(step, stepR);
             options.rotation = R;
             double start = prt::nowSeconds();
-            prt::envlight::Decomposition d = prt::envlight::decompose(env, options);
+            prt::envlight::Decomposition d = mode == "coherent"
+                                                 ? prt::envlight::decomposeCoherent(env, options, coherence, state)
+                                                 : prt::envlight::decompose(env, options);
             seconds += prt::nowSeconds() - start;
             prt::HybridLighting lighting;
             lighting.order = options.order;
@@ -116,6 +127,8 @@ int main(int argc, char** argv) {
                     }
                 }
                 Change h = change(hybrid, previousHybrid, meanRadiance), p = change(plain, previousPlain, meanRadiance);
+                hybridSeries.push_back(h.rms);
+                plainSeries.push_back(p.rms);
                 hybridChange.rms = std::max(hybridChange.rms, h.rms);
                 hybridChange.max = std::max(hybridChange.max, h.max);
                 plainChange.rms = std::max(plainChange.rms, p.rms);
@@ -125,7 +138,15 @@ int main(int argc, char** argv) {
             previousHybrid.swap(hybrid);
             previousPlain.swap(plain);
         }
+        auto median = [](nlohmann::json series) {
+            std::vector<double> v = series.get<std::vector<double>>();
+            if (v.empty()) return 0.0;
+            std::sort(v.begin(), v.end());
+            return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+        };
+        double hybridMedian = median(hybridSeries), plainMedian = median(plainSeries);
         nlohmann::json out = {{"frames", frames},
+                              {"mode", mode},
                               {"step_degrees", step},
                               {"order", options.order},
                               {"max_lights", options.maxLights},
@@ -137,6 +158,11 @@ int main(int argc, char** argv) {
                               {"hybrid_largest_change_max", hybridChange.max},
                               {"plain_largest_change_rms", plainChange.rms},
                               {"plain_largest_change_max", plainChange.max},
+                              {"hybrid_median_change_rms", hybridMedian},
+                              {"plain_median_change_rms", plainMedian},
+                              {"hybrid_largest_over_median", hybridMedian > 0 ? hybridChange.rms / hybridMedian : 0.0},
+                              {"plain_largest_over_median", plainMedian > 0 ? plainChange.rms / plainMedian : 0.0},
+                              {"hybrid_change_rms_per_frame", hybridSeries},
                               {"decompose_seconds_per_frame", seconds / frames}};
         std::cout << out.dump() << "\n";
     } catch (const std::exception& e) {
