@@ -107,8 +107,11 @@ bool buildInstanced(EmbreeScene& embree, const TriMesh& mesh, const SceneAsset& 
             continue;
         }
         placements.push_back({r, 1});
-        if (placementsOfMesh.size() <= size_t(receiver.mesh)) placementsOfMesh.resize(size_t(receiver.mesh) + 1);
-        placementsOfMesh[size_t(receiver.mesh)].push_back(uint32_t(placements.size() - 1));
+        // Mirrored placements get a prototype of their own: their flattened triangles have the winding flipped, so
+        // a hit's barycentrics on the unmirrored prototype would name their corners in the wrong order.
+        const size_t group = 2 * size_t(receiver.mesh) + (receiver.mirrored ? 1 : 0);
+        if (placementsOfMesh.size() <= group) placementsOfMesh.resize(group + 1);
+        placementsOfMesh[group].push_back(uint32_t(placements.size() - 1));
     }
     bool repeated = false;
     for (const std::vector<uint32_t>& list : placementsOfMesh) repeated = repeated || list.size() > 1;

@@ -108,3 +108,49 @@ TEST(SceneRender, ASceneBakeIsLookedUpThroughItsCornerUvsAndTimesTheAlbedo) {
     EXPECT_NEAR(right[0], 0.0f, 1e-5f);
     EXPECT_NEAR(right[1], 1.0f, 1e-5f);
 }
+
+TEST(SceneRender, AMirroredInstanceInterpolatesLikeTheMirroredCopy) {
+    // One mesh placed twice, the second mirrored: Embree instances it; its hits must name the flattened triangle's
+    // corners in the flattened (flipped) order. Radiance linear in world position then renders the same as two
+    // plain copies.
+    TriMesh plane = makePlane(1.0f, 2, 0.0f);
+    TriMesh mirrored = plane;
+    for (size_t v = 0; v < mirrored.vertexCount(); ++v) mirrored.positions[3 * v] *= -1.0f;
+    for (size_t t = 0; t < mirrored.triangleCount(); ++t) std::swap(mirrored.indices[3 * t + 1], mirrored.indices[3 * t + 2]);
+    auto write = [](const TestScene& scene, const char* name) {
+        std::filesystem::path dir = std::filesystem::temp_directory_path() / name;
+        std::filesystem::create_directories(dir);
+        writeSceneGltf((dir / "scene.gltf").string(), scene);
+        return readBundle((dir / "scene.gltf").string());
+    };
+    TestScene instanced;
+    instanced.meshes = {{{plane, -1}}};
+    instanced.nodes = json::array({{{"mesh", 0}, {"translation", {-0.6, 0.0, 0.0}}},
+                                   {{"mesh", 0}, {"translation", {0.6, 0.0, 0.0}}, {"scale", {-1.0, 1.0, 1.0}}}});
+    instanced.roots = {0, 1};
+    TestScene copies;
+    copies.meshes = {{{plane, -1}}, {{mirrored, -1}}};
+    copies.nodes = json::array({{{"mesh", 0}, {"translation", {-0.6, 0.0, 0.0}}},
+                                {{"mesh", 1}, {"translation", {0.6, 0.0, 0.0}}}});
+    copies.roots = {0, 1};
+    Bundle a = write(instanced, "prt_scene_render_mirror_instance"), b = write(copies, "prt_scene_render_mirror_copy");
+    ASSERT_EQ(a.mesh.positions, b.mesh.positions);
+    ASSERT_EQ(a.mesh.indices, b.mesh.indices);
+    Surface surfaceA = decodeSurface(a, "instanced"), surfaceB = decodeSurface(b, "copies");
+    ASSERT_TRUE(surfaceA.instancing);
+    std::vector<float> rows(a.mesh.vertexCount() * 3);
+    for (size_t v = 0; v < a.mesh.vertexCount(); ++v) {
+        rows[3 * v] = 2.0f + a.mesh.positions[3 * v];
+        rows[3 * v + 1] = 2.0f + a.mesh.positions[3 * v + 2];
+        rows[3 * v + 2] = 1.0f;
+    }
+    RenderedImage ia = renderVertexRadiance(a.mesh, rows, topCamera(), &surfaceA);
+    RenderedImage ib = renderVertexRadiance(b.mesh, rows, topCamera(), &surfaceB);
+    size_t covered = 0;
+    for (size_t p = 0; p < ia.coverage.size(); ++p) {
+        ASSERT_EQ(ia.coverage[p], ib.coverage[p]) << p;
+        covered += ia.coverage[p] > 0.5f;
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(ia.radiance.rgb[3 * p + c], ib.radiance.rgb[3 * p + c], 1e-4f) << p;
+    }
+    EXPECT_GT(covered, 400u);
+}
