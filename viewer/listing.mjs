@@ -15,8 +15,13 @@ export function listFolder(dataDir) {
            maps: pick((n) => n.endsWith('.exr')) };
 }
 
-// Answers `url` (the decoded path) when it is the listing and returns true; returns false for anything else.
-export function answerListing(url, dataDir, response) {
+// Answers the request target `target` when it is the listing and returns true; returns false for anything else,
+// a malformed target included (bad %-escape, NUL: serve.mjs's resolveTarget answers those 400). Never throws.
+// The listing names only regular files directly in the folder: a symlink is never listed, so nothing outside the
+// folder is named (serve.mjs refuses links out of it anyway).
+export function answerListing(target, dataDir, response) {
+  let url;
+  try { url = decodeURIComponent(new URL(target, 'http://x').pathname); } catch { return false; }
   if (url !== kListingPath) return false;
   response.writeHead(200, { 'content-type': 'application/json', 'cache-control': 'no-store' })
     .end(JSON.stringify(listFolder(path.resolve(dataDir))));

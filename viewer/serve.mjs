@@ -74,7 +74,7 @@ export function serve(dataDir, port = 0) {
       if (!loopbackHost(request.headers.host, server.address().port)) { refuse(421); return; }
       if (request.method !== 'GET' && request.method !== 'HEAD') { refuse(405); return; }
       // The viewer's panel (listing.mjs) answers its own path; everything else is a file under the roots.
-      if (answerListing(decodeURIComponent(new URL(request.url, 'http://x').pathname), dataDir, response)) return;
+      if (answerListing(request.url, dataDir, response)) return;
       const { status, file } = resolveTarget(roots, request.url);
       if (status !== 200) { refuse(status); return; }
       fs.readFile(file, (error, bytes) => {
