@@ -36,7 +36,7 @@ function accessorArray(gltf, bin, index) {
 }
 
 // A layer's values as a Float32Array (float32 or float16 layers).
-function layerData(gltf, bin, layer) {
+export function layerData(gltf, bin, layer) {
   if (layer.bufferView === undefined) return null;
   const bufferView = gltf.bufferViews[layer.bufferView];
   const offset = bufferView.byteOffset || 0;
@@ -50,6 +50,39 @@ function layerData(gltf, bin, layer) {
     return out;
   }
   throw new Error(`layer ${layer.name}: component type ${type} is not a float`);
+}
+
+// Whether the bundle's extension describes a scene bundle (version 3, docs/bundle.md "Scene bundles"): the glTF
+// asset kept intact, with the receivers' rows listed in `scene.receivers`.
+export function isSceneBundle(json) {
+  const extension = json.extensions && json.extensions.PRT_bundle;
+  return !!(extension && extension.scene && Array.isArray(extension.scene.receivers));
+}
+
+// A scene bundle's irradiance transfer (layer "transfer", params.albedo "excluded") and its receivers, each
+// {node, mesh, primitive, first_row, rows} as the extension lists them, checked against the layer's row count.
+// Returns {transfer: {rows, order, data}, receivers}. Throws Error naming the problem.
+export function readSceneTransfer(json, bin) {
+  const extension = json.extensions.PRT_bundle;
+  const layer = (extension.layers || []).find((l) => l.name === 'transfer');
+  if (!layer || layer.semantic !== 'sh_transfer_rgb' || layer.domain !== 'vertex')
+    throw new Error('scene bundle: no per-vertex "transfer" layer of semantic sh_transfer_rgb');
+  if (!layer.params || layer.params.albedo !== 'excluded')
+    throw new Error('scene bundle: layer "transfer" must be irradiance transfer (params.albedo "excluded")');
+  const data = layerData(json, bin, layer);
+  if (!data) throw new Error('scene bundle: layer "transfer" has no data in the bundle');
+  const rows = layer.shape[0], order = Math.round(Math.sqrt(layer.shape[1]));
+  if (order * order !== layer.shape[1] || layer.shape[2] !== 3) throw new Error('scene bundle: transfer shape is not [rows, L^2, 3]');
+  const receivers = extension.scene.receivers;
+  let next = 0;
+  for (const [k, r] of receivers.entries()) {
+    for (const key of ['node', 'mesh', 'primitive', 'first_row', 'rows'])
+      if (!Number.isInteger(r[key]) || r[key] < 0) throw new Error(`scene bundle: receiver ${k} has no valid ${key}`);
+    if (r.first_row !== next) throw new Error(`scene bundle: receiver ${k} starts at row ${r.first_row}, expected ${next}`);
+    next += r.rows;
+  }
+  if (next !== rows) throw new Error(`scene bundle: receivers cover ${next} rows, the transfer has ${rows}`);
+  return { transfer: { rows, order, data }, receivers };
 }
 
 // The bundle's mesh (object 0) and its transfer: `kind` "vertex" (layer "transfer") or "texel" (layer
@@ -83,13 +116,14 @@ export function readBundle(arrayBuffer, kind = 'vertex') {
 
 // Fetches the bundle at `url` and, for texels kept in an OpenEXR file next to it, that file too. Returns what
 // readBundle returns, with transfer.data filled in ([rows][L^2][3] from channels T000.R .. as the bake names them).
-export async function loadBundle(url, kind = 'vertex') {
+// `bytes`, when given, are the bundle's bytes already fetched.
+export async function loadBundle(url, kind = 'vertex', bytes = null) {
   const fetchBytes = async (what) => {
     const response = await fetch(what);
     if (!response.ok) throw new Error(`${what}: HTTP ${response.status}`);
     return response.arrayBuffer();
   };
-  const mesh = readBundle(await fetchBytes(url), kind);
+  const mesh = readBundle(bytes || await fetchBytes(url), kind);
   const t = mesh.transfer;
   if (t.data) return mesh;
   const imageUrl = new URL(t.uri, new URL(url, location.href)).href;

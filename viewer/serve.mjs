@@ -10,6 +10,7 @@ import http from 'node:http';
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { answerListing } from './listing.mjs';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const types = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.json': 'application/json',
@@ -72,6 +73,8 @@ export function serve(dataDir, port = 0) {
       response.on('error', () => {});
       if (!loopbackHost(request.headers.host, server.address().port)) { refuse(421); return; }
       if (request.method !== 'GET' && request.method !== 'HEAD') { refuse(405); return; }
+      // The viewer's panel (listing.mjs) answers its own path; everything else is a file under the roots.
+      if (answerListing(request.url, dataDir, response)) return;
       const { status, file } = resolveTarget(roots, request.url);
       if (status !== 200) { refuse(status); return; }
       fs.readFile(file, (error, bytes) => {

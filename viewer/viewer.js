@@ -2,8 +2,11 @@
 // lets the user turn the environment and change the order. Shading agrees with `prt relight` (the same sum) and
 // pictures with `prt render` (the same pinhole camera and tone map, compare.h toneMap).
 import * as THREE from 'three';
-import { loadBundle, syntheticBundle } from './bundle.js';
+import { isSceneBundle, loadBundle, parseGlb, readSceneTransfer, syntheticBundle } from './bundle.js';
+import { relightRowGlsl, toneMapGlsl } from './glsl.js';
+import { sceneMeshes } from './scene.js';
 import { fitLighting, rotateLightingY } from './sh.js';
+import { loadSky, skyMesh } from './sky.js';
 
 const kMaxCoefficients = 64; // order 8
 
@@ -24,17 +27,12 @@ in float relativeError;
 out vec3 vRadiance;
 out vec2 vUv;
 out float vError;
+${relightRowGlsl(kMaxCoefficients)}
 void main() {
   vUv = uv;
   vError = relativeError;
   vRadiance = vec3(0.0);
-  if (perVertex) {
-    ivec2 at = ivec2(gl_VertexID % rowsPerLine, gl_VertexID / rowsPerLine);
-    for (int j = 0; j < ${kMaxCoefficients}; ++j) {
-      if (j >= coefficients) break;
-      vRadiance += texelFetch(transfer, ivec3(at, j), 0).rgb * lighting[j];
-    }
-  }
+  if (perVertex) vRadiance = relightRow(gl_VertexID);
   gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
 }`;
 
@@ -54,12 +52,7 @@ in vec3 vRadiance;
 in vec2 vUv;
 in float vError;
 out vec4 colour;
-// compare.h toneMap: x = radiance 2^exposure, Reinhard x / (1 + x), sRGB; the framebuffer rounds to 8 bits.
-vec3 toneMap(vec3 radiance) {
-  vec3 x = max(radiance * exp2(exposure), 0.0);
-  vec3 d = x / (1.0 + x);
-  return mix(12.92 * d, 1.055 * pow(d, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), d));
-}
+${toneMapGlsl}
 // Viridis at five stops, as prt compare --image draws relative error.
 vec3 falseColour(float t) {
   vec3 stops[5] = vec3[5](vec3(0.267, 0.005, 0.329), vec3(0.229, 0.322, 0.546), vec3(0.128, 0.567, 0.551),
@@ -122,13 +115,26 @@ function transferTexture(transfer, rowsPerLine, lines) {
   return texture;
 }
 
+// Loads what `params` (the page's query, README "Query parameters") names and draws it. Returns the api the page
+// and the tests drive: set(changes), read(points), bench(frames), metrics(), state(), query().
 export async function startViewer(canvas, panel, params) {
   const [width, height] = parseNumbers(params.get('size') || '640,480', 2, 'size');
   const kind = params.get('mode') === 'texel' ? 'texel' : 'vertex';
   const bundleUrl = params.get('bundle'), synthetic = params.get('synthetic'); // synthetic=VERTICES,ORDER
   if (!bundleUrl && !synthetic) throw new Error('give ?bundle=URL of a .glb');
-  const mesh = synthetic ? await syntheticBundle(...parseNumbers(synthetic, 2, 'synthetic'))
-                         : await loadBundle(bundleUrl, kind);
+  let bytes = null, sceneJson = null, sceneBin = null;
+  if (bundleUrl) {
+    const response = await fetch(bundleUrl);
+    if (!response.ok) throw new Error(`${bundleUrl}: HTTP ${response.status}`);
+    bytes = await response.arrayBuffer();
+    const { json, bin } = parseGlb(bytes);
+    if (isSceneBundle(json)) [sceneJson, sceneBin] = [json, bin];
+  }
+  const isScene = !!sceneJson;
+  if (isScene && kind === 'texel') throw new Error('a scene bundle is relit per vertex (mode=texel is for bakes)');
+  const sceneTransfer = isScene ? readSceneTransfer(sceneJson, sceneBin) : null;
+  const mesh = isScene ? null : synthetic ? await syntheticBundle(...parseNumbers(synthetic, 2, 'synthetic'))
+                                          : await loadBundle(bundleUrl, kind, bytes);
   const maps = (params.get('maps') || '').split(',').filter(Boolean);
   if (!maps.length) throw new Error('give ?maps=URL,URL of prt-sh JSON lighting (prt envsh)');
   const lightings = await Promise.all(maps.map(async (url) => {
@@ -137,7 +143,10 @@ export async function startViewer(canvas, panel, params) {
     return { name: url.split('/').pop().replace(/\.sh\.json$|\.json$/, ''), order: sh.order,
              coefficients: Float32Array.from(sh.coefficients.flat()) };
   }));
-  const reference = params.get('reference') ? parseNpy(await (await fetch(params.get('reference'))).arrayBuffer()) : null;
+  // sky=URL,URL: the OpenEXR maps behind the lighting, one per entry of maps (empty: black for that one).
+  const skyUrls = (params.get('sky') || '').split(',');
+  const skies = await Promise.all(maps.map((_, i) => (skyUrls[i] ? loadSky(skyUrls[i]) : null)));
+  const reference = !isScene && params.get('reference') ? parseNpy(await (await fetch(params.get('reference'))).arrayBuffer()) : null;
 
   const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true, alpha: false });
   renderer.setPixelRatio(1);
@@ -145,15 +154,7 @@ export async function startViewer(canvas, panel, params) {
   renderer.setClearColor(0x000000, 1);
   const gl = renderer.getContext();
 
-  const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute('position', new THREE.BufferAttribute(mesh.positions, 3));
-  const vertexCount = mesh.positions.length / 3;
-  geometry.setAttribute('uv', new THREE.BufferAttribute(mesh.texcoords || new Float32Array(vertexCount * 2), 2));
-  const errors = new Float32Array(vertexCount);
-  geometry.setAttribute('relativeError', new THREE.BufferAttribute(errors, 1));
-  geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
-
-  const t = mesh.transfer;
+  const t = isScene ? sceneTransfer.transfer : mesh.transfer;
   let rowsPerLine, lines;
   if (kind === 'texel') [rowsPerLine, lines] = [t.width, t.height];
   else [rowsPerLine, lines] = [Math.min(t.rows, 2048), Math.ceil(t.rows / Math.min(t.rows, 2048))];
@@ -168,26 +169,54 @@ export async function startViewer(canvas, panel, params) {
     atlasSize: { value: new THREE.Vector2(t.width || 1, t.height || 1) },
     exposure: { value: Number(params.get('exposure') || 0) },
   };
-  const material = new THREE.RawShaderMaterial({
-    vertexShader, fragmentShader, uniforms, glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
-  });
   const scene = new THREE.Scene();
-  scene.add(new THREE.Mesh(geometry, material));
+  const sky = skyMesh(uniforms.exposure);
+  scene.add(sky);
+  let vertexCount, errors = null, geometry = null, receiverCount = 0;
+  if (isScene) {
+    const shared = { transfer: uniforms.transfer, coefficients: uniforms.coefficients, rowsPerLine: uniforms.rowsPerLine,
+                     lighting: uniforms.lighting, exposure: uniforms.exposure };
+    const built = await sceneMeshes(bytes, sceneJson, sceneTransfer.receivers, shared);
+    scene.add(built.group);
+    vertexCount = t.rows;
+    receiverCount = built.receivers;
+  } else {
+    geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(mesh.positions, 3));
+    vertexCount = mesh.positions.length / 3;
+    geometry.setAttribute('uv', new THREE.BufferAttribute(mesh.texcoords || new Float32Array(vertexCount * 2), 2));
+    errors = new Float32Array(vertexCount);
+    geometry.setAttribute('relativeError', new THREE.BufferAttribute(errors, 1));
+    geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
+    const material = new THREE.RawShaderMaterial({
+      vertexShader, fragmentShader, uniforms, glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
+    });
+    scene.add(new THREE.Mesh(geometry, material));
+  }
 
   const view = parseNumbers(params.get('camera') || '0,0.1,0.4,0,0.1,0,0,1,0,40', 10, 'camera');
-  const eye = new THREE.Vector3(view[0], view[1], view[2]), target = new THREE.Vector3(view[3], view[4], view[5]);
-  const distance = eye.distanceTo(target);
-  const camera = new THREE.PerspectiveCamera(view[9], width / height, distance * 1e-3, distance * 1e3);
-  camera.position.copy(eye);
-  camera.up.set(view[6], view[7], view[8]);
-  camera.lookAt(target);
+  const camera = new THREE.PerspectiveCamera(view[9], width / height, 1e-3, 1e3);
+  const orbit = { eye: new THREE.Vector3(view[0], view[1], view[2]), target: new THREE.Vector3(view[3], view[4], view[5]),
+                  up: new THREE.Vector3(view[6], view[7], view[8]), fovy: view[9] };
+  function placeCamera() {
+    const distance = orbit.eye.distanceTo(orbit.target);
+    camera.near = distance * 1e-3;
+    camera.far = distance * 1e3;
+    camera.fov = orbit.fovy;
+    camera.updateProjectionMatrix();
+    camera.position.copy(orbit.eye);
+    camera.up.copy(orbit.up);
+    camera.lookAt(orbit.target);
+  }
 
   const state = {
-    map: 0, order: Math.min(t.order, Number(params.get('order') || t.order)), rotate: Number(params.get('rotate') || 0),
-    showError: false,
+    map: Math.min(lightings.length - 1, Math.max(0, Number(params.get('map') || 0))),
+    order: Math.min(t.order, Number(params.get('order') || t.order)), rotate: Number(params.get('rotate') || 0),
+    showError: false, showSky: params.get('showSky') !== '0',
   };
   let metrics = null;
   let lighting = null;
+  let frameMs = null;
 
   // The relit radiance on the CPU, only for the error against a reference (per vertex).
   function errorAgainstReference() {
@@ -215,6 +244,18 @@ export async function startViewer(canvas, panel, params) {
     return { relativeRmse: Math.sqrt(squared / referenceSquared), meanRelativeError: relativeSum / vertexCount };
   }
 
+  // One frame, finished (a 1-pixel read waits for the GPU): its milliseconds are the panel's frame time.
+  const pixel = new Uint8Array(4);
+  function draw() {
+    placeCamera();
+    sky.userData.set(state.showSky ? skies[state.map] : null, width, height, orbit.eye, orbit.target, orbit.up,
+                     orbit.fovy, state.rotate);
+    const start = performance.now();
+    renderer.render(scene, camera);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    frameMs = performance.now() - start;
+  }
+
   function update() {
     const source = lightings[state.map];
     const order = state.order, count = order * order;
@@ -228,25 +269,67 @@ export async function startViewer(canvas, panel, params) {
     uniforms.coefficients.value = count;
     uniforms.showError.value = state.showError && !!reference;
     metrics = errorAgainstReference();
-    renderer.render(scene, camera);
-    if (panel) panel.update(state, metrics, { kind, vertexCount, renderer: api.renderer });
+    draw();
+    report();
+  }
+  function report() {
+    if (panel) panel.update(state, metrics, { kind: isScene ? 'scene' : kind, vertexCount, receivers: receiverCount,
+                                               renderer: api.renderer, frameMs, hasSky: !!skies[state.map] });
+  }
+
+  // The view as a query string: what was loaded, and the state (README "Query parameters"), to share a view.
+  function query() {
+    const q = new URLSearchParams(params);
+    const round = (v) => Number(v.toPrecision(6));
+    q.set('camera', [...orbit.eye.toArray(), ...orbit.target.toArray(), ...orbit.up.toArray(), orbit.fovy].map(round).join(','));
+    q.set('map', String(state.map));
+    q.set('order', String(state.order));
+    q.set('rotate', String(state.rotate));
+    q.set('exposure', String(uniforms.exposure.value));
+    if (!state.showSky) q.set('showSky', '0'); else q.delete('showSky');
+    return q.toString().replace(/%2C/g, ',').replace(/%2F/g, '/');
   }
 
   const api = {
     lightings: lightings.map((l) => l.name),
     transferOrder: t.order,
-    kind,
+    kind: isScene ? 'scene' : kind,
     vertexCount,
+    receivers: receiverCount,
     renderer: (() => {
       const debug = gl.getExtension('WEBGL_debug_renderer_info'); // the real GL behind Chromium's mask
       return debug ? gl.getParameter(debug.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER);
     })(),
-    set(changes) { Object.assign(state, changes); update(); return { ...state }; },
+    set(changes) {
+      if ('exposure' in changes) uniforms.exposure.value = Number(changes.exposure);
+      const { exposure, ...rest } = changes;
+      Object.assign(state, rest);
+      update();
+      return { ...state };
+    },
+    // Orbit about the target: `yaw` and `pitch` in degrees about the up axis and the camera's right axis, `zoom`
+    // a factor on the distance. The pitch stops 1 degree short of the poles.
+    orbit(yaw, pitch, zoom = 1) {
+      const up = orbit.up.clone().normalize();
+      const offset = orbit.eye.clone().sub(orbit.target);
+      offset.applyAxisAngle(up, -yaw * Math.PI / 180);
+      const right = offset.clone().cross(up).normalize();
+      const angle = offset.angleTo(up) * 180 / Math.PI;
+      const limited = Math.max(1 - angle, Math.min(179 - angle, pitch));
+      offset.applyAxisAngle(right, -limited * Math.PI / 180);
+      offset.multiplyScalar(zoom);
+      orbit.eye.copy(orbit.target).add(offset);
+      draw();
+      report();
+    },
+    camera: () => [...orbit.eye.toArray(), ...orbit.target.toArray(), ...orbit.up.toArray(), orbit.fovy],
     metrics: () => metrics,
+    frameMs: () => frameMs,
+    state: () => ({ ...state, exposure: uniforms.exposure.value }),
+    query,
     // 8-bit RGB of the canvas at pixels [[x, y], ...], row 0 at the top as in prt's images.
     read(points) {
-      renderer.render(scene, camera);
-      const pixel = new Uint8Array(4);
+      draw();
       return points.map(([x, y]) => {
         gl.readPixels(x, height - 1 - y, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
         return [pixel[0], pixel[1], pixel[2]];
@@ -254,7 +337,6 @@ export async function startViewer(canvas, panel, params) {
     },
     // Mean milliseconds per frame over `frames` frames, each finished (a 1-pixel read waits for the GPU).
     bench(frames) {
-      const pixel = new Uint8Array(4);
       renderer.render(scene, camera);
       gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
       const start = performance.now();
