@@ -41,6 +41,7 @@ TEST(Shards, AMergeRefusesACorruptedShardBundleByName) {
     test::TempDir dir;
     test::writeSkyExr(dir / "sky.exr", 1.0f);
     RunOptions options = test::testOptions(dir / "cache");
+    options.keepIntermediates = true; // the shard entries this test corrupts
     nlohmann::json report = test::runQuietly(shardedPipeline(dir, 3), options);
     std::string store = options.cacheDir + "/store";
     std::string mergedKey = report["stages"][1]["key"];
