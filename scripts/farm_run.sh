@@ -24,6 +24,7 @@ conf=$(scripts/slurm_local.sh start "$slurm" | tail -1)
 export SLURM_CONF=$conf
 figures="$work/figures-$count-$samples.txt"
 : > "$figures"
+rm -f "$work"/report-*.json "$work"/time-*.txt # figures of this run only
 rm -rf "$work/cache-slurm"
 # The farm run, intermediates kept so that the store can be measured before and after `prt gc`.
 /usr/bin/time -v -o "$work/time-slurm.txt" "$prt" run "$pipeline" --executor slurm --cache-dir "$work/cache-slurm" \
