@@ -83,6 +83,8 @@ void addRunCommand(CLI::App& app) {
     command->add_flag("--allow-outputs-anywhere", args->allowOutputsAnywhere,
                       "Write outputs outside the current directory and the pipeline file's folder too");
     command->add_flag("--force", options.force, "Ignore the cache: rerun every stage");
+    command->add_flag("--keep-intermediates", options.keepIntermediates,
+                      "Keep sharded stages' shard, pass and gather entries in the store after a successful run");
     command->add_option("--only", options.only, "Rerun only this stage, its inputs from the cache");
     command->add_option("--from", options.from, "Rerun this stage and everything downstream of it");
     command->add_option("--executor", args->executor, "local (default) or slurm")
@@ -107,6 +109,20 @@ void addRunCommand(CLI::App& app) {
         ->check(CLI::NonNegativeNumber)->group(internal);
     command->add_option("--run-dir", args->runDir, "Run folder the job records go to")->group(internal);
     command->callback([args] { runRun(*args); });
+
+    // `prt gc` lives with `prt run`: it collects the store that runs fill.
+    auto gc = std::make_shared<std::pair<RunOptions, bool>>();
+    CLI::App* collect = app.add_subcommand(
+        "gc", "Remove every store entry that no pipeline's last run needs (each stays fully cached)");
+    collect->add_flag("--dry-run", gc->second, "Print what would be removed; remove nothing");
+    collect->add_option("--cache-dir", gc->first.cacheDir, "The cache whose store to collect (default .cache)");
+    collect->callback([gc] {
+        nlohmann::json result = collectStore(gc->first, gc->second);
+        std::printf("%s %zu entries (%.1f MiB), kept %zu entries (%.1f MiB) in %s\n",
+                    gc->second ? "would remove" : "removed", result["removed"].size(),
+                    result["removed_bytes"].get<uint64_t>() / 1048576.0, result["kept"].get<size_t>(),
+                    result["kept_bytes"].get<uint64_t>() / 1048576.0, result["store"].get<std::string>().c_str());
+    });
 }
 
 } // namespace prt::cli

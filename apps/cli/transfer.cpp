@@ -122,13 +122,15 @@ Bundle transferBundle(const TransferArgs& args, const TransferOptions& options, 
 
     // What a scene's rows are multiplied by for outgoing radiance: the diffuse albedo at each vertex.
     Layer albedoLayer;
-    if (options.surface && shardCount <= 1) {
+    // A shard holds its rows of it, so that the merge gives the unsharded layer.
+    if (options.surface) {
         albedoLayer.name = "diffuse_albedo";
-        albedoLayer.domain = "vertex";
         albedoLayer.semantic = "diffuse_albedo_rgb";
-        albedoLayer.shape = {mesh.vertexCount(), 3};
-        albedoLayer.data = vertexDiffuseAlbedo(*options.surface);
+        std::vector<float> albedo = vertexDiffuseAlbedo(*options.surface);
+        albedoLayer.data.assign(albedo.begin() + 3 * rows.begin, albedo.begin() + 3 * rows.end);
+        albedoLayer.shape = {rows.end - rows.begin, 3};
         albedoLayer.params = {{"rule", "base colour factor * texture at the vertex's texcoord * COLOR_0 * (1 - metallic)"}};
+        markVertexShard(albedoLayer, rows.begin, rows.end, mesh.vertexCount(), shardIndex, shardCount);
     }
 
     Bundle output = std::move(input);

@@ -200,6 +200,10 @@ struct RunOptions {
     int shards = 0;            // > 0: shard every stage that can take it into this many
     int threads = 0;           // per stage; 0 = all cores (Slurm: the job's CPUs)
     std::string reportPath;    // also copy the run report here
+    // After a successful run the store drops the entries of sharded stages' shard, pass and gather jobs (hit
+    // records, pass rows, gathered exitant arrays, shard bundles) whose stage's merged entry is stored; a cached
+    // rerun needs only the merged entries. true keeps them (docs/pipelines.md, "Store garbage collection").
+    bool keepIntermediates = false;
     // Slurm
     std::string slurmPartition;
     int slurmCpusPerTask = 1;
@@ -229,6 +233,13 @@ std::string hashMemoFile(const RunOptions& options);
 // Times are seconds from the run's start. Declared outputs are copied atomically once every stage succeeded.
 // Throws prt::Error for a stage that fails (naming it and quoting its log), after writing the report.
 nlohmann::json runPipeline(const Pipeline& pipeline, const RunOptions& options);
+
+// `prt gc`: removes every store entry that no stage of any pipeline's last recorded run (CACHE/runs/NAME.last.json)
+// needs, so each of those runs stays fully cached; with `dryRun` only reports. Each removal is crash-safe (one
+// rename takes an entry out whole, sweepStore clears what a killed collector leaves). Returns {"store",
+// "dry_run","kept","kept_bytes","removed":[{"key","bytes"}],"removed_bytes"}. Throws prt::Error for a run record
+// that is not JSON. Not to be run while a run writes to the same store.
+nlohmann::json collectStore(const RunOptions& options, bool dryRun);
 
 // Fills every stage's `resolved` and `build` (above) through options.askPrt, in this process (each distinct
 // question once per process). Throws prt::Error when askPrt is unset or cannot say.

@@ -51,6 +51,15 @@ std::map<std::string, std::string> inputHashes(const StageInputs& inputs);
 // read from the bundle. Throws prt::Error for a name that is not a plain file name.
 std::vector<std::string> bundleCompanionNames(const std::string& bundleFile);
 
+// Removes the store entry STORE/<hex> crash-safely (gc.cpp: one rename takes it out, then its files go); returns
+// the bytes it held, 0 when absent.
+uint64_t removeStoreEntry(const std::string& store, const std::string& hex);
+// The automatic collection at the end of a successful run: removes the entries of `jobKeys` (a sharded stage's
+// shard, pass and gather jobs) that are not among `finalKeys` (the stages' own entries, which stay). Returns
+// {"removed": count, "removed_bytes", "store_bytes": what the store holds after}.
+nlohmann::json collectIntermediates(const std::string& store, const std::vector<std::string>& finalKeys,
+                                    const std::vector<std::string>& jobKeys);
+
 // runStageJob with the inputs already resolved.
 nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, const RunOptions& options, int shardIndex,
                       int shardCount, bool force, int pass = 0);

@@ -535,6 +535,15 @@ nlohmann::json runPipeline(const Pipeline& given, const RunOptions& options) {
     if (!failure) {
         try {
             report["outputs"] = copyOutputs(pipeline, entries, hashMemoFile(options));
+            if (!options.keepIntermediates) {
+                // The store's policy: a sharded stage's job entries go once its merged entry is stored.
+                std::vector<std::string> finalKeys, jobKeys;
+                for (const auto& [id, entry] : entries) finalKeys.push_back(entry.manifest.value("key", ""));
+                for (const auto& [id, records] : jobs)
+                    for (const nlohmann::json& job : records)
+                        if (job.contains("shard") && entries.count(id)) jobKeys.push_back(job.value("key", ""));
+                report["gc"] = collectIntermediates(storeDir(options), finalKeys, jobKeys);
+            }
         } catch (const Error& e) {
             failure = e; // the report still records what ran
         }

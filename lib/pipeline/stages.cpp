@@ -72,7 +72,7 @@ std::vector<StageSpec> makeCatalogue() {
     stages.push_back(envsh);
 
     // 2: transfer_bounce layer; 3: one spawn rule (lib/raycast); 4: scenes (materials at hits, irradiance transfer)
-    StageSpec transfer{"transfer", 4, "per-vertex SH transfer by ray casting"};
+    StageSpec transfer{"transfer", 5, "per-vertex SH transfer by ray casting"};
     transfer.inputs = {{"mesh", FileKind::Mesh, "", ""}};
     transfer.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
     transfer.params = {{"mode", ParamType::String, 0.0, 0.0, {"unshadowed", "shadowed", "interreflected"}},

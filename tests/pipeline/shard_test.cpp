@@ -3,6 +3,7 @@
 #include "pipeline_test_util.h"
 
 #include "bundle.h"
+#include "../scene_gltf.h"
 
 namespace prt {
 namespace {
@@ -41,6 +42,7 @@ TEST(Shards, AMergeRefusesACorruptedShardBundleByName) {
     test::TempDir dir;
     test::writeSkyExr(dir / "sky.exr", 1.0f);
     RunOptions options = test::testOptions(dir / "cache");
+    options.keepIntermediates = true; // the shard entries this test corrupts
     nlohmann::json report = test::runQuietly(shardedPipeline(dir, 3), options);
     std::string store = options.cacheDir + "/store";
     std::string mergedKey = report["stages"][1]["key"];
@@ -156,6 +158,61 @@ TEST_F(Merge, RefusesShardsThatDoNotTileOneRun) {
     expectRefused({shard(0), shard(1), dir / "other.glb"}, "differs from the mesh");
 
     expectRefused({dir / "whole.glb"}, "not a shard bundle");
+}
+
+} // namespace
+} // namespace prt
+
+namespace prt {
+namespace {
+
+// A glTF scene's transfer excludes the albedo and carries it as a "diffuse_albedo" layer; sharded, each shard
+// holds its rows of it, so the merged bundle is the unsharded one and relight takes it.
+TEST(Shards, ASceneShardedKeepsItsAlbedoLayerAndMergesBitForBit) {
+    test::TempDir dir;
+    test::writeSkyExr(dir / "sky.exr", 1.0f);
+    test::TestScene scene;
+    scene.meshes.push_back({{makeSphere(0.5f, 12, 16), 0}});
+    scene.meshes.push_back({{makePlane(4.0f, 4, -0.5f), 0}});
+    scene.nodes = nlohmann::json::array({{{"mesh", 0}}, {{"mesh", 1}}});
+    scene.roots = {0, 1};
+    scene.materials = nlohmann::json::array({{{"pbrMetallicRoughness", {{"baseColorFactor", {0.8, 0.3, 0.2, 1.0}}, {"metallicFactor", 0.0}}}}});
+    test::writeSceneGltf(dir / "scene.gltf", scene);
+    auto pipeline = [&](int shards, const std::string& run) {
+        std::string text = test::withDir(R"(
+[inputs]
+scene = { mesh = "@DIR@/scene.gltf" }
+sky = { env = "@DIR@/sky.exr" }
+[stages.prep]
+run = "meshprep"
+inputs = { mesh = "scene" }
+[stages.transfer]
+run = "transfer"
+inputs = { mesh = "prep" }
+mode = "interreflected"
+samples = 16
+bounces = 2
+shards = )" + std::to_string(shards) + R"(
+[stages.relight]
+run = "relight"
+inputs = { bundle = "transfer", env = "sky" }
+[outputs]
+bundle = { from = "transfer", path = "@DIR@/out-)" + run + R"(/bundle.glb" }
+radiance = { from = "relight", path = "@DIR@/out-)" + run + R"(/radiance.npy" }
+)", dir.path);
+        return parsePipeline(text, dir / (run + ".toml"));
+    };
+    nlohmann::json whole = test::runQuietly(pipeline(1, "whole"), test::testOptions(dir / "cache-whole"));
+    nlohmann::json sharded = test::runQuietly(pipeline(3, "sharded"), test::testOptions(dir / "cache-sharded"));
+    ASSERT_EQ(readFileBytes(dir / "out-sharded/bundle.glb"), readFileBytes(dir / "out-whole/bundle.glb"));
+    EXPECT_EQ(test::outputHashes(sharded), test::outputHashes(whole));
+    const Layer* albedo = nullptr;
+    Bundle bundle = readBundle(dir / "out-sharded/bundle.glb");
+    for (const Layer& layer : bundle.layers)
+        if (layer.name == "diffuse_albedo") albedo = &layer;
+    ASSERT_NE(albedo, nullptr);
+    EXPECT_EQ(albedo->domain, "vertex");
+    EXPECT_FLOAT_EQ(albedo->data[0], 0.8f);
 }
 
 } // namespace
