@@ -7,14 +7,6 @@
 #include <algorithm>
 #include <vector>
 
-#if defined(__GNUC__) && defined(__x86_64__)
-#define PRT_HAVE_AVX2_CLONE 1
-#define PRT_ALWAYS_INLINE __attribute__((always_inline))
-#else
-#define PRT_HAVE_AVX2_CLONE 0
-#define PRT_ALWAYS_INLINE
-#endif
-
 namespace prt {
 
 namespace {

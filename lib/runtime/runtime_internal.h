@@ -8,6 +8,16 @@
 #include <string>
 #include <vector>
 
+// The relighting kernels (relight.cpp, relight_encoded.cpp) are also compiled for AVX2 and chosen at run time on
+// GCC / x86-64 (the same bits: no FMA, the same per-lane order); their bodies are inlined into both versions.
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PRT_HAVE_AVX2_CLONE 1
+#define PRT_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define PRT_HAVE_AVX2_CLONE 0
+#define PRT_ALWAYS_INLINE
+#endif
+
 namespace prt {
 
 // The layer called `name` of `bundle`, of semantic "sh_transfer_rgb" in `domain`. `stage` names the prt stage that

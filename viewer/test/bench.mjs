@@ -4,7 +4,7 @@
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import { chromium } from 'playwright-core';
+import { launchChromium } from './chromium.mjs';
 import { serve } from '../serve.mjs';
 
 const [prt, bunny, work, out] = process.argv.slice(2);
@@ -27,12 +27,7 @@ fs.writeFileSync(file('flat.sh.json'), JSON.stringify({ format: 'prt-sh', order:
 
 const server = await serve(work);
 const base = `http://127.0.0.1:${server.address().port}`;
-const browser = await chromium.launch({
-  executablePath: process.env.PRT_CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-         '--disable-background-networking', '--disable-component-update', '--disable-sync',
-         '--enable-unsafe-swiftshader', '--use-angle=swiftshader'],
-});
+const browser = await launchChromium();
 const rows = [];
 try {
   const cases = [];
