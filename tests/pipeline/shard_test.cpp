@@ -172,8 +172,8 @@ TEST(Shards, ASceneShardedKeepsItsAlbedoLayerAndMergesBitForBit) {
     test::TempDir dir;
     test::writeSkyExr(dir / "sky.exr", 1.0f);
     test::TestScene scene;
-    scene.meshes.push_back({{makeSphere(0.5f, 12, 16), 0}});
-    scene.meshes.push_back({{makePlane(4.0f, 4, -0.5f), 0}});
+    scene.meshes.push_back({test::TestPrimitive{makeSphere(0.5f, 12, 16), 0, {}, {}}});
+    scene.meshes.push_back({test::TestPrimitive{makePlane(4.0f, 4, -0.5f), 0, {}, {}}});
     scene.nodes = nlohmann::json::array({{{"mesh", 0}}, {{"mesh", 1}}});
     scene.roots = {0, 1};
     scene.materials = nlohmann::json::array({{{"pbrMetallicRoughness", {{"baseColorFactor", {0.8, 0.3, 0.2, 1.0}}, {"metallicFactor", 0.0}}}}});
