@@ -5,6 +5,7 @@
 #include "core.h"
 #include "runtime.h"
 #include "scene.h"
+#include "scene_gltf.h"
 
 #include <gtest/gtest.h>
 
@@ -254,6 +255,26 @@ TEST(BakeShards, MergedShardsEqualTheUnshardedBakeInHalf) {
     Folder inputs("shards_half_in");
     BakeOptions options = smallBake(writeMesh(inputs, "scene.glb", planeUnderABall(1)), "");
     expectMergedShardsEqualTheWholeBake(options, "shards_half");
+}
+
+TEST(BakeShards, AScenesMergedShardsEqualItsUnshardedBake) {
+    // A glTF scene: a floor and a ball placed twice, once mirrored (Embree instances), with a coloured material,
+    // interreflected, its atlas generated over every placement.
+    Folder inputs("shards_scene_in");
+    test::TestScene scene;
+    scene.meshes = {{test::TestPrimitive{makePlane(4.0f, 4, -0.5f), 0, {}, {}}},
+                    {test::TestPrimitive{makeSphere(0.4f, 8, 12), 1, {}, {}}}};
+    scene.nodes = nlohmann::json::array({{{"mesh", 0}}, {{"mesh", 1}, {"translation", {-0.6, 0.0, 0.0}}},
+                                         {{"mesh", 1}, {"translation", {0.6, 0.0, 0.0}}, {"scale", {-1.0, 1.0, 1.0}}}});
+    scene.roots = {0, 1, 2};
+    scene.materials = nlohmann::json::array(
+        {{{"pbrMetallicRoughness", {{"baseColorFactor", {0.9, 0.9, 0.9, 1.0}}, {"metallicFactor", 0.0}}}},
+         {{"pbrMetallicRoughness", {{"baseColorFactor", {0.8, 0.2, 0.1, 1.0}}, {"metallicFactor", 0.0}}}}});
+    test::writeSceneGltf(inputs / "scene.gltf", scene);
+    BakeOptions options = smallBake(inputs / "scene.gltf", "");
+    options.resolution = 64;
+    options.bounces = 1;
+    expectMergedShardsEqualTheWholeBake(options, "shards_scene");
 }
 
 TEST(BakeShards, MergedShardsEqualTheUnshardedBakeInU8WithAGeneratedAtlas) {
