@@ -53,6 +53,15 @@ void runRender(const RenderOptions& options) {
     }
     TexelRelightModel atlas;
     if (options.texels) atlas = loadTexelRelightModel(options.bundle);
+    // A glossy bundle (`prt glossy`): its lobes are evaluated per pixel, toward each pixel's own view direction.
+    std::optional<GlossyModel> glossy;
+    if (!options.texels && findLayer(bundle, "glossy_lobes")) {
+        if (bundle.asset) throw Error(options.bundle, "layers", "glossy lobes of a scene are not supported", kExitInput);
+        if (options.rotateYDegrees != 0.0)
+            throw Error("", "--rotate-y", "does not combine with glossy lobes (they are fitted to the map as it is)",
+                        kExitUsage);
+        glossy = glossyModel(bundle, options.bundle);
+    }
     RelightModel model = options.texels ? std::move(atlas.rows) : relightModel(std::move(bundle), options.bundle);
     if (surface) {
         if (!model.albedoExcluded)
@@ -65,8 +74,9 @@ void runRender(const RenderOptions& options) {
                     kExitUsage);
     double R[9];
     sh::rotationY(options.rotateYDegrees, R);
-    std::vector<float> lighting = environmentLighting(readEnvironmentMap(options.env), model.order,
-                                                      options.rotateYDegrees != 0.0 ? R : nullptr, window);
+    const EnvironmentMap environment = readEnvironmentMap(options.env);
+    std::vector<float> lighting =
+        environmentLighting(environment, model.order, options.rotateYDegrees != 0.0 ? R : nullptr, window);
     // A lower --order keeps the first order^2 coefficients of the lighting, as the viewer's order slider does.
     if (options.order > 0)
         for (size_t i = size_t(options.order) * options.order * 3; i < lighting.size(); ++i) lighting[i] = 0.0f;
@@ -82,7 +92,15 @@ void runRender(const RenderOptions& options) {
         image = renderTexelRadiance(mesh, relit, camera, cornerUv.empty() ? nullptr : cornerUv.data(),
                                     surface ? &*surface : nullptr);
     } else {
-        image = renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
+        if (glossy) {
+            if (environment.layout != EnvLayout::Equirectangular)
+                throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map", kExitUsage);
+            PrefilteredEnvironment prefiltered = prefilterEnvironment(
+                environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height);
+            image = renderGlossyRadiance(mesh, radiance, *glossy, prefiltered, camera, false);
+        } else {
+            image = renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
+        }
     }
     writeRenderedPicture(options.output, image, options.exposure);
     logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +

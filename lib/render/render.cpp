@@ -4,6 +4,7 @@
 #include "compare.h"
 #include "core.h"
 #include "material.h"
+#include "runtime.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -109,6 +110,35 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
             for (int c = 0; c < 3; ++c) out[c] *= albedo[c];
         },
         surface);
+}
+
+RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
+                                   const PrefilteredEnvironment& env, const PinholeCamera& camera, bool glossyOnly) {
+    if (!glossyOnly && diffuse.size() != mesh.vertexCount() * 3)
+        throw Error("", "render", std::to_string(diffuse.size() / 3) + " radiance rows for " +
+                                      std::to_string(mesh.vertexCount()) + " vertices");
+    if (glossy.vertexCount != mesh.vertexCount())
+        throw Error("", "render", "the glossy lobes have " + std::to_string(glossy.vertexCount) + " vertices, the mesh " +
+                                      std::to_string(mesh.vertexCount()));
+    return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
+        const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
+        const float w[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
+        float p[3] = {0, 0, 0}, d[3];
+        for (int k = 0; k < 3; ++k)
+            for (int a = 0; a < 3; ++a) p[a] += w[k] * mesh.positions[size_t(corner[k]) * 3 + a];
+        for (int a = 0; a < 3; ++a) d[a] = camera.eye[a] - p[a];
+        const float length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (int a = 0; a < 3; ++a) out[a] = 0.0f;
+        for (int k = 0; k < 3; ++k) {
+            if (!glossyOnly)
+                for (int a = 0; a < 3; ++a) out[a] += w[k] * diffuse[size_t(corner[k]) * 3 + a];
+            if (!(length > 0.0f)) continue;
+            const float unit[3] = {d[0] / length, d[1] / length, d[2] / length};
+            float lit[3];
+            glossyRadianceToward(glossy, env, corner[k], unit, lit);
+            for (int a = 0; a < 3; ++a) out[a] += w[k] * lit[a];
+        }
+    });
 }
 
 RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const PinholeCamera& camera,

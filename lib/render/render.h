@@ -15,6 +15,9 @@
 
 namespace prt {
 
+struct GlossyModel;           // prt/glossy.h
+struct PrefilteredEnvironment; // prt/glossy.h
+
 struct RenderedImage {
     Image radiance;              // linear RGB, row 0 at the top
     std::vector<float> coverage; // per pixel: 1 where the ray hits the mesh (front or back face), 0 where it escapes
@@ -30,6 +33,14 @@ struct RenderedImage {
 // lightmap; primary rays pass through cut-outs. Back faces stay black, double-sided or not, as in the reference.
 RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>& radiance, const PinholeCamera& camera,
                                    const Surface* surface = nullptr);
+
+// Renders per-vertex diffuse radiance ([V][3], as renderVertexRadiance interpolates it) plus glossy lobes evaluated
+// per pixel: at each hit the view direction from the hit point to the camera's eye, each corner's lobes toward that
+// one direction (glossyRadianceToward, prt/glossy.h) blended with the hit's barycentrics. So a highlight moves
+// across a triangle as the camera does, where per-vertex glossy radiance would cross-fade between its corners.
+// With glossyOnly the diffuse radiance is left out (it may then be empty). Needs a model of this mesh's vertices.
+RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
+                                   const PrefilteredEnvironment& env, const PinholeCamera& camera, bool glossyOnly);
 
 // Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0, or
 // through `cornerUv` ([3 T][2], a scene bake's layer "lightmap_uv": corner k of triangle t at 3 t + k) when given.

@@ -211,37 +211,44 @@ void turnViewLobes(const GlossyModel& model, uint32_t vertex, uint32_t view, con
     }
 }
 
+void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment& env, uint32_t vertex,
+                          const float d[3], float radiance[3]) {
+    radiance[0] = radiance[1] = radiance[2] = 0.0f;
+    const float* n = &model.normals[size_t(vertex) * 3];
+    if (dot3(d, n) <= 0.0f) return; // the lobe sends nothing below the surface
+    uint32_t views[3];
+    float weights[3];
+    viewWeights(model, d, views, weights);
+    // The view's mirror direction about the (unit) normal; each view's lobes turned onto it, then the three views'
+    // radiances blended: no lobe of one view is paired with a lobe of another.
+    double ln2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
+    double c = (double(d[0]) * n[0] + double(d[1]) * n[1] + double(d[2]) * n[2]) / ln2;
+    float mirror[3];
+    for (int i = 0; i < 3; ++i) mirror[i] = float(2.0 * c * n[i] - d[i]);
+    float turned[4 * 5];
+    const int lobes = std::min(model.lobes, 4); // glossyModel allows 1..4
+    for (int j = 0; j < 3; ++j) {
+        if (!(weights[j] > 0.0f)) continue;
+        turnViewLobes(model, vertex, views[j], mirror, turned);
+        for (int k = 0; k < lobes; ++k) {
+            float lit[3];
+            integrateLobe(env, &turned[size_t(k) * 5], lit);
+            for (int i = 0; i < 3; ++i) radiance[i] += weights[j] * lit[i];
+        }
+    }
+}
+
 void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env, const float eye[3],
                     float* radiance) {
-    std::vector<float> turned(size_t(model.lobes) * 5);
     for (uint32_t v = 0; v < model.vertexCount; ++v) {
         float* out = radiance + size_t(v) * 3;
         out[0] = out[1] = out[2] = 0.0f;
         const float* p = &model.positions[size_t(v) * 3];
-        const float* n = &model.normals[size_t(v) * 3];
         float d[3] = {eye[0] - p[0], eye[1] - p[1], eye[2] - p[2]};
         float length = std::sqrt(dot3(d, d));
         if (!(length > 0.0f)) continue;
         for (float& c : d) c /= length;
-        if (dot3(d, n) <= 0.0f) continue; // the lobe sends nothing below the surface
-        uint32_t views[3];
-        float weights[3];
-        viewWeights(model, d, views, weights);
-        // The eye's mirror direction about the (unit) normal; each view's lobes turned onto it, then the three
-        // views' radiances blended: no lobe of one view is paired with a lobe of another.
-        double ln2 = double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2];
-        double c = (double(d[0]) * n[0] + double(d[1]) * n[1] + double(d[2]) * n[2]) / ln2;
-        float mirror[3];
-        for (int i = 0; i < 3; ++i) mirror[i] = float(2.0 * c * n[i] - d[i]);
-        for (int j = 0; j < 3; ++j) {
-            if (!(weights[j] > 0.0f)) continue;
-            turnViewLobes(model, v, views[j], mirror, turned.data());
-            for (int k = 0; k < model.lobes; ++k) {
-                float lit[3];
-                integrateLobe(env, &turned[size_t(k) * 5], lit);
-                for (int i = 0; i < 3; ++i) out[i] += weights[j] * lit[i];
-            }
-        }
+        glossyRadianceToward(model, env, v, d, out);
     }
 }
 

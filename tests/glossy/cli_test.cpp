@@ -8,6 +8,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -117,11 +120,26 @@ TEST_F(GlossyCli, RelightImageRendersTheLobesTowardTheCamera) {
     pinhole.fovyDegrees = 35.0f;
     pinhole.width = 24;
     pinhole.height = 20;
+    // The picture evaluates the lobes per pixel, toward each pixel's own view direction; the per-vertex radiance
+    // toward the eye, interpolated, is what it replaces. Both see the same highlights on average (the lobes are
+    // smooth at this sharpness), but not pixel for pixel.
     prt::RenderedImage expected = prt::renderVertexRadiance(prt::readBundle(path("g.glb")).mesh,
                                                             prt::readVertexRadiance(path("eye.npy")), pinhole);
     prt::Image image = prt::readImage(path("pic.exr"));
     ASSERT_EQ(image.rgb.size(), expected.radiance.rgb.size());
-    for (size_t i = 0; i < image.rgb.size(); ++i) ASSERT_FLOAT_EQ(image.rgb[i], expected.radiance.rgb[i]) << i;
+    double pictureSum = 0.0, vertexSum = 0.0, largest = 0.0;
+    for (size_t i = 0; i < image.rgb.size(); ++i) {
+        pictureSum += image.rgb[i], vertexSum += expected.radiance.rgb[i];
+        largest = std::max(largest, std::fabs(double(image.rgb[i]) - expected.radiance.rgb[i]));
+    }
+    EXPECT_NEAR(pictureSum, vertexSum, 0.05 * vertexSum);
+    EXPECT_GT(largest, 1e-4); // per pixel is not per vertex
+    // `prt render` of the glossy bundle draws the same picture as `prt relight --image`.
+    ASSERT_EQ(prt("render " + path("g.glb") + " --env " + env + " --size 24,20 --camera 0,0.5,4,0,0,0,0,1,0,35 -o " +
+                      path("render.exr") + " --quiet", dir).exitCode, 0);
+    prt::Image rendered = prt::readImage(path("render.exr"));
+    ASSERT_EQ(rendered.rgb.size(), image.rgb.size());
+    for (size_t i = 0; i < image.rgb.size(); ++i) ASSERT_EQ(rendered.rgb[i], image.rgb[i]) << i;
 
     PrtRun glossyOnly = prt("relight " + path("g.glb") + " --env " + env + camera + " --glossy-only -o " +
                                 path("lobes.png") + " --quiet", dir);

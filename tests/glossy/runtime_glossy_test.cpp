@@ -2,6 +2,8 @@
 // checks.
 #include "glossy.h"
 #include "runtime.h"
+#include "render.h"
+#include "scene.h"
 
 #include <gtest/gtest.h>
 
@@ -183,3 +185,75 @@ TEST(GlossyRuntime, LoaderRefusesALobeLayerThatDisagreesWithItsViewSet) {
 }
 
 } // namespace
+
+namespace {
+
+// A square of two triangles in the plane y = 0 (normal +Y), every vertex and view with one lobe along the view's
+// mirror direction: identical lobes everywhere, so the glossy radiance at a point depends only on its view direction.
+prt::GlossyModel mirrorLobePlane(const prt::TriMesh& plane, float sharpness) {
+    const prt::glossy::ViewSet& views = prt::glossy::viewSet();
+    prt::GlossyModel model;
+    model.vertexCount = uint32_t(plane.vertexCount());
+    model.lobes = 1;
+    for (const auto& d : views.directions) model.views.insert(model.views.end(), d.begin(), d.end());
+    for (const auto& t : views.triangles) model.triangles.insert(model.triangles.end(), t.begin(), t.end());
+    model.positions = plane.positions;
+    model.normals = plane.normals;
+    for (uint32_t v = 0; v < model.vertexCount; ++v)
+        for (const auto& w : views.directions) {
+            const float mirror[3] = {-w[0], w[1], -w[2]}; // about +Y
+            model.values.insert(model.values.end(), {1.0f, mirror[0], mirror[1], mirror[2], sharpness});
+        }
+    return model;
+}
+
+} // namespace
+
+TEST(GlossyRender, LobesAreEvaluatedPerPixelTowardEachPixelsOwnViewDirection) {
+    prt::TriMesh plane = prt::makePlane(2.0f, 1, 0.0f);
+    prt::GlossyModel model = mirrorLobePlane(plane, 60.0f);
+    // A map whose radiance varies with direction: brighter toward +X and up.
+    const int width = 64, height = 32;
+    std::vector<float> rgb(size_t(width) * height * 3);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            for (int c = 0; c < 3; ++c) rgb[(size_t(y) * width + x) * 3 + c] = 0.2f + float(x) / width + 0.5f * float(height - y) / height;
+    prt::PrefilteredEnvironment env = prt::prefilterEnvironment(rgb.data(), width, height);
+    prt::PinholeCamera camera;
+    camera.eye = {0.3f, 1.2f, 2.0f};
+    camera.target = {0.0f, 0.0f, 0.0f};
+    camera.fovyDegrees = 50.0f;
+    camera.width = 32;
+    camera.height = 24;
+    prt::RenderedImage picture = prt::renderGlossyRadiance(plane, {}, model, env, camera, true);
+    // Per vertex toward the eye, interpolated: what the per-pixel picture replaces.
+    std::vector<float> vertexGlossy(plane.vertexCount() * 3);
+    prt::glossyRadiance(model, env, camera.eye.data(), vertexGlossy.data());
+    prt::RenderedImage perVertex = prt::renderVertexRadiance(plane, vertexGlossy, camera);
+    const prt::PinholeRays rays = prt::pinholeRays(camera);
+    size_t covered = 0;
+    double largestVertexDifference = 0.0;
+    for (size_t pixel = 0; pixel < picture.coverage.size(); ++pixel) {
+        if (picture.coverage[pixel] < 0.5f) continue;
+        ++covered;
+        // The hit point on y = 0 and the direction from it to the eye, by hand.
+        float d[3];
+        prt::pinholeRayDirection(rays, pixel, d);
+        const float t = -camera.eye[1] / d[1];
+        float view[3];
+        for (int a = 0; a < 3; ++a) view[a] = -t * d[a];
+        const float length = std::sqrt(view[0] * view[0] + view[1] * view[1] + view[2] * view[2]);
+        for (float& a : view) a /= length;
+        float expected[3];
+        prt::glossyRadianceToward(model, env, 0, view, expected);
+        for (int c = 0; c < 3; ++c) {
+            const float got = picture.radiance.rgb[pixel * 3 + c];
+            ASSERT_NEAR(got, expected[c], 1e-3f * std::max(1.0f, expected[c])) << "pixel " << pixel;
+            largestVertexDifference =
+                std::max(largestVertexDifference, std::fabs(double(perVertex.radiance.rgb[pixel * 3 + c]) - got) / got);
+        }
+    }
+    EXPECT_GT(covered, 200u);
+    // Interpolating the corners' radiance instead misses how the highlight moves inside the triangles.
+    EXPECT_GT(largestVertexDifference, 0.02);
+}

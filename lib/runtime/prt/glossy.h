@@ -61,6 +61,14 @@ void integrateLobe(const PrefilteredEnvironment& env, const float lobe[5], float
 // direction about the vertex normal to unit `mirror` (amplitude and sharpness kept): out [lobes][5].
 void turnViewLobes(const GlossyModel& model, uint32_t vertex, uint32_t view, const float mirror[3], float* out);
 
+// Glossy radiance of vertex `vertex` toward unit direction d (from the surface to the viewer): for each of the 3
+// views around d, that view's lobes turned onto d's mirror direction about the vertex normal (turnViewLobes) and
+// integrated against the environment, the three blended with the barycentric weights; zero where d is below the
+// vertex's tangent plane. What glossyRadiance does per vertex, and a per-pixel renderer per triangle corner.
+// Needs model.lobes in 1..4 (as glossyModel guarantees; more are not read).
+void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment& env, uint32_t vertex,
+                          const float d[3], float radiance[3]);
+
 // Glossy radiance of every vertex toward the point `eye`: for each of the 3 views around the eye direction, that
 // view's lobes turned onto the eye's mirror direction (turnViewLobes) and integrated against the environment, the
 // three radiances blended with the barycentric weights (docs/glossy.md, "Runtime": lobes are never paired across
