@@ -328,15 +328,12 @@ void runRelight(const RelightOptions& options) {
                   relightSeconds > 0.0 ? model.vertexCount / relightSeconds / 1e6 : 0.0, rows);
     logInfo(rate);
 
-    PrefilteredEnvironment prefiltered;
-    if (glossy) {
-        if (environment.layout != EnvLayout::Equirectangular)
-            throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map");
-        prefiltered = prefilterEnvironment(environment.radiance.rgb.data(), environment.radiance.width,
-                                           environment.radiance.height);
-    }
+    if (glossy && environment.layout != EnvLayout::Equirectangular)
+        throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map");
     if (glossy && !imageMode) { // a picture evaluates the lobes per pixel instead (below)
         double glossyStart = nowSeconds();
+        PrefilteredEnvironment prefiltered = prefilterEnvironment(
+            environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height);
         std::vector<float> glossyPart(radiance.size());
         glossyRadiance(*glossy, prefiltered, eye.data(), glossyPart.data());
         for (size_t i = 0; i < radiance.size(); ++i) radiance[i] = (options.glossyOnly ? 0.0f : radiance[i]) + glossyPart[i];
@@ -352,7 +349,8 @@ void runRelight(const RelightOptions& options) {
         // Diffuse radiance interpolated over each hit triangle as `prt render` does; glossy lobes per pixel, toward
         // the pixel's own view direction.
         double pictureStart = nowSeconds();
-        RenderedImage picture = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, prefiltered, camera, options.glossyOnly)
+        RenderedImage picture = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, environment, options.env, camera,
+                                                              options.glossyOnly)
                                        : renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
         if (glossy) {
             char line[160];

@@ -92,15 +92,8 @@ void runRender(const RenderOptions& options) {
         image = renderTexelRadiance(mesh, relit, camera, cornerUv.empty() ? nullptr : cornerUv.data(),
                                     surface ? &*surface : nullptr);
     } else {
-        if (glossy) {
-            if (environment.layout != EnvLayout::Equirectangular)
-                throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map", kExitUsage);
-            PrefilteredEnvironment prefiltered = prefilterEnvironment(
-                environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height);
-            image = renderGlossyRadiance(mesh, radiance, *glossy, prefiltered, camera, false);
-        } else {
-            image = renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
-        }
+        image = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, environment, options.env, camera, false)
+                       : renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
     }
     writeRenderedPicture(options.output, image, options.exposure);
     logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +

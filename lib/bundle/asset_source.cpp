@@ -63,11 +63,19 @@ std::vector<PrimitiveTriangles> primitivesWithoutNormals(const Bundle& bundle, c
     for (const SceneReceiver& receiver : bundle.asset->receivers) {
         const tinygltf::Primitive& primitive = model.meshes[size_t(receiver.mesh)].primitives[size_t(receiver.primitive)];
         if (!seen.insert({receiver.mesh, receiver.primitive}).second) continue;
+        auto anyZero = [](const std::vector<float>& normals, size_t first, size_t count) {
+            for (size_t i = 3 * first; i < 3 * (first + count); i += 3)
+                if (normals[i] == 0.0f && normals[i + 1] == 0.0f && normals[i + 2] == 0.0f) return true;
+            return false;
+        };
+        const bool authored = primitive.attributes.count("NORMAL") > 0;
+        // The flattened rows already hold this placement's normals: a zero vector stays zero in world space and a
+        // non-zero one stays non-zero under any invertible transform, so only a primitive with a zero row is read.
+        const std::vector<float>& rows = bundle.mesh.normals;
+        if (authored && !rows.empty() && !anyZero(rows, receiver.firstVertex, receiver.vertexCount)) continue;
         TriMesh triangles = detail::readGltfPrimitive(model, receiver.mesh, receiver.primitive, file);
-        bool usable = primitive.attributes.count("NORMAL") > 0;
-        for (size_t i = 0; usable && i + 2 < triangles.normals.size(); i += 3)
-            usable = triangles.normals[i] != 0.0f || triangles.normals[i + 1] != 0.0f || triangles.normals[i + 2] != 0.0f;
-        if (!usable) out.push_back({receiver.mesh, receiver.primitive, std::move(triangles)});
+        if (authored && !anyZero(triangles.normals, 0, triangles.normals.size() / 3)) continue;
+        out.push_back({receiver.mesh, receiver.primitive, std::move(triangles)});
     }
     return out;
 }

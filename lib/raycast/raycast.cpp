@@ -193,7 +193,9 @@ EmbreeScene::EmbreeScene(const TriMesh& mesh, const Surface* surface) {
     if (!device)
         throw Error("", "embree device",
                     "cannot create (error code " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")", kExitFailure);
-    rtcSetDeviceMemoryMonitorFunction(device, countEmbreeBytes, nullptr);
+    // Only a scene logs its structures' size, so only a scene's device pays for the monitor on every allocation.
+    const bool sceneAsset = surface && surface->asset;
+    if (sceneAsset) rtcSetDeviceMemoryMonitorFunction(device, countEmbreeBytes, nullptr);
     const int64_t bytesBefore = embreeBytes;
     try {
         scene = rtcNewScene(device);
@@ -207,7 +209,7 @@ EmbreeScene::EmbreeScene(const TriMesh& mesh, const Surface* surface) {
             attachTriangles(device, scene, mesh, nullptr, mesh.triangleCount(), 0, uint32_t(mesh.vertexCount()), filter);
         rtcCommitScene(scene);
         throwIfEmbreeFailed(device, "scene build");
-        if (surface && surface->asset)
+        if (sceneAsset)
             logInfo("ray tracing: " + std::to_string(surface->asset->receivers.size()) + " receivers, " +
                     (instances ? std::to_string(prototypes.size()) + " meshes built once and placed as instances"
                                : std::string("every triangle in one BVH")) +

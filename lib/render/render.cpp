@@ -113,13 +113,18 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 }
 
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
-                                   const PrefilteredEnvironment& env, const PinholeCamera& camera, bool glossyOnly) {
+                                   const EnvironmentMap& environment, const std::string& envSource,
+                                   const PinholeCamera& camera, bool glossyOnly) {
     if (!glossyOnly && diffuse.size() != mesh.vertexCount() * 3)
         throw Error("", "render", std::to_string(diffuse.size() / 3) + " radiance rows for " +
                                       std::to_string(mesh.vertexCount()) + " vertices");
     if (glossy.vertexCount != mesh.vertexCount())
         throw Error("", "render", "the glossy lobes have " + std::to_string(glossy.vertexCount) + " vertices, the mesh " +
                                       std::to_string(mesh.vertexCount()));
+    if (environment.layout != EnvLayout::Equirectangular)
+        throw Error(envSource, "--env", "the glossy runtime needs an equirectangular (2:1) map");
+    const PrefilteredEnvironment env = prefilterEnvironment(environment.radiance.rgb.data(), environment.radiance.width,
+                                                            environment.radiance.height);
     return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
         const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
         const float w[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
@@ -128,14 +133,14 @@ RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>
             for (int a = 0; a < 3; ++a) p[a] += w[k] * mesh.positions[size_t(corner[k]) * 3 + a];
         for (int a = 0; a < 3; ++a) d[a] = camera.eye[a] - p[a];
         const float length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (int a = 0; a < 3; ++a) d[a] /= length; // the pixel's view direction, shared by the three corners
         for (int a = 0; a < 3; ++a) out[a] = 0.0f;
         for (int k = 0; k < 3; ++k) {
             if (!glossyOnly)
                 for (int a = 0; a < 3; ++a) out[a] += w[k] * diffuse[size_t(corner[k]) * 3 + a];
             if (!(length > 0.0f)) continue;
-            const float unit[3] = {d[0] / length, d[1] / length, d[2] / length};
             float lit[3];
-            glossyRadianceToward(glossy, env, corner[k], unit, lit);
+            glossyRadianceToward(glossy, env, corner[k], d, lit);
             for (int a = 0; a < 3; ++a) out[a] += w[k] * lit[a];
         }
     });

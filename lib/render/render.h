@@ -15,8 +15,7 @@
 
 namespace prt {
 
-struct GlossyModel;           // prt/glossy.h
-struct PrefilteredEnvironment; // prt/glossy.h
+struct GlossyModel; // prt/glossy.h
 
 struct RenderedImage {
     Image radiance;              // linear RGB, row 0 at the top
@@ -38,9 +37,11 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 // per pixel: at each hit the view direction from the hit point to the camera's eye, each corner's lobes toward that
 // one direction (glossyRadianceToward, prt/glossy.h) blended with the hit's barycentrics. So a highlight moves
 // across a triangle as the camera does, where per-vertex glossy radiance would cross-fade between its corners.
-// With glossyOnly the diffuse radiance is left out (it may then be empty). Needs a model of this mesh's vertices.
+// With glossyOnly the diffuse radiance is left out (it may then be empty). Needs a model of this mesh's vertices and
+// an equirectangular map (prefiltered here once); throws prt::Error(envSource, "--env", ...) for another layout.
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
-                                   const PrefilteredEnvironment& env, const PinholeCamera& camera, bool glossyOnly);
+                                   const EnvironmentMap& environment, const std::string& envSource,
+                                   const PinholeCamera& camera, bool glossyOnly);
 
 // Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0, or
 // through `cornerUv` ([3 T][2], a scene bake's layer "lightmap_uv": corner k of triangle t at 3 t + k) when given.

@@ -219,13 +219,15 @@ TEST(GlossyRender, LobesAreEvaluatedPerPixelTowardEachPixelsOwnViewDirection) {
         for (int x = 0; x < width; ++x)
             for (int c = 0; c < 3; ++c) rgb[(size_t(y) * width + x) * 3 + c] = 0.2f + float(x) / width + 0.5f * float(height - y) / height;
     prt::PrefilteredEnvironment env = prt::prefilterEnvironment(rgb.data(), width, height);
+    prt::EnvironmentMap map;
+    map.radiance = {width, height, rgb};
     prt::PinholeCamera camera;
     camera.eye = {0.3f, 1.2f, 2.0f};
     camera.target = {0.0f, 0.0f, 0.0f};
     camera.fovyDegrees = 50.0f;
     camera.width = 32;
     camera.height = 24;
-    prt::RenderedImage picture = prt::renderGlossyRadiance(plane, {}, model, env, camera, true);
+    prt::RenderedImage picture = prt::renderGlossyRadiance(plane, {}, model, map, "map", camera, true);
     // Per vertex toward the eye, interpolated: what the per-pixel picture replaces.
     std::vector<float> vertexGlossy(plane.vertexCount() * 3);
     prt::glossyRadiance(model, env, camera.eye.data(), vertexGlossy.data());
