@@ -13,11 +13,16 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace prt::test {
 
 struct TestPrimitive {
+    // A constructor rather than aggregate initialisation, so that {mesh, material} leaves the rest empty without
+    // -Wmissing-field-initializers.
+    TestPrimitive(TriMesh mesh_ = {}, int material_ = -1, std::vector<float> uv1_ = {}, std::vector<float> colors_ = {})
+        : mesh(std::move(mesh_)), material(material_), uv1(std::move(uv1_)), colors(std::move(colors_)) {}
     TriMesh mesh;              // POSITION, NORMAL, TEXCOORD_0 (mesh.texcoords) as present; indices
     int material = -1;
     std::vector<float> uv1;    // TEXCOORD_1 per vertex, or empty

@@ -140,8 +140,12 @@ TEST(AdaptTexels, OrdersStayWithinTheBoundAndGradedOverTheTexelGrid) {
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
             size_t t = size_t(y) * width + x;
-            if (x + 1 < width) EXPECT_LE(std::abs(orderOf(t) - orderOf(t + 1)), 1) << "texel " << t;
-            if (y + 1 < height) EXPECT_LE(std::abs(orderOf(t) - orderOf(t + width)), 1) << "texel " << t;
+            if (x + 1 < width) {
+                EXPECT_LE(std::abs(orderOf(t) - orderOf(t + 1)), 1) << "texel " << t;
+            }
+            if (y + 1 < height) {
+                EXPECT_LE(std::abs(orderOf(t) - orderOf(t + width)), 1) << "texel " << t;
+            }
         }
     // A per-vertex runtime call on texel layers is refused rather than misread.
     Bundle vertexBundle = transferBundle(10, 3, 1);

@@ -79,7 +79,9 @@ TEST(Coherence, TwoComparableSunsNearTheThresholdDoNotFlicker) {
             for (size_t s = 0; s < count; ++s) {
                 EXPECT_EQ(d.weights[s], 1.0);
                 // Slot s follows one sun: a 1-degree turn moves it by at most 1 degree.
-                if (frame > 0) EXPECT_LT(angleDegrees(d.lights[s].direction, previous[s]), 1.5) << s << " " << frame;
+                if (frame > 0) {
+                    EXPECT_LT(angleDegrees(d.lights[s].direction, previous[s]), 1.5) << s << " " << frame;
+                }
             }
             expectEnergyIdentity(d, env, R, options.order);
             previous.clear();

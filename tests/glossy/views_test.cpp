@@ -62,7 +62,9 @@ TEST(GlossyViews, FortySixInEveryOpenHemisphereAndCoveringRadius) {
             above += d[0] * v[0] + d[1] * v[1] + d[2] * v[2] > 0;
             nearest = std::min(nearest, angleDegrees(d, v.data()));
         }
-        if (trial < 2000) EXPECT_EQ(above, 46) << trial;
+        if (trial < 2000) {
+            EXPECT_EQ(above, 46) << trial;
+        }
         covering = std::max(covering, nearest);
     }
     EXPECT_LE(covering, 13.65);
@@ -119,7 +121,9 @@ TEST(GlossyKernel, WhiteFurnaceEnergyOfThePhongLobe) {
             tabulateKernel(grid, normal, outgoing, phong, nullptr, kernel.data());
             double energy = 0;
             for (size_t i = 0; i < grid.count(); ++i) energy += kernel[i] * grid.solidAngle[i];
-            if (degrees == 0.0) EXPECT_NEAR(energy, 0.7, 0.7 * 0.01) << exponent;
+            if (degrees == 0.0) {
+                EXPECT_NEAR(energy, 0.7, 0.7 * 0.01) << exponent;
+            }
             EXPECT_LE(energy, 0.7 * 1.005);
             EXPECT_LT(energy, previous + 1e-6);
             previous = energy;

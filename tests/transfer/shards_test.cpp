@@ -74,7 +74,7 @@ protected:
         std::string bundles;
         for (int pass = 1; pass <= bounces; ++pass) {
             std::string parts;
-            for (int i = shards - 1; i >= 0; --i) parts += " " + rows(pass - 1, i); // any order
+            for (int i = shards - 1; i >= 0; --i) parts.append(" ").append(rows(pass - 1, i)); // any order
             ok(transfer + " --gather" + parts + " -o " + exitant(pass - 1));
             for (int i = 0; i < shards; ++i) {
                 std::string out = pass == bounces ? rows(pass, i) + ".glb" : rows(pass, i);
