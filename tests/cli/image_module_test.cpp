@@ -17,13 +17,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
+struct Ran {
     int exitCode;
     std::string output; // stdout, and stderr when `withStderr`
 };
 
-Run run(const std::string& command, bool withStderr = true) {
-    Run result{-1, {}};
+Ran run(const std::string& command, bool withStderr = true) {
+    Ran result{-1, {}};
     FILE* pipe = popen((command + (withStderr ? " 2>&1" : " 2>/dev/null")).c_str(), "r");
     if (!pipe) return result;
     std::array<char, 4096> chunk;
@@ -37,16 +37,16 @@ Run run(const std::string& command, bool withStderr = true) {
 const std::string kBuild = PRT_BINARY_DIR;
 
 TEST(ImageModule, TheDriverDoesNotLinkOpenImageIO) {
-    Run ldd = run("ldd " + kBuild + "/prt-driver");
+    Ran ldd = run("ldd " + kBuild + "/prt-driver");
     ASSERT_EQ(ldd.exitCode, 0) << ldd.output;
     EXPECT_EQ(ldd.output.find("libOpenImageIO"), std::string::npos) << ldd.output;
-    Run module = run("ldd " + kBuild + "/prt_oiio.so");
+    Ran module = run("ldd " + kBuild + "/prt_oiio.so");
     ASSERT_EQ(module.exitCode, 0) << module.output;
     EXPECT_NE(module.output.find("libOpenImageIO"), std::string::npos) << module.output;
 }
 
 TEST(ImageModule, BuildInfoCoversTheModuleAndItsLibraries) {
-    Run info = run(kBuild + "/prt --build-info", false);
+    Ran info = run(kBuild + "/prt --build-info", false);
     ASSERT_EQ(info.exitCode, 0) << info.output;
     nlohmann::json build = nlohmann::json::parse(info.output);
     EXPECT_EQ(build["image_module"], prt::hashFile(kBuild + "/prt_oiio.so"));
@@ -66,12 +66,12 @@ TEST(ImageModule, ABrokenModuleIsRefusedByNameAndNotLoadedForKeys) {
     fs::copy_file(kBuild + "/prt-driver.libs", dir / "prt-driver.libs");
     std::ofstream(dir / "prt_oiio.so") << "not a shared library\n";
 
-    Run info = run((dir / "prt-driver").string() + " --build-info", false);
+    Ran info = run((dir / "prt-driver").string() + " --build-info", false);
     ASSERT_EQ(info.exitCode, 0) << info.output;
     EXPECT_EQ(nlohmann::json::parse(info.output)["image_module"], prt::hashFile((dir / "prt_oiio.so").string()));
 
     fs::path out = dir / "sh.json";
-    Run envsh = run((dir / "prt-driver").string() + " envsh " + PRT_DATA_DIR + "/env/courtyard.exr --order 2 -o " +
+    Ran envsh = run((dir / "prt-driver").string() + " envsh " + PRT_DATA_DIR + "/env/courtyard.exr --order 2 -o " +
                     out.string());
     EXPECT_EQ(envsh.exitCode, prt::kExitFailure) << envsh.output;
     EXPECT_NE(envsh.output.find((dir / "prt_oiio.so").string() + ": cannot load it"), std::string::npos)
