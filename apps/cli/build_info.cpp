@@ -4,6 +4,7 @@
 #include "cli.h"
 
 #include "core.h"
+#include "image_library.h"
 #include "pipeline.h"
 
 #include <CLI/Version.hpp>
@@ -61,7 +62,12 @@ std::string libraryIdentity(const std::string& path) {
 } // namespace
 
 void writeLinkedLibraries(const std::string& path) {
-    writeBytesAtomic(path, nlohmann::json(kLinkedLibraryPaths).dump(1) + "\n");
+    // The image module is loaded only when a stage reads or writes an image, but its libraries (OpenImageIO and
+    // the ~260 it pulls in) shape those stages' outputs: load it here, at build time, and list them too.
+    imageLibraryVersion();
+    std::set<std::string> paths(kLinkedLibraryPaths.begin(), kLinkedLibraryPaths.end());
+    for (const std::string& loaded : linkedLibraryPaths()) paths.insert(loaded);
+    writeBytesAtomic(path, nlohmann::json(std::vector<std::string>(paths.begin(), paths.end())).dump(1) + "\n");
 }
 
 std::string driverOf(const std::string& program) {
@@ -92,10 +98,14 @@ nlohmann::json buildInfo(const std::string& driver, const std::string& memoFile)
         {"tbb", TBB_VERSION_STRING},
         {"tomlplusplus", std::to_string(TOML_LIB_MAJOR) + "." + std::to_string(TOML_LIB_MINOR) + "." +
                              std::to_string(TOML_LIB_PATCH)}};
+    // The image module the driver's stages will load (image_library.h's rule), by content hash: never loaded here,
+    // so a cache key costs no OpenImageIO start-up; its OpenImageIO version is the header's above.
+    std::string imageModule = findImageModule(driver);
     return {{"prt", PRT_VERSION},
             {"build_type", PRT_BUILD_TYPE},
             {"compiler", __VERSION__},
             {"executable", hashFileMemo(driver, memoFile)},
+            {"image_module", imageModule.empty() ? std::string("none") : hashFileMemo(imageModule, memoFile)},
             {"libraries", {{"compiled", compiled}, {"loaded", std::vector<std::string>(loaded.begin(), loaded.end())}}}};
 }
 

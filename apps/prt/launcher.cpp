@@ -1,8 +1,8 @@
 // prt: a launcher that answers `prt --version` itself and hands every other command line, unchanged, to
-// prt-driver next to it (the real driver, apps/prt/main.cpp). The driver links every stage's libraries: about 270
-// shared libraries through OpenImageIO alone, whose loading and relocation is nearly all of a bare start. The
-// launcher links only the C library, so `prt --version` starts in a millisecond or two, and each other command pays
-// one extra exec (well under a millisecond next to the driver's own start-up).
+// prt-driver next to it (the real driver, apps/prt/main.cpp). The driver links every stage's libraries, about 40
+// shared libraries (OpenImageIO's ~260 are loaded only by stages that read or write an image, lib/image's
+// image_library.h). The launcher links only the C library, so `prt --version` starts in a millisecond or two, and
+// each other command pays one extra exec (well under a millisecond next to the driver's own start-up).
 #include <cerrno>
 #include <cstdio>
 #include <cstring>

@@ -3,9 +3,8 @@
 
 #include "core.h"
 #include "image.h"
+#include "image_library.h"
 #include "runtime.h"
-
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -60,17 +59,19 @@ std::vector<float> readCoefficientExr(const std::string& path, int& width, int& 
 }
 
 std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int channels) {
-    auto input = OIIO::ImageInput::open(path);
-    if (!input) throw Error(path, "", "cannot open image (" + OIIO::geterror() + ")");
-    const OIIO::ImageSpec& spec = input->spec();
-    if ((width > 0 && spec.width != width) || (height > 0 && spec.height != height) || spec.nchannels < channels)
+    std::string error;
+    OpenedImage spec = openImageFile(path, error);
+    if (!spec.handle) throw Error(path, "", "cannot open image (" + error + ")");
+    if ((width > 0 && spec.width != width) || (height > 0 && spec.height != height) || spec.channels < channels)
         throw Error(path, "", std::to_string(spec.width) + "x" + std::to_string(spec.height) + " texels of " +
-                                  std::to_string(spec.nchannels) + " channels, expected " + std::to_string(width) +
+                                  std::to_string(spec.channels) + " channels, expected " + std::to_string(width) +
                                   "x" + std::to_string(height) + " of " + std::to_string(channels));
+    if (spec.width <= 0 || spec.height <= 0 || spec.deep) throw Error(path, "", "image has no flat pixels");
+    checkedProduct({uint64_t(spec.width), uint64_t(spec.height), uint64_t(channels)}, "texel values", path, "header");
     width = spec.width, height = spec.height;
     std::vector<uint8_t> bytes(size_t(width) * height * channels);
-    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, bytes.data()))
-        throw Error(path, "", "cannot read pixels (" + input->geterror() + ")");
+    if (!readOpenedPixels(spec, channels, bytes.data(), error))
+        throw Error(path, "", "cannot read pixels (" + error + ")");
     return bytes;
 }
 

@@ -1,9 +1,8 @@
-// Reading images and environment maps through OpenImageIO.
+// Reading images and environment maps through OpenImageIO (loaded on first use, image_library.h).
 #include "image.h"
 
 #include "core.h"
-
-#include <OpenImageIO/imageio.h>
+#include "image_library.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,25 +13,26 @@ namespace prt {
 // Negative radiance down to this fraction of the mean radiance is treated as compression noise.
 constexpr double kCompressionNoise = 0.1;
 
-static Image readWithSpec(const std::string& path, OIIO::ImageSpec* specOut) {
+// Reads `path` as readImage does; `cubeTagged` (when given) says whether the file is tagged as a cube map.
+static Image readTagged(const std::string& path, bool* cubeTagged) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw Error(path, "", "file not found");
     if (std::filesystem::is_directory(path, ec)) throw Error(path, "", "is a folder, not an image");
 
     checkExrHeaders(path);
-    auto input = OIIO::ImageInput::open(path);
-    if (!input) throw Error(path, "", "not a readable image (" + OIIO::geterror() + ")");
-    const OIIO::ImageSpec& spec = input->spec();
+    std::string error;
+    OpenedImage spec = openImageFile(path, error);
+    if (!spec.handle) throw Error(path, "", "not a readable image (" + error + ")");
     // Deep EXRs hold per-pixel sample lists, not one value per pixel.
     if (spec.deep) throw Error(path, "", "deep image data is not a flat image");
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+    if (spec.width <= 0 || spec.height <= 0 || spec.channels <= 0)
         throw Error(path, "", "image has no pixels");
 
-    int channels = spec.nchannels;
+    int channels = spec.channels;
     checkedProduct({uint64_t(spec.width), uint64_t(spec.height), uint64_t(channels)}, "texel values", path, "header");
     std::vector<float> pixels(size_t(spec.width) * spec.height * channels);
-    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
-        throw Error(path, "pixels", "cannot read (" + input->geterror() + ")");
+    if (!readOpenedPixels(spec, channels, pixels.data(), error))
+        throw Error(path, "pixels", "cannot read (" + error + ")");
 
     Image image;
     image.width = spec.width;
@@ -42,20 +42,18 @@ static Image readWithSpec(const std::string& path, OIIO::ImageSpec* specOut) {
     for (size_t p = 0; p < count; ++p)
         for (int c = 0; c < 3; ++c)
             image.rgb[p * 3 + c] = pixels[p * channels + (channels >= 3 ? c : 0)];
-    if (specOut) *specOut = spec;
+    if (cubeTagged) *cubeTagged = spec.cubeEnvironment;
     return image;
 }
 
-Image readImage(const std::string& path) { return readWithSpec(path, nullptr); }
+Image readImage(const std::string& path) { return readTagged(path, nullptr); }
 
 EnvironmentMap readEnvironmentMap(const std::string& path) {
-    OIIO::ImageSpec spec;
+    bool taggedCube = false; // OpenEXR's envmap=cube attribute
     EnvironmentMap env;
-    env.radiance = readWithSpec(path, &spec);
+    env.radiance = readTagged(path, &taggedCube);
     Image& image = env.radiance;
 
-    // OpenImageIO reports OpenEXR's envmap=cube attribute as this texture format.
-    bool taggedCube = spec.get_string_attribute("textureformat") == "CubeFace Environment";
     if (image.height == 6 * image.width)
         env.layout = EnvLayout::CubeStrip;
     else if (image.width == 2 * image.height && !taggedCube)

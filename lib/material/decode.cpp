@@ -2,9 +2,7 @@
 #include "material.h"
 
 #include "core.h"
-
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
+#include "image_library.h"
 
 #include <algorithm>
 #include <cmath>
@@ -22,23 +20,22 @@ SurfaceImage decodeImage(const ImageRecord& record, const std::string& file, con
     if (record.bytes.empty()) refuse("has no data");
     // OpenImageIO picks its reader by the name's extension, then reads the bytes through the proxy.
     const char* name = record.mimeType == "image/png" ? "texture.png" : "texture.jpg";
-    OIIO::Filesystem::IOMemReader reader(const_cast<unsigned char*>(record.bytes.data()), record.bytes.size());
-    std::unique_ptr<OIIO::ImageInput> input = OIIO::ImageInput::open(name, nullptr, &reader);
-    if (!input) refuse("is not a readable " + record.mimeType + " image (" + OIIO::geterror().substr(0, 200) + ")");
-    const OIIO::ImageSpec& spec = input->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.nchannels > 4)
+    std::string error;
+    const OpenedImage spec = openImageMemory(name, record.bytes.data(), record.bytes.size(), error);
+    if (!spec.handle) refuse("is not a readable " + record.mimeType + " image (" + error.substr(0, 200) + ")");
+    if (spec.width <= 0 || spec.height <= 0 || spec.channels <= 0 || spec.channels > 4)
         refuse("has " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " texels of " +
-               std::to_string(spec.nchannels) + " channels; prt reads 1 to 4 channels");
+               std::to_string(spec.channels) + " channels; prt reads 1 to 4 channels");
     if (spec.width > kMaxTextureSide || spec.height > kMaxTextureSide ||
         uint64_t(spec.width) * uint64_t(spec.height) > kMaxTextureTexels)
         refuse("claims " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
                " texels, more than prt decodes (" + std::to_string(kMaxTextureSide) + " per side, " +
                std::to_string(kMaxTextureTexels) + " in all)");
-    const int channels = spec.nchannels;
+    const int channels = spec.channels;
     checkedProduct({uint64_t(spec.width), uint64_t(spec.height), 4}, "texel values", file, place);
     std::vector<float> pixels(size_t(spec.width) * spec.height * channels);
-    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
-        refuse("cannot decode its texels (" + input->geterror().substr(0, 200) + ")");
+    if (!readOpenedPixels(spec, channels, pixels.data(), error))
+        refuse("cannot decode its texels (" + error.substr(0, 200) + ")");
     SurfaceImage image;
     image.width = spec.width;
     image.height = spec.height;
@@ -47,7 +44,7 @@ SurfaceImage decodeImage(const ImageRecord& record, const std::string& file, con
     const bool alpha = channels == 2 || channels == 4;
     // glTF colours are not premultiplied, but OpenImageIO associates a PNG's alpha with its colours on reading
     // (unless the file says it is unassociated): divide it out again. Where alpha is 0 the colour is lost, and unused.
-    const bool associated = alpha && spec.get_int_attribute("oiio:UnassociatedAlpha", 0) == 0;
+    const bool associated = alpha && !spec.unassociatedAlpha;
     for (size_t p = 0; p < count; ++p) {
         const float* in = &pixels[p * channels];
         float* out = &image.rgba[p * 4];

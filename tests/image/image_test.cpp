@@ -2,6 +2,7 @@
 #include "image.h"
 
 #include "core.h"
+#include "image_library.h"
 
 #include <OpenImageIO/deepdata.h>
 #include <OpenImageIO/imageio.h>
@@ -268,4 +269,20 @@ TEST_F(ImageTest, ExrPreviewAndStringVectorSizesAreCheckedBeforeOpenExrAllocates
     // itself no longer reads).
     EXPECT_NO_THROW(prt::checkExrHeaders(withAttribute("fine", "preview", words({1, 1}) + std::string(4, '\x7f'))));
     EXPECT_NO_THROW(prt::checkExrHeaders(withAttribute("list", "stringvector", words({2}) + "ab" + words({0}))));
+}
+
+// Where prt looks for its OpenImageIO module (image_library.h): next to the executable, then an installed lib/prt/
+// beside its bin/, then this build tree's, then the configured install prefix's; the first that exists wins.
+TEST(ImageModule, CandidatesInTheDocumentedOrder) {
+    std::vector<std::string> candidates = prt::imageModuleCandidates("/opt/engine/bin/game");
+    ASSERT_EQ(candidates.size(), 4u);
+    EXPECT_EQ(candidates[0], "/opt/engine/bin/prt_oiio.so");
+    EXPECT_EQ(candidates[1], "/opt/engine/lib/prt/prt_oiio.so");
+    EXPECT_EQ(candidates[2], std::string(PRT_BINARY_DIR) + "/prt_oiio.so");
+    EXPECT_NE(candidates[3].find("/lib"), std::string::npos);
+    EXPECT_EQ(candidates[3].substr(candidates[3].size() - 16), "/prt/prt_oiio.so");
+    // Nothing at the first two: the build tree's module is found.
+    EXPECT_EQ(prt::findImageModule("/nonexistent/bin/game"), std::string(PRT_BINARY_DIR) + "/prt_oiio.so");
+    // The version the module reports is the one its OpenImageIO headers say (this test includes the same ones).
+    EXPECT_EQ(prt::imageLibraryVersion(), OIIO_VERSION_STRING);
 }
