@@ -1,0 +1,200 @@
+#!/usr/bin/env node
+// The viewer's other methods in Debian's headless Chromium (playwright-core), each against the CLI's own output:
+//   - hybrid lights (hybrid.js): the bunny's interreflected transfer (order 4, one bounce, so it has the bounce
+//     layer) under sunrise's cone lights and SH residual from `prt envlight`; the canvas must match the picture of
+//     `prt relight --lights --image` at sampled interior pixels, with the cone visibility `--visibility-out` wrote
+//     (turned 0 and 60 degrees, the turn locked to the visibility's), and unshadowed (`--light-samples 0`) turned
+//     freely to 120 degrees; the toggle to plain SH must match `prt render` of the same bundle and camera;
+//   - the reference beside the result (compare.js): `prt reference --image` of the same camera; the relative RMSE the
+//     page prints must be `prt compare --image`'s (of `prt render`'s EXR against the same reference) within
+//     kRmseTolerance, the reference panel must be compare's strip's reference panel, the error panel compare's
+//     false-colour picture at interior pixels, and the camera must stay locked while the comparison is shown.
+// Screenshots and agreement.json land in WORK_DIR.
+// usage: node viewer/test/methods_test.mjs PRT DATA_DIR WORK_DIR
+import { spawnSync } from 'node:child_process';
+import fs from 'node:fs';
+import path from 'node:path';
+import { launchChromium } from './chromium.mjs';
+import { serve } from '../serve.mjs';
+
+// 8-bit levels at interior pixels (3x3 neighbourhood all surface): as viewer_test.mjs (sums in another order, the
+// GPU's interpolation), plus the cone integral in float on the GPU against double in the runtime.
+const kMaxLevels = 2, kMeanLevels = 0.3;
+// The printed relative RMSE against prt compare's: the viewer's result is its own float radiance (GPU sums and
+// interpolation) and its coverage the rasteriser's, which may differ from the ray caster's at silhouette pixels.
+const kRmseTolerance = 0.01; // relative
+// Error panel against compare's picture, at pixels whose 3x3 neighbourhood is inside both coverages: the relative
+// error of two results that differ by float rounding, in colour levels.
+const kErrorPanelLevels = 3;
+
+const [prt, data, work] = process.argv.slice(2);
+if (!prt || !data || !work) {
+  console.error('usage: methods_test.mjs PRT DATA_DIR WORK_DIR');
+  process.exit(2);
+}
+fs.rmSync(work, { recursive: true, force: true });
+fs.mkdirSync(work, { recursive: true });
+const file = (name) => path.join(work, name);
+const run = (...args) => {
+  const result = spawnSync(prt, ['--quiet', ...args], { encoding: 'utf8', cwd: work });
+  if (result.status !== 0) throw new Error(`prt ${args.join(' ')} failed (${result.status}):\n${result.stderr}`);
+  return result.stdout;
+};
+const map = path.join(data, 'env/sunrise.exr');
+const size = [160, 120];
+const camera = '3.46275,7.798,18.8643,-0.00481248,4.8258,0.040403,0,1,0,35'; // docs/strips' bunny camera
+const view = ['--camera', camera, '--size', size.join(',')];
+
+run('meshprep', path.join(data, 'bunny.ply'), '-o', file('bunny.glb'));
+run('transfer', file('bunny.glb'), '--mode', 'interreflected', '--bounces', '1', '--order', '4', '--samples', '64',
+    '--albedo', '0.8', '-o', file('bunny.prt.glb'));
+run('envsh', map, '--order', '8', '-o', file('sunrise.sh.json'));
+run('envlight', map, '--order', '4', '--max-lights', '4', '-o', file('sunrise.lights.json'));
+const lightCount = JSON.parse(fs.readFileSync(file('sunrise.lights.json'), 'utf8')).lights.length;
+const hybridCases = [
+  { rotate: 0, visibility: 'visibility0.npy' },
+  { rotate: 60, visibility: 'visibility60.npy' },
+  { rotate: 120, visibility: null }, // unshadowed cones, turned freely
+];
+for (const c of hybridCases)
+  run('relight', file('bunny.prt.glb'), '--lights', file('sunrise.lights.json'), '--env', map, '--rotate-y', String(c.rotate),
+      ...(c.visibility ? ['--visibility-out', file(c.visibility)] : ['--light-samples', '0']),
+      '--image', size.join(','), '--camera', camera, '-o', file(`hybrid${c.rotate}.png`));
+run('render', file('bunny.prt.glb'), '--env', map, ...view, '-o', file('plain.png'));
+run('render', file('bunny.prt.glb'), '--env', map, ...view, '-o', file('plain.exr'));
+run('reference', file('bunny.glb'), '--env', map, '--image', size.join(','), '--camera', camera, '--bounces', '1',
+    '--albedo', '0.8', '--samples', '32', '-o', file('reference.exr'));
+run('compare', '--image', file('plain.exr'), file('reference.exr'), '-o', file('compare_error.png'), '--strip',
+    file('compare_strip.png'), '--metrics', file('compare.json'));
+const compared = JSON.parse(fs.readFileSync(file('compare.json'), 'utf8'));
+
+const server = await serve(work);
+const base = `http://127.0.0.1:${server.address().port}`;
+const browser = await launchChromium();
+let failed = false;
+const check = (ok, line) => { console.log(`${line} ${ok ? 'ok' : 'FAILED'}`); failed ||= !ok; return ok; };
+const results = { lights: lightCount, hybrid: [] };
+try {
+  const page = await browser.newPage({ viewport: { width: 1100, height: 420 }, deviceScaleFactor: 1 });
+  page.on('pageerror', (error) => console.error('page error:', error.message));
+  page.on('console', (message) => { if (message.type() === 'error') console.error('page console:', message.text()); });
+  const open = async (query) => {
+    await page.goto(`${base}/?bundle=data/bunny.prt.glb&maps=data/sunrise.sh.json&camera=${camera}&size=${size.join(',')}${query}`);
+    return page.evaluate(async () => { const api = await window.prtReady; return { renderer: api.renderer, lights: api.lights, locked: api.turnLocked }; });
+  };
+  // The canvas against a prt PNG at every 4th pixel whose 3x3 neighbourhood is lit in the PNG.
+  const against = (png, changes) => page.evaluate(async ({ png, size, changes }) => {
+    const blob = await (await fetch(`data:image/png;base64,${png}`)).blob();
+    const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+    const context = new OffscreenCanvas(size[0], size[1]).getContext('2d');
+    context.drawImage(bitmap, 0, 0);
+    const rendered = context.getImageData(0, 0, size[0], size[1]).data;
+    const at = (x, y, ch) => rendered[(y * size[0] + x) * 4 + ch];
+    const lit = (x, y) => at(x, y, 0) + at(x, y, 1) + at(x, y, 2) > 0;
+    const points = [];
+    for (let y = 1; y < size[1] - 1; y += 4)
+      for (let x = 1; x < size[0] - 1; x += 4) {
+        let inside = true;
+        for (let dy = -1; dy <= 1; ++dy) for (let dx = -1; dx <= 1; ++dx) inside &&= lit(x + dx, y + dy);
+        if (inside) points.push([x, y]);
+      }
+    window.prt.set(changes);
+    const viewer = window.prt.read(points);
+    let max = 0, sum = 0;
+    points.forEach(([x, y], k) => {
+      for (let ch = 0; ch < 3; ++ch) { const d = Math.abs(viewer[k][ch] - at(x, y, ch)); max = Math.max(max, d); sum += d; }
+    });
+    return { points: points.length, max, mean: sum / (3 * points.length), state: window.prt.state() };
+  }, { png: fs.readFileSync(file(png)).toString('base64'), size, changes });
+
+  // 1. Hybrid lights against prt relight --lights --image.
+  for (const c of hybridCases) {
+    const info = await open(`&lights=data/sunrise.lights.json&rotate=${c.rotate}` + (c.visibility ? `&visibility=data/${c.visibility}` : ''));
+    if (c.rotate === 0) console.log(`viewer: ${info.renderer}; ${info.lights} cone lights`);
+    const r = await against(`hybrid${c.rotate}.png`, { rotate: c.rotate, hybrid: true });
+    await page.locator('#view').screenshot({ path: file(`viewer_hybrid${c.rotate}.png`) });
+    check(info.lights === lightCount && r.points >= 200 && r.max <= kMaxLevels && r.mean <= kMeanLevels,
+          `hybrid, ${lightCount} lights, turned ${c.rotate}, ${c.visibility ? 'visibility from prt relight' : 'unshadowed'}: ` +
+          `${r.points} pixels, max ${r.max} mean ${r.mean.toFixed(3)} levels against prt relight --lights --image ` +
+          `(tolerance max ${kMaxLevels}, mean ${kMeanLevels})`);
+    results.hybrid.push({ ...c, ...r, state: undefined });
+    if (c.rotate === 60) {
+      const locked = await page.evaluate(() => { window.prt.set({ rotate: 10 }); return window.prt.state().rotate; });
+      check(info.locked && locked === 60, `with a visibility file the turn stays at the visibility's (asked 10, shows ${locked})`);
+    }
+    if (c.rotate === 0) {
+      // The toggle: plain SH from the same page is prt render's picture, and differs from the hybrid's.
+      const plain = await against('plain.png', { hybrid: false });
+      await page.locator('#view').screenshot({ path: file('viewer_plain.png') });
+      const hybridVsPlain = await against('plain.png', { hybrid: true });
+      check(plain.points >= 200 && plain.max <= kMaxLevels && plain.mean <= kMeanLevels && hybridVsPlain.mean > 1,
+            `toggle to plain SH: ${plain.points} pixels, max ${plain.max} mean ${plain.mean.toFixed(3)} levels against ` +
+            `prt render (tolerance max ${kMaxLevels}, mean ${kMeanLevels}); hybrid against prt render: mean ` +
+            `${hybridVsPlain.mean.toFixed(2)} levels (must exceed 1: the toggle changes the picture)`);
+      results.toggle = { plain, hybridVsPlain };
+    }
+  }
+
+  // 2. The reference beside the result, against prt compare --image.
+  await open('&referenceImage=data/reference.exr&compare=1');
+  const shown = await page.evaluate(async ({ size }) => {
+    const before = window.prt.camera();
+    window.prt.orbit(40, 10, 0.8); // locked: nothing moves
+    const after = window.prt.camera();
+    const panel = (id) => Array.from(document.getElementById(id).getContext('2d').getImageData(0, 0, size[0], size[1]).data);
+    return { before, after, metrics: window.prt.referenceMetrics(), status: document.getElementById('status').textContent,
+             reference: panel('referenceView'), error: panel('errorView') };
+  }, { size });
+  await page.locator('#views').screenshot({ path: file('viewer_compare.png') });
+  const printed = shown.status.match(/vs reference image: relative RMSE ([0-9.]+)%/);
+  const printedRmse = printed ? Number(printed[1]) / 100 : NaN;
+  const rmseOff = Math.abs(printedRmse - compared.relative_rmse) / compared.relative_rmse;
+  check(rmseOff <= kRmseTolerance && Math.abs(shown.metrics.relativeRmse - printedRmse) < 1e-5,
+        `reference beside the result: printed relative RMSE ${printed ? printed[1] : 'missing'}% over ` +
+        `${shown.metrics.count} pixels, prt compare --image ${(100 * compared.relative_rmse).toFixed(3)}% over ` +
+        `${compared.count} (off by ${(100 * rmseOff).toFixed(3)}% of it, tolerance ${100 * kRmseTolerance}%)`);
+  check(shown.before.every((v, k) => v === shown.after[k]), 'the camera stays locked to the reference\'s while shown');
+  // Panels: the strip's reference panel (below its label row) and compare's error picture (above its legend).
+  const decode = (name) => page.evaluate(async (png) => {
+    const blob = await (await fetch(`data:image/png;base64,${png}`)).blob();
+    const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+    const context = new OffscreenCanvas(bitmap.width, bitmap.height).getContext('2d');
+    context.drawImage(bitmap, 0, 0);
+    return { width: bitmap.width, height: bitmap.height, data: Array.from(context.getImageData(0, 0, bitmap.width, bitmap.height).data) };
+  }, fs.readFileSync(file(name)).toString('base64'));
+  const strip = await decode('compare_strip.png'), errorPicture = await decode('compare_error.png');
+  const labelHeight = strip.height - size[1], referenceLeft = size[0] + 4;
+  let referenceMax = 0;
+  for (let y = 0; y < size[1]; ++y)
+    for (let x = 0; x < size[0]; ++x)
+      for (let ch = 0; ch < 3; ++ch)
+        referenceMax = Math.max(referenceMax, Math.abs(shown.reference[(y * size[0] + x) * 4 + ch] -
+                                                       strip.data[((y + labelHeight) * strip.width + referenceLeft + x) * 4 + ch]));
+  check(referenceMax <= 1, `reference panel against prt compare's strip: max ${referenceMax} levels over every pixel (tolerance 1)`);
+  const grey = (d, w, x, y) => d[(y * w + x) * 4] === 48 && d[(y * w + x) * 4 + 1] === 48 && d[(y * w + x) * 4 + 2] === 48;
+  let errorMax = 0, errorPoints = 0, coverageDiffers = 0;
+  for (let y = 0; y < size[1]; ++y)
+    for (let x = 0; x < size[0]; ++x) {
+      coverageDiffers += grey(shown.error, size[0], x, y) !== grey(errorPicture.data, errorPicture.width, x, y);
+      if (x === 0 || y === 0 || x === size[0] - 1 || y === size[1] - 1) continue;
+      let inside = true;
+      for (let dy = -1; dy <= 1; ++dy)
+        for (let dx = -1; dx <= 1; ++dx)
+          inside &&= !grey(shown.error, size[0], x + dx, y + dy) && !grey(errorPicture.data, errorPicture.width, x + dx, y + dy);
+      if (!inside) continue;
+      ++errorPoints;
+      for (let ch = 0; ch < 3; ++ch)
+        errorMax = Math.max(errorMax, Math.abs(shown.error[(y * size[0] + x) * 4 + ch] - errorPicture.data[(y * errorPicture.width + x) * 4 + ch]));
+    }
+  check(errorPoints >= 1000 && errorMax <= kErrorPanelLevels,
+        `error panel against prt compare's picture: ${errorPoints} interior pixels, max ${errorMax} levels ` +
+        `(tolerance ${kErrorPanelLevels}); ${coverageDiffers} pixels differ in coverage (silhouettes)`);
+  results.reference = { printedRmse, compareRmse: compared.relative_rmse, viewerCount: shown.metrics.count,
+                        compareCount: compared.count, referenceMax, errorMax, errorPoints, coverageDiffers };
+  results.renderer = await page.evaluate(() => window.prt.renderer);
+} finally {
+  await browser.close();
+  server.close();
+}
+fs.writeFileSync(file('agreement.json'), JSON.stringify(results, null, 2) + '\n');
+process.exit(failed ? 1 : 0);
