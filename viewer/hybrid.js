@@ -129,7 +129,7 @@ export function parseVisibilityNpy(arrayBuffer, url) {
   const bytes = new Uint8Array(arrayBuffer);
   const headerLength = bytes[8] | (bytes[9] << 8);
   const header = new TextDecoder().decode(bytes.subarray(10, 10 + headerLength));
-  const shape = header.match(/'shape': \((\d+), (\d+)\)/);
+  const shape = header.match(/'shape': \((\d+),\s*(\d+)\)/);
   if (!header.includes("'<f4'") || header.includes("'fortran_order': True") || !shape)
     throw new Error(`${url}: need a float32 C-order .npy of shape (rows, lights)`);
   const rows = Number(shape[1]), lights = Number(shape[2]);

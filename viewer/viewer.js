@@ -397,6 +397,8 @@ export async function startViewer(canvas, panel, params) {
     turnLocked: lockedTurn !== null,
     hasReferenceImage: !!comparison,
     referenceMetrics: () => referenceMetrics,
+    // With a reference image: the result's linear RGBA (A = coverage), row 0 at the top, as the comparison reads it.
+    linearPixels: () => (renderLinear ? Array.from(renderLinear(scene, camera)) : null),
     renderer: (() => {
       const debug = gl.getExtension('WEBGL_debug_renderer_info'); // the real GL behind Chromium's mask
       return debug ? gl.getParameter(debug.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER);

@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // The viewer's other methods in Debian's headless Chromium (playwright-core), each against the CLI's own output:
 //   - hybrid lights (hybrid.js): the bunny's interreflected transfer (order 4, one bounce, so it has the bounce
-//     layer) under sunrise's cone lights and SH residual from `prt envlight`; the canvas must match the picture of
+//     layer) under studio's cone lights and SH residual from `prt envlight`; the canvas must match the picture of
 //     `prt relight --lights --image` at sampled interior pixels, with the cone visibility `--visibility-out` wrote
 //     (turned 0 and 60 degrees, the turn locked to the visibility's), and unshadowed (`--light-samples 0`) turned
 //     freely to 120 degrees; the toggle to plain SH must match `prt render` of the same bundle and camera;
@@ -16,16 +16,24 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
 import { serve } from '../serve.mjs';
+import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
+import * as THREE from 'three';
 
 // 8-bit levels at interior pixels (3x3 neighbourhood all surface): as viewer_test.mjs (sums in another order, the
 // GPU's interpolation), plus the cone integral in float on the GPU against double in the runtime.
 const kMaxLevels = 2, kMeanLevels = 0.3;
 // The printed relative RMSE against prt compare's: the viewer's result is its own float radiance (GPU sums and
 // interpolation) and its coverage the rasteriser's, which may differ from the ray caster's at silhouette pixels.
-const kRmseTolerance = 0.01; // relative
-// Error panel against compare's picture, at pixels whose 3x3 neighbourhood is inside both coverages: the relative
-// error of two results that differ by float rounding, in colour levels.
-const kErrorPanelLevels = 3;
+// Measured: 20 of 6,500 pixels see another triangle than prt render's ray at silhouettes and ear edges (up to 60%
+// apart), 3 more are covered, so the two RMSEs differ by about 1%.
+const kRmseTolerance = 0.02; // relative
+// Error panel against compare's picture, at pixels covered in both where the viewer's linear result is prt render's
+// within 0.1% (the GPU's interpolation agrees there; elsewhere a silhouette or an edge where the rasteriser picks
+// another triangle, or interpolation rounding above 0.1%), in colour levels: a relative error e moved by 0.1% (1 + e)
+// moves viridis's t = e / 0.2 by at most 0.006, up to 4 levels on its steepest stop, plus rounding.
+const kErrorPanelLevels = 5;
+// Over every pixel covered in both, this share must lie within kErrorPanelLevels.
+const kErrorPanelShare = 0.97;
 
 const [prt, data, work] = process.argv.slice(2);
 if (!prt || !data || !work) {
@@ -40,7 +48,7 @@ const run = (...args) => {
   if (result.status !== 0) throw new Error(`prt ${args.join(' ')} failed (${result.status}):\n${result.stderr}`);
   return result.stdout;
 };
-const map = path.join(data, 'env/sunrise.exr');
+const map = path.join(data, 'env/studio.exr'); // three cone lights of 2.5 to 3.1 degrees
 const size = [160, 120];
 const camera = '3.46275,7.798,18.8643,-0.00481248,4.8258,0.040403,0,1,0,35'; // docs/strips' bunny camera
 const view = ['--camera', camera, '--size', size.join(',')];
@@ -48,22 +56,22 @@ const view = ['--camera', camera, '--size', size.join(',')];
 run('meshprep', path.join(data, 'bunny.ply'), '-o', file('bunny.glb'));
 run('transfer', file('bunny.glb'), '--mode', 'interreflected', '--bounces', '1', '--order', '4', '--samples', '64',
     '--albedo', '0.8', '-o', file('bunny.prt.glb'));
-run('envsh', map, '--order', '8', '-o', file('sunrise.sh.json'));
-run('envlight', map, '--order', '4', '--max-lights', '4', '-o', file('sunrise.lights.json'));
-const lightCount = JSON.parse(fs.readFileSync(file('sunrise.lights.json'), 'utf8')).lights.length;
+run('envsh', map, '--order', '8', '-o', file('studio.sh.json'));
+run('envlight', map, '--order', '4', '--max-lights', '4', '-o', file('studio.lights.json'));
+const lightCount = JSON.parse(fs.readFileSync(file('studio.lights.json'), 'utf8')).lights.length;
 const hybridCases = [
   { rotate: 0, visibility: 'visibility0.npy' },
   { rotate: 60, visibility: 'visibility60.npy' },
   { rotate: 120, visibility: null }, // unshadowed cones, turned freely
 ];
 for (const c of hybridCases)
-  run('relight', file('bunny.prt.glb'), '--lights', file('sunrise.lights.json'), '--env', map, '--rotate-y', String(c.rotate),
+  run('relight', file('bunny.prt.glb'), '--lights', file('studio.lights.json'), '--env', map, '--rotate-y', String(c.rotate),
       ...(c.visibility ? ['--visibility-out', file(c.visibility)] : ['--light-samples', '0']),
       '--image', size.join(','), '--camera', camera, '-o', file(`hybrid${c.rotate}.png`));
 run('render', file('bunny.prt.glb'), '--env', map, ...view, '-o', file('plain.png'));
 run('render', file('bunny.prt.glb'), '--env', map, ...view, '-o', file('plain.exr'));
 run('reference', file('bunny.glb'), '--env', map, '--image', size.join(','), '--camera', camera, '--bounces', '1',
-    '--albedo', '0.8', '--samples', '32', '-o', file('reference.exr'));
+    '--albedo', '0.8', '--samples', '256', '-o', file('reference.exr'));
 run('compare', '--image', file('plain.exr'), file('reference.exr'), '-o', file('compare_error.png'), '--strip',
     file('compare_strip.png'), '--metrics', file('compare.json'));
 const compared = JSON.parse(fs.readFileSync(file('compare.json'), 'utf8'));
@@ -79,7 +87,7 @@ try {
   page.on('pageerror', (error) => console.error('page error:', error.message));
   page.on('console', (message) => { if (message.type() === 'error') console.error('page console:', message.text()); });
   const open = async (query) => {
-    await page.goto(`${base}/?bundle=data/bunny.prt.glb&maps=data/sunrise.sh.json&camera=${camera}&size=${size.join(',')}${query}`);
+    await page.goto(`${base}/?bundle=data/bunny.prt.glb&maps=data/studio.sh.json&camera=${camera}&size=${size.join(',')}${query}`);
     return page.evaluate(async () => { const api = await window.prtReady; return { renderer: api.renderer, lights: api.lights, locked: api.turnLocked }; });
   };
   // The canvas against a prt PNG at every 4th pixel whose 3x3 neighbourhood is lit in the PNG.
@@ -109,7 +117,7 @@ try {
 
   // 1. Hybrid lights against prt relight --lights --image.
   for (const c of hybridCases) {
-    const info = await open(`&lights=data/sunrise.lights.json&rotate=${c.rotate}` + (c.visibility ? `&visibility=data/${c.visibility}` : ''));
+    const info = await open(`&lights=data/studio.lights.json&rotate=${c.rotate}` + (c.visibility ? `&visibility=data/${c.visibility}` : ''));
     if (c.rotate === 0) console.log(`viewer: ${info.renderer}; ${info.lights} cone lights`);
     const r = await against(`hybrid${c.rotate}.png`, { rotate: c.rotate, hybrid: true });
     await page.locator('#view').screenshot({ path: file(`viewer_hybrid${c.rotate}.png`) });
@@ -143,7 +151,7 @@ try {
     const after = window.prt.camera();
     const panel = (id) => Array.from(document.getElementById(id).getContext('2d').getImageData(0, 0, size[0], size[1]).data);
     return { before, after, metrics: window.prt.referenceMetrics(), status: document.getElementById('status').textContent,
-             reference: panel('referenceView'), error: panel('errorView') };
+             reference: panel('referenceView'), error: panel('errorView'), linear: window.prt.linearPixels() };
   }, { size });
   await page.locator('#views').screenshot({ path: file('viewer_compare.png') });
   const printed = shown.status.match(/vs reference image: relative RMSE ([0-9.]+)%/);
@@ -163,7 +171,7 @@ try {
     return { width: bitmap.width, height: bitmap.height, data: Array.from(context.getImageData(0, 0, bitmap.width, bitmap.height).data) };
   }, fs.readFileSync(file(name)).toString('base64'));
   const strip = await decode('compare_strip.png'), errorPicture = await decode('compare_error.png');
-  const labelHeight = strip.height - size[1], referenceLeft = size[0] + 4;
+  const labelHeight = strip.height - errorPicture.height, referenceLeft = size[0] + 4; // the error has a legend below
   let referenceMax = 0;
   for (let y = 0; y < size[1]; ++y)
     for (let x = 0; x < size[0]; ++x)
@@ -172,25 +180,35 @@ try {
                                                        strip.data[((y + labelHeight) * strip.width + referenceLeft + x) * 4 + ch]));
   check(referenceMax <= 1, `reference panel against prt compare's strip: max ${referenceMax} levels over every pixel (tolerance 1)`);
   const grey = (d, w, x, y) => d[(y * w + x) * 4] === 48 && d[(y * w + x) * 4 + 1] === 48 && d[(y * w + x) * 4 + 2] === 48;
-  let errorMax = 0, errorPoints = 0, coverageDiffers = 0;
+  const exr = new EXRLoader();
+  exr.setDataType(THREE.FloatType);
+  const rendered = exr.parse(fs.readFileSync(file('plain.exr')).buffer.slice(0)); // RGBA, rows bottom-up
+  const samePoint = (x, y) => {
+    const p = (y * size[0] + x) * 4, q = ((size[1] - 1 - y) * size[0] + x) * 4;
+    if (!(shown.linear[p + 3] > 0.5) || !(rendered.data[q + 3] > 0.5)) return false;
+    return [0, 1, 2].every((c) => Math.abs(shown.linear[p + c] - rendered.data[q + c]) <= 1e-3 * Math.max(rendered.data[q + c], 1e-3));
+  };
+  let errorMax = 0, errorPoints = 0, otherPoint = 0, coverageDiffers = 0, bothCovered = 0, within = 0;
   for (let y = 0; y < size[1]; ++y)
     for (let x = 0; x < size[0]; ++x) {
-      coverageDiffers += grey(shown.error, size[0], x, y) !== grey(errorPicture.data, errorPicture.width, x, y);
-      if (x === 0 || y === 0 || x === size[0] - 1 || y === size[1] - 1) continue;
-      let inside = true;
-      for (let dy = -1; dy <= 1; ++dy)
-        for (let dx = -1; dx <= 1; ++dx)
-          inside &&= !grey(shown.error, size[0], x + dx, y + dy) && !grey(errorPicture.data, errorPicture.width, x + dx, y + dy);
-      if (!inside) continue;
-      ++errorPoints;
+      const viewerGrey = grey(shown.error, size[0], x, y), compareGrey = grey(errorPicture.data, errorPicture.width, x, y);
+      coverageDiffers += viewerGrey !== compareGrey;
+      if (viewerGrey || compareGrey) continue;
+      let worst = 0;
       for (let ch = 0; ch < 3; ++ch)
-        errorMax = Math.max(errorMax, Math.abs(shown.error[(y * size[0] + x) * 4 + ch] - errorPicture.data[(y * errorPicture.width + x) * 4 + ch]));
+        worst = Math.max(worst, Math.abs(shown.error[(y * size[0] + x) * 4 + ch] - errorPicture.data[(y * errorPicture.width + x) * 4 + ch]));
+      ++bothCovered;
+      within += worst <= kErrorPanelLevels;
+      if (!samePoint(x, y)) { ++otherPoint; continue; }
+      ++errorPoints;
+      errorMax = Math.max(errorMax, worst);
     }
-  check(errorPoints >= 1000 && errorMax <= kErrorPanelLevels,
-        `error panel against prt compare's picture: ${errorPoints} interior pixels, max ${errorMax} levels ` +
-        `(tolerance ${kErrorPanelLevels}); ${coverageDiffers} pixels differ in coverage (silhouettes)`);
+  check(errorPoints >= 4000 && errorMax <= kErrorPanelLevels && within >= kErrorPanelShare * bothCovered,
+        `error panel against prt compare's picture: ${errorPoints} pixels where the results agree to 0.1%, max ` +
+        `${errorMax} levels (tolerance ${kErrorPanelLevels}); over all ${bothCovered} covered in both, ${within} within ` +
+        `${kErrorPanelLevels} levels (at least ${100 * kErrorPanelShare}%); ${coverageDiffers} differ in coverage`);
   results.reference = { printedRmse, compareRmse: compared.relative_rmse, viewerCount: shown.metrics.count,
-                        compareCount: compared.count, referenceMax, errorMax, errorPoints, coverageDiffers };
+                        compareCount: compared.count, referenceMax, errorMax, errorPoints, otherPoint, bothCovered, within, coverageDiffers };
   results.renderer = await page.evaluate(() => window.prt.renderer);
 } finally {
   await browser.close();
