@@ -10,6 +10,9 @@ import { sceneMeshes } from './scene.js';
 import { fitLighting, rotateLightingY } from './sh.js';
 import { loadSky, skyMesh } from './sky.js';
 import { linearReadback, referencePanels } from './compare.js';
+import { orbitCamera, parseNumbers } from './camera.js';
+import { isFivSceneJson } from './fiv.js';
+import { startFivViewer } from './fiv_view.js';
 
 const kMaxCoefficients = 64; // order 8
 
@@ -80,12 +83,6 @@ void main() {
   }
   colour = vec4(toneMap(radiance), 1.0);
 }`;
-
-function parseNumbers(text, count, name) {
-  const values = text.split(',').map(Number);
-  if (values.length !== count || values.some((v) => !Number.isFinite(v))) throw new Error(`${name}: need ${count} numbers`);
-  return values;
-}
 
 // A prt .npy of float32 [N, 3] (prt reference's per-vertex radiance) as a Float32Array.
 function parseNpy(arrayBuffer) {
@@ -165,6 +162,7 @@ export async function startViewer(canvas, panel, params) {
     if (!response.ok) throw new Error(`${bundleUrl}: HTTP ${response.status}`);
     bytes = await response.arrayBuffer();
     const { json, bin } = parseGlb(bytes);
+    if (isFivSceneJson(json)) return startFivViewer(canvas, panel, params, bytes); // moving occluders: fiv_view.js
     if (isSceneBundle(json)) [sceneJson, sceneBin] = [json, bin];
   }
   const isScene = !!sceneJson;
@@ -247,19 +245,9 @@ export async function startViewer(canvas, panel, params) {
   }
 
   const view = parseNumbers(params.get('camera') || '0,0.1,0.4,0,0.1,0,0,1,0,40', 10, 'camera');
-  const camera = new THREE.PerspectiveCamera(view[9], width / height, 1e-3, 1e3);
-  const orbit = { eye: new THREE.Vector3(view[0], view[1], view[2]), target: new THREE.Vector3(view[3], view[4], view[5]),
-                  up: new THREE.Vector3(view[6], view[7], view[8]), fovy: view[9] };
-  function placeCamera() {
-    const distance = orbit.eye.distanceTo(orbit.target);
-    camera.near = distance * 1e-3;
-    camera.far = distance * 1e3;
-    camera.fov = orbit.fovy;
-    camera.updateProjectionMatrix();
-    camera.position.copy(orbit.eye);
-    camera.up.copy(orbit.up);
-    camera.lookAt(orbit.target);
-  }
+  const view3d = orbitCamera(view, width, height);
+  const { camera, orbit } = view3d;
+  const placeCamera = () => view3d.place();
 
   // referenceImage=URL: `prt reference --image` of this camera and size, shown beside the result (compare.js); the
   // camera is locked to the reference's (the URL's camera, or referenceCamera=) while it is shown.
@@ -355,10 +343,7 @@ export async function startViewer(canvas, panel, params) {
     uniforms.showError.value = state.showError && !!reference;
     metrics = hybridOn ? null : errorAgainstReference(); // the CPU error sums plain SH only
     if (state.showReference) {
-      orbit.eye.fromArray(referenceView, 0);
-      orbit.target.fromArray(referenceView, 3);
-      orbit.up.fromArray(referenceView, 6);
-      orbit.fovy = referenceView[9];
+      view3d.set(referenceView);
     }
     if (comparison) comparison.show(state.showReference);
     draw();
@@ -414,19 +399,11 @@ export async function startViewer(canvas, panel, params) {
     // a factor on the distance. The pitch stops 1 degree short of the poles.
     orbit(yaw, pitch, zoom = 1) {
       if (state.showReference) return; // the camera is the reference's while it is shown
-      const up = orbit.up.clone().normalize();
-      const offset = orbit.eye.clone().sub(orbit.target);
-      offset.applyAxisAngle(up, -yaw * Math.PI / 180);
-      const right = offset.clone().cross(up).normalize();
-      const angle = offset.angleTo(up) * 180 / Math.PI;
-      const limited = Math.max(1 - angle, Math.min(179 - angle, pitch));
-      offset.applyAxisAngle(right, -limited * Math.PI / 180);
-      offset.multiplyScalar(zoom);
-      orbit.eye.copy(orbit.target).add(offset);
+      view3d.turn(yaw, pitch, zoom);
       draw();
       report();
     },
-    camera: () => [...orbit.eye.toArray(), ...orbit.target.toArray(), ...orbit.up.toArray(), orbit.fovy],
+    camera: () => view3d.array(),
     metrics: () => metrics,
     frameMs: () => frameMs,
     state: () => ({ ...state, exposure: uniforms.exposure.value }),

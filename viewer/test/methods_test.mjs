@@ -8,7 +8,11 @@
 //   - the reference beside the result (compare.js): `prt reference --image` of the same camera; the relative RMSE the
 //     page prints must be `prt compare --image`'s (of `prt render`'s EXR against the same reference) within
 //     kRmseTolerance, the reference panel must be compare's strip's reference panel, the error panel compare's
-//     false-colour picture at interior pixels, and the camera must stay locked while the comparison is shown.
+//     false-colour picture at interior pixels, and the camera must stay locked while the comparison is shown;
+//   - moving occluders (fiv.js, CPU): a `prt fivscene` bundle of the bunny under three sphere instances, with and
+//     without the bunny's own grid (self-shadowing); the viewer's per-vertex radiance must be `prt fivshade`'s of the
+//     same placements at every vertex, for three sets of instance positions reached by moving the instances in the
+//     page (kFivTolerance); a view reloaded from its URL keeps the positions.
 // Screenshots and agreement.json land in WORK_DIR.
 // usage: node viewer/test/methods_test.mjs PRT DATA_DIR WORK_DIR
 import { spawnSync } from 'node:child_process';
@@ -34,6 +38,8 @@ const kRmseTolerance = 0.02; // relative
 const kErrorPanelLevels = 5;
 // Over every pixel covered in both, this share must lie within kErrorPanelLevels.
 const kErrorPanelShare = 0.97;
+// FIV radiance per vertex: the runtime shades in float, the page in double; |a - b| <= abs + rel |b|.
+const kFivAbs = 1e-5, kFivRel = 1e-4;
 
 const [prt, data, work] = process.argv.slice(2);
 if (!prt || !data || !work) {
@@ -75,6 +81,31 @@ run('reference', file('bunny.glb'), '--env', map, '--image', size.join(','), '--
 run('compare', '--image', file('plain.exr'), file('reference.exr'), '-o', file('compare_error.png'), '--strip',
     file('compare_strip.png'), '--metrics', file('compare.json'));
 const compared = JSON.parse(fs.readFileSync(file('compare.json'), 'utf8'));
+
+// Moving occluders: sphere grids (radius 1) around the bunny, and the bunny's own grid.
+const fivMap = path.join(data, 'env/courtyard.exr');
+run('scene', 'sphere', '-o', file('sphere.glb'));
+for (const mesh of ['sphere', 'bunny'])
+  run('fiv', file(`${mesh}.glb`), '--env', fivMap, '--grid', '16,9,6', '--cube', '8', '-o', file(`${mesh}.fiv.glb`));
+// Three placements: above the bunny (case A), one sphere sunk into its back (B and inside), one beside it (C for
+// the far side); each of three spheres.
+const placements = [
+  [[-2, 11, 1], [2, 10, -1], [4, 7, 4]],
+  [[0, 8.2, -1.5], [-3, 6, 3], [5, 3, 0]],
+  [[1, 12, 3], [-4, 2, 4], [0, 5, -5]],
+];
+const fivArgs = (at) => at.flatMap((p) => ['--occluder', file('sphere.fiv.glb'), '--at', p.join(',')]);
+run('fivscene', file('bunny.glb'), ...fivArgs(placements[0]), '-o', file('fivscene.glb'));
+run('fivscene', file('bunny.glb'), '--self', file('bunny.fiv.glb'), ...fivArgs(placements[0]), '-o', file('fivscene_self.glb'));
+for (const [k, at] of placements.entries()) {
+  run('fivshade', file('bunny.glb'), '--env', fivMap, ...fivArgs(at), '--albedo', '0.8', '-o', file(`fiv${k}.npy`));
+  run('fivshade', file('bunny.glb'), '--env', fivMap, '--self', file('bunny.fiv.glb'), ...fivArgs(at), '--albedo', '0.8',
+      '-o', file(`fiv_self${k}.npy`));
+}
+const readNpy = (name) => {
+  const bytes = fs.readFileSync(file(name)), header = bytes.readUInt16LE(8);
+  return Array.from(new Float32Array(bytes.buffer.slice(bytes.byteOffset + 10 + header, bytes.byteOffset + bytes.length)));
+};
 
 const server = await serve(work);
 const base = `http://127.0.0.1:${server.address().port}`;
@@ -209,6 +240,39 @@ try {
         `${kErrorPanelLevels} levels (at least ${100 * kErrorPanelShare}%); ${coverageDiffers} differ in coverage`);
   results.reference = { printedRmse, compareRmse: compared.relative_rmse, viewerCount: shown.metrics.count,
                         compareCount: compared.count, referenceMax, errorMax, errorPoints, otherPoint, bothCovered, within, coverageDiffers };
+
+  // 3. Moving occluders against prt fivshade, the instances moved in the page.
+  results.fiv = [];
+  for (const self of [false, true]) {
+    await page.goto(`${base}/?bundle=data/${self ? 'fivscene_self' : 'fivscene'}.glb&albedo=0.8&camera=${camera}&size=${size.join(',')}`);
+    const info = await page.evaluate(async () => { const api = await window.prtReady; return { kind: api.kind, instances: api.instances.length }; });
+    check(info.kind === 'fiv' && info.instances === 3, `FIV scene${self ? ' with self-shadowing' : ''} read as ${info.kind} with ${info.instances} instances`);
+    for (const [k, at] of placements.entries()) {
+      const shaded = await page.evaluate((at) => {
+        at.forEach((p, j) => window.prt.moveInstance(j, p));
+        return { radiance: window.prt.fivRadiance(), shadeMs: window.prt.shadeMs(), query: window.prt.query() };
+      }, at);
+      const expected = readNpy(`fiv${self ? '_self' : ''}${k}.npy`);
+      let worst = 0, maxAbs = 0;
+      expected.forEach((b, i) => {
+        const d = Math.abs(shaded.radiance[i] - b);
+        maxAbs = Math.max(maxAbs, d);
+        worst = Math.max(worst, d / (kFivAbs + kFivRel * Math.abs(b)));
+      });
+      await page.locator('#view').screenshot({ path: file(`viewer_fiv${self ? '_self' : ''}${k}.png`) });
+      check(expected.length === shaded.radiance.length && worst <= 1,
+            `FIV${self ? ' + self' : ''} placement ${k}: ${expected.length / 3} vertices, max |viewer - prt fivshade| ` +
+            `${maxAbs.toExponential(2)} (${worst.toFixed(3)} of the tolerance ${kFivAbs} + ${kFivRel} x value); CPU shading ` +
+            `${shaded.shadeMs.toFixed(1)} ms`);
+      results.fiv.push({ self, placement: k, vertices: expected.length / 3, maxAbs, ofTolerance: worst, shadeMs: shaded.shadeMs });
+      if (k === 1 && !self) {
+        await page.goto(`${base}/?${shaded.query}`);
+        const reloaded = await page.evaluate(async () => { await window.prtReady; return window.prt.translations(); });
+        const off = Math.max(...reloaded.flat().map((v, i) => Math.abs(v - at.flat()[i])));
+        check(off < 1e-4, `a FIV view reloaded from its URL keeps the positions (off by ${off})`);
+      }
+    }
+  }
   results.renderer = await page.evaluate(() => window.prt.renderer);
 } finally {
   await browser.close();
