@@ -120,8 +120,8 @@ function transferTexture(transfer, rowsPerLine, lines) {
 // and the tests drive: set(changes), read(points), bench(frames), metrics(), state(), query().
 // lights=URL (prt-lights JSON, `prt envlight`) and visibility=URL (its cone visibility per vertex, `prt relight
 // --lights ... --visibility-out`): the hybrid's inputs (hybrid.js), or null without lights. Plain bundles per vertex
-// only. The synthetic sphere (frame times) takes its normals from its positions, albedo 1, and its transfer as a
-// stand-in bounce layer of the same cost.
+// only. The synthetic sphere (frame times) takes its normals from its positions, albedo 1, its transfer as a
+// stand-in bounce layer of the same cost, and a visibility of ones.
 async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
   const url = params.get('lights');
   if (!url) return null;
@@ -132,13 +132,15 @@ async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
                     `run prt envlight --order ${mesh.transfer.order}`);
   const vertexCount = mesh.positions.length / 3;
   let layers;
+  let visibility = null;
   if (synthetic) {
     layers = { bounce: mesh.transfer.data, albedo: new Float32Array(vertexCount * 3).fill(1),
                normals: mesh.positions.map((x) => 2 * x) };
+    // A visibility of ones, so that its texture fetches are in the frame time.
+    visibility = { rows: vertexCount, lights: lights.lights.length, data: new Float32Array(vertexCount * lights.lights.length).fill(1) };
   } else {
     layers = readHybridLayers(bytes, vertexCount);
   }
-  let visibility = null;
   const visibilityUrl = params.get('visibility');
   if (visibilityUrl) {
     const response = await fetch(visibilityUrl);
