@@ -132,11 +132,29 @@ export function fivDifmap(lighting, n) {
 }
 
 // The grid's FIV [9] and power [3] at offset = centre - point (fivLookup), or null when no usable sample exists.
+// Allocation-free in its loop (it runs per vertex and occluder): the result lives in scratch arrays that the next
+// call overwrites.
+const scratch = { fiv: new Float64Array(9), power: new Float64Array(3), rows: new Int32Array(8), weights: new Float64Array(8) };
+function gather(o, count) {
+  const { fiv, power, rows, weights } = scratch;
+  fiv.fill(0);
+  power.fill(0);
+  let total = 0;
+  for (let c = 0; c < count; ++c) {
+    const row = rows[c], w = weights[c];
+    if (w <= 0 || !o.valid[row]) continue;
+    for (let e = 0; e < 9; ++e) fiv[e] += w * o.fiv[9 * row + e];
+    for (let e = 0; e < 3; ++e) power[e] += w * o.power[3 * row + e];
+    total += w;
+  }
+  return total;
+}
 export function fivLookup(o, offset) {
   const length = Math.hypot(offset[0], offset[1], offset[2]);
-  const u = length > 0 ? offset.map((x) => x / length) : [0, 1, 0];
-  const theta = Math.acos(Math.min(1, Math.max(-1, u[1])));
-  let phi = Math.atan2(u[0], -u[2]);
+  const u1 = length > 0 ? offset[1] / length : 1, u0 = length > 0 ? offset[0] / length : 0;
+  const u2 = length > 0 ? offset[2] / length : 0;
+  const theta = Math.acos(Math.min(1, Math.max(-1, u1)));
+  let phi = Math.atan2(u0, -u2);
   if (phi < 0) phi += 2 * Math.PI;
   const fj = theta / Math.PI * (o.polar - 1);
   const j0 = Math.min(Math.max(Math.floor(fj), 0), o.polar - 2), tj = Math.min(Math.max(fj - j0, 0), 1);
@@ -154,41 +172,28 @@ export function fivLookup(o, offset) {
     tk = (length - r[k0]) / (r[k1] - r[k0]);
   }
   const inverse2 = length > r[0] ? 1 / (length * length) : 1 / (r[0] * r[0]);
-  const rowOf = (k, j, i) => (k * o.polar + j) * o.azimuth + i;
-  const shellWeight = (k) => r[k] * r[k];
-  const angular = [(1 - ti) * (1 - tj), ti * (1 - tj), (1 - ti) * tj, ti * tj];
-  const corners = [];
-  const ks = [k0, k1], kt = [1 - tk, tk];
-  for (let s = 0; s < 2; ++s) {
-    const w = kt[s] * shellWeight(ks[s]);
-    corners.push([rowOf(ks[s], j0, i0), w * angular[0]], [rowOf(ks[s], j0, i1), w * angular[1]],
-                 [rowOf(ks[s], j0 + 1, i0), w * angular[2]], [rowOf(ks[s], j0 + 1, i1), w * angular[3]]);
-  }
-  const fiv = new Array(9).fill(0), power = [0, 0, 0];
-  const gather = (list) => {
-    fiv.fill(0);
-    power.fill(0);
-    let total = 0;
-    for (const [row, w] of list) {
-      if (w <= 0 || !o.valid[row]) continue;
-      for (let e = 0; e < 9; ++e) fiv[e] += w * o.fiv[9 * row + e];
-      for (let e = 0; e < 3; ++e) power[e] += w * o.power[3 * row + e];
-      total += w;
-    }
-    return total;
-  };
-  let full = kt[0] * shellWeight(k0) + kt[1] * shellWeight(k1);
-  let used = gather(corners);
+  const P = o.polar, A = o.azimuth;
+  const a0 = (1 - ti) * (1 - tj), a1 = ti * (1 - tj), a2 = (1 - ti) * tj, a3 = ti * tj;
+  const { rows, weights } = scratch;
+  const corner = (c, k, j, i, w) => { rows[c] = (k * P + j) * A + i; weights[c] = w; };
+  const w0 = (1 - tk) * r[k0] * r[k0], w1 = tk * r[k1] * r[k1];
+  corner(0, k0, j0, i0, w0 * a0); corner(1, k0, j0, i1, w0 * a1); corner(2, k0, j0 + 1, i0, w0 * a2); corner(3, k0, j0 + 1, i1, w0 * a3);
+  corner(4, k1, j0, i0, w1 * a0); corner(5, k1, j0, i1, w1 * a1); corner(6, k1, j0 + 1, i0, w1 * a2); corner(7, k1, j0 + 1, i1, w1 * a3);
+  let full = w0 + w1;
+  let used = gather(o, 8);
   if (used <= 1e-6 * full) {
     used = 0;
     for (let k = k1 + 1; k < o.shells && used <= 0; ++k) {
-      full = shellWeight(k);
-      used = gather([0, 1, 2, 3].map((c) => [rowOf(k, c < 2 ? j0 : j0 + 1, c % 2 ? i1 : i0), full * angular[c]]));
+      full = r[k] * r[k];
+      corner(0, k, j0, i0, full * a0); corner(1, k, j0, i1, full * a1); corner(2, k, j0 + 1, i0, full * a2); corner(3, k, j0 + 1, i1, full * a3);
+      used = gather(o, 4);
     }
     if (used <= 0) return null;
   }
   const scale = full / used * inverse2;
-  return { fiv: fiv.map((x) => x * scale), power: power.map((x) => x * scale) };
+  for (let e = 0; e < 9; ++e) scratch.fiv[e] *= scale;
+  for (let e = 0; e < 3; ++e) scratch.power[e] *= scale;
+  return scratch;
 }
 
 // sh::capCosineIntegral (clippedCapIrradiance): integral of max(0, n . w) over a cap at cosine cosTheta from n.
@@ -234,7 +239,7 @@ export function fivIrradiance(lighting, instances, self, positions, normals) {
     const total = fivDifmap(lighting, n);
     let unoccluded = total.slice();
     if (self) {
-      const hit = fivLookup(self, [0, 1, 2].map((c) => self.centre[c] - p[c]));
+      const hit = fivLookup(self, [self.centre[0] - p[0], self.centre[1] - p[1], self.centre[2] - p[2]]);
       if (hit) unoccluded = [0, 1, 2].map((c) => dot(n, lighting.fivEnv, 0, 3 * c) - dot(n, hit.fiv, 0, 3 * c));
     }
     const hidden = [];
@@ -248,7 +253,7 @@ export function fivIrradiance(lighting, instances, self, positions, normals) {
       const distance = Math.hypot(...offset);
       let direction = offset.map((x) => (distance > 0 ? x / distance : 0));
       let angularRadius = distance > o.radius ? Math.asin(o.radius / distance) : Math.PI / 2;
-      const fiv = hit ? hit.fiv : null, power = hit ? hit.power : null;
+      const fiv = hit ? Array.from(hit.fiv) : null, power = hit ? Array.from(hit.power) : null;
       const green = fiv ? Math.sqrt(dot(fiv, fiv, 3, 3)) : 0;
       if (green > 0 && power[1] > 0) {
         const cosSigma = Math.min(Math.max(2 * green / power[1] - 1, 0), 1);
