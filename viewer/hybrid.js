@@ -127,6 +127,8 @@ export function readHybridLayers(bytes, vertexCount) {
 // A prt .npy of float32 [rows, lights] (prt relight --visibility-out) as {rows, lights, data}. Throws Error otherwise.
 export function parseVisibilityNpy(arrayBuffer, url) {
   const bytes = new Uint8Array(arrayBuffer);
+  if (bytes.length < 10 || bytes[0] !== 0x93 || new TextDecoder().decode(bytes.subarray(1, 6)) !== 'NUMPY')
+    throw new Error(`${url}: not a .npy file`);
   const headerLength = bytes[8] | (bytes[9] << 8);
   const header = new TextDecoder().decode(bytes.subarray(10, 10 + headerLength));
   const shape = header.match(/'shape': \((\d+),\s*(\d+)\)/);

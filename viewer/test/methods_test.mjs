@@ -65,6 +65,12 @@ run('transfer', file('bunny.glb'), '--mode', 'interreflected', '--bounces', '1',
 run('envsh', map, '--order', '8', '-o', file('studio.sh.json'));
 run('envlight', map, '--order', '4', '--max-lights', '4', '-o', file('studio.lights.json'));
 const lightCount = JSON.parse(fs.readFileSync(file('studio.lights.json'), 'utf8')).lights.length;
+run('envlight', map, '--order', '3', '--max-lights', '4', '-o', file('order3.lights.json')); // bad inputs below
+{ // a visibility of 10 rows x 3 lights
+  const header = "{'descr': '<f4', 'fortran_order': False, 'shape': (10, 3), }".padEnd(117, ' ') + '\n';
+  fs.writeFileSync(file('short.npy'), Buffer.concat([Buffer.from([0x93]), Buffer.from('NUMPY'), Buffer.from([1, 0, 118, 0]),
+                                                       Buffer.from(header), Buffer.alloc(120)]));
+}
 const hybridCases = [
   { rotate: 0, visibility: 'visibility0.npy' },
   { rotate: 60, visibility: 'visibility60.npy' },
@@ -274,6 +280,25 @@ try {
     }
   }
   results.renderer = await page.evaluate(() => window.prt.renderer);
+
+  // 4. Bad inputs are refused with a message naming the file and the problem, never drawn.
+  const refused = async (query) => {
+    const sized = query.includes('&size=') ? query : `${query}&size=${size.join(',')}`;
+    await page.goto(`${base}/?bundle=data/bunny.prt.glb&maps=data/studio.sh.json&camera=${camera}${sized}`);
+    return page.evaluate(async () => { try { await window.prtReady; return null; } catch (error) { return error.message; } });
+  };
+  const badInputs = [
+    ['&lights=data/order3.lights.json', /order3\.lights\.json.*order 3.*order 4/],
+    ['&lights=data/studio.lights.json&visibility=data/short.npy', /short\.npy: visibility of 10 rows x 3 lights, the bundle has 1839 vertices/],
+    ['&lights=data/studio.lights.json&visibility=data/studio.lights.json', /studio\.lights\.json: not a \.npy file/],
+    ['&referenceImage=data/reference.exr&size=80,60', /referenceImage: 160 x 120 pixels, the view is 80 x 60/],
+    ['&lights=data/studio.sh.json', /studio\.sh\.json: format/],
+  ];
+  for (const [query, expected] of badInputs) {
+    const message = await refused(query);
+    check(!!message && expected.test(message), `refused ${query.slice(1)}: ${message}`);
+  }
+
 } finally {
   await browser.close();
   server.close();
