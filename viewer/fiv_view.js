@@ -1,4 +1,5 @@
-// The viewer for a `prt fivscene` bundle (fiv.js): the receiver shaded per vertex from the FIV grids, radiance =
+// The viewer for a `prt fivscene` bundle: the receiver shaded per vertex from the FIV grids on the GPU (fiv_gpu.js,
+// float, the default) or on the CPU (fiv.js, double; `fivOn=cpu`), radiance =
 // albedo / pi x irradiance as `prt fivshade --albedo` (albedo=R,G,B or one grey value; default 1), the occluders
 // drawn where their instances sit, each lit unshadowed (albedo / pi x DifMap(n)). Instances move by api.moveInstance,
 // by shift-drag of the selected one in the camera's plane, or on a path (animate: each circles its start position
@@ -6,6 +7,7 @@
 import * as THREE from 'three';
 import { orbitCamera, parseNumbers } from './camera.js';
 import { fivDifmap, fivIrradiance, readFivScene } from './fiv.js';
+import { fivGpu } from './fiv_gpu.js';
 import { toneMapGlsl } from './glsl.js';
 import { loadSky, skyMesh } from './sky.js';
 
@@ -30,6 +32,23 @@ ${toneMapGlsl}
 void main() {
   if (!gl_FrontFacing) { colour = vec4(0.0, 0.0, 0.0, 1.0); return; } // back faces black, as prt render
   colour = vec4(toneMap(vRadiance), 1.0);
+}`;
+
+// The receiver when the GPU shades it: vertex v's irradiance from the shading pass's texel (v % width, v / width).
+const gpuVertexShader = /* glsl */ `
+precision highp float;
+precision highp int;
+precision highp sampler2D;
+uniform mat4 modelViewMatrix;
+uniform mat4 projectionMatrix;
+uniform sampler2D shaded;
+uniform int shadedWidth;
+uniform vec3 albedoOverPi;
+in vec3 position;
+out vec3 vRadiance;
+void main() {
+  vRadiance = albedoOverPi * texelFetch(shaded, ivec2(gl_VertexID % shadedWidth, gl_VertexID / shadedWidth), 0).rgb;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
 }`;
 
 function meshObject(mesh, radiance, material) {
@@ -78,7 +97,13 @@ export async function startFivViewer(canvas, panel, params, bytes) {
   const skyMap = params.get('sky') ? await loadSky(params.get('sky').split(',')[0]) : null;
 
   const radiance = new Float32Array(positions.length);
-  const receiver = meshObject(fiv.receiver, radiance, material);
+  const onGpu = params.get('fivOn') !== 'cpu';
+  const gpu = onGpu ? fivGpu(renderer, fiv, positions, Float32Array.from(normals)) : null;
+  const receiverMaterial = onGpu ? new THREE.RawShaderMaterial({
+    vertexShader: gpuVertexShader, fragmentShader, glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
+    uniforms: { ...uniforms, shaded: { value: gpu.texture }, shadedWidth: { value: gpu.width },
+                albedoOverPi: { value: new THREE.Vector3(...albedo.map((a) => a / Math.PI)) } } }) : material;
+  const receiver = meshObject(fiv.receiver, radiance, receiverMaterial);
   scene.add(receiver);
   // Occluders: unshadowed, albedo / pi x DifMap(n), once per type.
   const occluderRadiance = {};
@@ -101,14 +126,19 @@ export async function startFivViewer(canvas, panel, params, bytes) {
   let frameMs = null, shadeMs = null;
   const pixel = new Uint8Array(4);
 
-  // The receiver's radiance from the instances where they are now (fiv.js, CPU), uploaded.
+  // The receiver's radiance from the instances where they are now: the GPU pass, or fiv.js on the CPU and uploaded.
   function shade() {
     const t0 = performance.now();
+    fiv.instances.forEach((instance, k) => occluders[k].position.fromArray(instance.translation));
+    if (gpu) {
+      gpu.shade(fiv.instances);
+      shadeMs = performance.now() - t0; // issued, not finished: the frame's read waits for it
+      return;
+    }
     const irradiance = fivIrradiance(fiv.lighting, fiv.instances.map((i) => ({ grid: fiv.grids[i.object], translation: i.translation })),
                                      fiv.self, positions, normals);
     for (let v = 0; v < irradiance.length; ++v) radiance[v] = albedo[v % 3] / Math.PI * irradiance[v];
     receiver.geometry.attributes.radiance.needsUpdate = true;
-    fiv.instances.forEach((instance, k) => occluders[k].position.fromArray(instance.translation));
     shadeMs = performance.now() - t0;
   }
   function draw() {
@@ -138,7 +168,7 @@ export async function startFivViewer(canvas, panel, params, bytes) {
   let animation = null;
 
   const api = {
-    lightings: [], transferOrder: 0, kind: 'fiv', vertexCount: positions.length / 3, receivers: 1, lights: 0,
+    lightings: [], transferOrder: 0, kind: 'fiv', fivOn: onGpu ? 'gpu' : 'cpu', vertexCount: positions.length / 3, receivers: 1, lights: 0,
     turnLocked: false, hasReferenceImage: false,
     instances: fiv.instances.map((i) => i.name),
     renderer: (() => {
@@ -173,8 +203,12 @@ export async function startFivViewer(canvas, panel, params, bytes) {
       update();
     },
     translations: () => fiv.instances.map((i) => i.translation.slice()),
-    // The receiver's radiance [V][3] as uploaded (float32), for the tests.
-    fivRadiance: () => Array.from(radiance),
+    // The receiver's radiance [V][3] as drawn (float32: the GPU pass read back, or the CPU's upload), for the tests.
+    fivRadiance: () => {
+      if (!gpu) return Array.from(radiance);
+      const irradiance = gpu.read();
+      return Array.from(irradiance, (e, i) => Math.fround(Math.fround(albedo[i % 3] / Math.PI) * e));
+    },
     // The path at `seconds`: instance k circles its start at 1.5 bounding radii in the XZ plane, phase 2 pi k / N.
     animate(seconds) {
       fiv.instances.forEach((instance, k) => {
