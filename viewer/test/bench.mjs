@@ -2,8 +2,8 @@
 // Viewer frame time in Debian's headless Chromium (software GL): the bunny and a 1M-vertex sphere, each frame finished
 // by a 1-pixel read: plain SH at orders 3, 5 and 8 (mode sh), hybrid with 4 cone lights at order 5 (mode hybrid:
 // night's lights from prt envlight; the bunny with its bounce layer and prt relight's visibility, the sphere with
-// stand-ins of the same cost), FIV with 3 moving sphere occluders (mode fiv: a still frame, and a frame in which
-// the occluders move, so the CPU shading and the upload are in it).
+// stand-ins of the same cost), FIV with 3 moving sphere occluders (mode fiv, shaded on the GPU and on the CPU: a still frame, and a frame in
+// which the occluders move, so the shading, and on the CPU the upload, are in it).
 // usage: node viewer/test/bench.mjs PRT BUNNY.ply WORK_DIR [OUT.json] [MODES, e.g. sh,hybrid,fiv]
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
@@ -72,8 +72,10 @@ try {
                  query: `synthetic=1000000,5&lights=data/night5.lights.json&camera=0,0,2,0,0,0,0,1,0,40` });
   }
   if (modes.includes('fiv')) {
-    cases.push({ mode: 'fiv 3 occluders', mesh: 'bunny', moving: true, query: `bundle=data/bunny.fiv.glb&albedo=0.8&camera=${bunnyCamera}` });
-    cases.push({ mode: 'fiv 3 occluders', mesh: 'sphere 1M vertices', moving: true, query: `bundle=data/big.fiv.glb&albedo=0.8&camera=0,1.5,6,0,0.5,0,0,1,0,40` });
+    for (const on of ['gpu', 'cpu']) {
+      cases.push({ mode: `fiv 3 occluders (${on})`, mesh: 'bunny', moving: true, query: `bundle=data/bunny.fiv.glb&albedo=0.8&camera=${bunnyCamera}&fivOn=${on}` });
+      cases.push({ mode: `fiv 3 occluders (${on})`, mesh: 'sphere 1M vertices', moving: true, query: `bundle=data/big.fiv.glb&albedo=0.8&camera=0,1.5,6,0,0.5,0,0,1,0,40&fivOn=${on}` });
+    }
   }
   for (const c of cases) {
     const page = await browser.newPage({ viewport: { width: 900, height: 520 }, deviceScaleFactor: 1 });
