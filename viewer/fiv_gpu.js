@@ -230,7 +230,7 @@ void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }`;
 
 // The GPU shading pass for readFivScene's `fiv`, the receiver's points and unit normals ([V][3]). Returns
 // {texture (the target's: vertex v's irradiance at (v % 1024, v / 1024)), shade(instances), read()}: shade
-// draws the pass for [{grid: object index, translation}], read() returns the irradiance [V][3] as floats.
+// draws the pass, finished (a 1-texel read), for [{grid: object index, translation}], read() returns the irradiance [V][3] as floats.
 // Throws Error for more grids, shells or instances than the shader holds.
 export function fivGpu(renderer, fiv, positions, normals) {
   const count = positions.length / 3;
@@ -294,7 +294,7 @@ export function fivGpu(renderer, fiv, positions, normals) {
   const pass = new THREE.Scene();
   pass.add(quad);
   const camera = new THREE.Camera();
-  const readback = new Float32Array(kWidth * lines * 4);
+  const readback = new Float32Array(kWidth * lines * 4), finished = new Float32Array(4);
   return {
     texture: target.texture,
     width: kWidth,
@@ -308,6 +308,7 @@ export function fivGpu(renderer, fiv, positions, normals) {
       renderer.setRenderTarget(target);
       renderer.render(pass, camera);
       renderer.setRenderTarget(previous);
+      renderer.readRenderTargetPixels(target, 0, 0, 1, 1, finished); // waits for the pass, so its time is measured
     },
     read() {
       renderer.readRenderTargetPixels(target, 0, 0, kWidth, lines, readback);

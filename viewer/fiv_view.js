@@ -132,7 +132,7 @@ export async function startFivViewer(canvas, panel, params, bytes) {
     fiv.instances.forEach((instance, k) => occluders[k].position.fromArray(instance.translation));
     if (gpu) {
       gpu.shade(fiv.instances);
-      shadeMs = performance.now() - t0; // issued, not finished: the frame's read waits for it
+      shadeMs = performance.now() - t0; // the pass finished (fiv_gpu.js reads a texel back)
       return;
     }
     const irradiance = fivIrradiance(fiv.lighting, fiv.instances.map((i) => ({ grid: fiv.grids[i.object], translation: i.translation })),
@@ -153,6 +153,7 @@ export async function startFivViewer(canvas, panel, params, bytes) {
   function report() {
     if (panel) panel.update({ ...state, rotate: 0 }, null, { kind: 'fiv', vertexCount: positions.length / 3, receivers: 1,
                                                               renderer: api.renderer, frameMs, shadeMs, instances: fiv.instances.length,
+                                                              fivOn: onGpu ? 'gpu' : 'cpu',
                                                               selfShadowing: !!fiv.self, lights: 0 });
   }
   function query() {
