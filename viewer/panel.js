@@ -42,13 +42,15 @@ export async function listingPanel(element, params) {
 }
 
 // Orbit about the target: drag (left button) turns, the wheel zooms; arrow keys turn by 5 degrees, + and - zoom.
+// With shift held, a drag moves the selected occluder of a FIV scene (api.drag) instead.
 export function attachOrbit(canvas, api) {
   let last = null;
   canvas.addEventListener('pointerdown', (e) => { last = [e.clientX, e.clientY]; canvas.setPointerCapture(e.pointerId); });
   canvas.addEventListener('pointerup', () => { last = null; });
   canvas.addEventListener('pointermove', (e) => {
     if (!last) return;
-    api.orbit(-0.4 * (e.clientX - last[0]), 0.4 * (e.clientY - last[1]));
+    if (e.shiftKey && api.drag) api.drag(e.clientX - last[0], e.clientY - last[1]); // a FIV scene's selected occluder
+    else api.orbit(-0.4 * (e.clientX - last[0]), 0.4 * (e.clientY - last[1]));
     last = [e.clientX, e.clientY];
   });
   canvas.addEventListener('wheel', (e) => { e.preventDefault(); api.orbit(0, 0, e.deltaY > 0 ? 1.1 : 1 / 1.1); }, { passive: false });

@@ -4,9 +4,15 @@
 import * as THREE from 'three';
 import { isSceneBundle, loadBundle, parseGlb, readSceneTransfer, syntheticBundle } from './bundle.js';
 import { relightRowGlsl, toneMapGlsl } from './glsl.js';
+import { hybridGlsl, hybridUniforms, loadLights, parseVisibilityNpy, readHybridLayers, setHybridUniforms,
+         turnedHybridLighting, visibilityTexture } from './hybrid.js';
 import { sceneMeshes } from './scene.js';
 import { fitLighting, rotateLightingY } from './sh.js';
 import { loadSky, skyMesh } from './sky.js';
+import { linearReadback, referencePanels } from './compare.js';
+import { orbitCamera, parseNumbers } from './camera.js';
+import { isFivSceneJson } from './fiv.js';
+import { startFivViewer } from './fiv_view.js';
 
 const kMaxCoefficients = 64; // order 8
 
@@ -28,11 +34,12 @@ out vec3 vRadiance;
 out vec2 vUv;
 out float vError;
 ${relightRowGlsl(kMaxCoefficients)}
+${hybridGlsl(kMaxCoefficients)}
 void main() {
   vUv = uv;
   vError = relativeError;
   vRadiance = vec3(0.0);
-  if (perVertex) vRadiance = relightRow(gl_VertexID);
+  if (perVertex) vRadiance = relightRow(gl_VertexID) + (hybrid ? hybridLights(gl_VertexID) : vec3(0.0));
   gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
 }`;
 
@@ -77,12 +84,6 @@ void main() {
   colour = vec4(toneMap(radiance), 1.0);
 }`;
 
-function parseNumbers(text, count, name) {
-  const values = text.split(',').map(Number);
-  if (values.length !== count || values.some((v) => !Number.isFinite(v))) throw new Error(`${name}: need ${count} numbers`);
-  return values;
-}
-
 // A prt .npy of float32 [N, 3] (prt reference's per-vertex radiance) as a Float32Array.
 function parseNpy(arrayBuffer) {
   const bytes = new Uint8Array(arrayBuffer);
@@ -117,6 +118,41 @@ function transferTexture(transfer, rowsPerLine, lines) {
 
 // Loads what `params` (the page's query, README "Query parameters") names and draws it. Returns the api the page
 // and the tests drive: set(changes), read(points), bench(frames), metrics(), state(), query().
+// lights=URL (prt-lights JSON, `prt envlight`) and visibility=URL (its cone visibility per vertex, `prt relight
+// --lights ... --visibility-out`): the hybrid's inputs (hybrid.js), or null without lights. Plain bundles per vertex
+// only. The synthetic sphere (frame times) takes its normals from its positions, albedo 1, its transfer as a
+// stand-in bounce layer of the same cost, and a visibility of ones.
+async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
+  const url = params.get('lights');
+  if (!url) return null;
+  if (isScene || kind === 'texel') throw new Error('lights: the hybrid relights plain bundles per vertex (not scenes or texels)');
+  const lights = await loadLights(url);
+  if (lights.order !== mesh.transfer.order)
+    throw new Error(`${url}: the lights' residual has order ${lights.order}, the bundle's transfer order ${mesh.transfer.order}: ` +
+                    `run prt envlight --order ${mesh.transfer.order}`);
+  const vertexCount = mesh.positions.length / 3;
+  let layers;
+  let visibility = null;
+  if (synthetic) {
+    layers = { bounce: mesh.transfer.data, albedo: new Float32Array(vertexCount * 3).fill(1),
+               normals: mesh.positions.map((x) => 2 * x) };
+    // A visibility of ones, so that its texture fetches are in the frame time.
+    visibility = { rows: vertexCount, lights: lights.lights.length, data: new Float32Array(vertexCount * lights.lights.length).fill(1) };
+  } else {
+    layers = readHybridLayers(bytes, vertexCount);
+  }
+  const visibilityUrl = params.get('visibility');
+  if (visibilityUrl) {
+    const response = await fetch(visibilityUrl);
+    if (!response.ok) throw new Error(`${visibilityUrl}: HTTP ${response.status}`);
+    visibility = parseVisibilityNpy(await response.arrayBuffer(), visibilityUrl);
+    if (visibility.rows !== vertexCount || visibility.lights !== lights.lights.length)
+      throw new Error(`${visibilityUrl}: visibility of ${visibility.rows} rows x ${visibility.lights} lights, the bundle has ` +
+                      `${vertexCount} vertices and ${url} ${lights.lights.length} lights`);
+  }
+  return { lights, layers, visibility };
+}
+
 export async function startViewer(canvas, panel, params) {
   const [width, height] = parseNumbers(params.get('size') || '640,480', 2, 'size');
   const kind = params.get('mode') === 'texel' ? 'texel' : 'vertex';
@@ -128,6 +164,7 @@ export async function startViewer(canvas, panel, params) {
     if (!response.ok) throw new Error(`${bundleUrl}: HTTP ${response.status}`);
     bytes = await response.arrayBuffer();
     const { json, bin } = parseGlb(bytes);
+    if (isFivSceneJson(json)) return startFivViewer(canvas, panel, params, bytes); // moving occluders: fiv_view.js
     if (isSceneBundle(json)) [sceneJson, sceneBin] = [json, bin];
   }
   const isScene = !!sceneJson;
@@ -146,6 +183,7 @@ export async function startViewer(canvas, panel, params) {
   // sky=URL,URL: the OpenEXR maps behind the lighting, one per entry of maps (empty: black for that one).
   const skyUrls = (params.get('sky') || '').split(',');
   const skies = await Promise.all(maps.map((_, i) => (skyUrls[i] ? loadSky(skyUrls[i]) : null)));
+  const hybrid = await loadHybrid(params, { isScene, kind, synthetic, mesh, bytes });
   const reference = !isScene && params.get('reference') ? parseNpy(await (await fetch(params.get('reference'))).arrayBuffer()) : null;
 
   const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true, alpha: false });
@@ -168,14 +206,24 @@ export async function startViewer(canvas, panel, params) {
     errorScale: { value: 0.2 },
     atlasSize: { value: new THREE.Vector2(t.width || 1, t.height || 1) },
     exposure: { value: Number(params.get('exposure') || 0) },
+    linearOutput: { value: false },
+    ...hybridUniforms(kMaxCoefficients),
   };
+  if (hybrid && hybrid.layers.bounce) {
+    uniforms.bounce.value = transferTexture({ ...t, data: hybrid.layers.bounce }, rowsPerLine, lines);
+    uniforms.hasBounce.value = true;
+  }
+  if (hybrid && hybrid.visibility) {
+    uniforms.visibility.value = visibilityTexture(hybrid.visibility, rowsPerLine, lines);
+    uniforms.hasVisibility.value = true;
+  }
   const scene = new THREE.Scene();
   const sky = skyMesh(uniforms.exposure);
   scene.add(sky);
   let vertexCount, errors = null, geometry = null, receiverCount = 0;
   if (isScene) {
     const shared = { transfer: uniforms.transfer, coefficients: uniforms.coefficients, rowsPerLine: uniforms.rowsPerLine,
-                     lighting: uniforms.lighting, exposure: uniforms.exposure };
+                     lighting: uniforms.lighting, exposure: uniforms.exposure, linearOutput: uniforms.linearOutput };
     const built = await sceneMeshes(bytes, sceneJson, sceneTransfer.receivers, shared);
     scene.add(built.group);
     vertexCount = t.rows;
@@ -188,6 +236,10 @@ export async function startViewer(canvas, panel, params) {
     errors = new Float32Array(vertexCount);
     geometry.setAttribute('relativeError', new THREE.BufferAttribute(errors, 1));
     geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
+    if (hybrid) {
+      geometry.setAttribute('normal', new THREE.BufferAttribute(hybrid.layers.normals, 3));
+      geometry.setAttribute('albedo', new THREE.BufferAttribute(hybrid.layers.albedo, 3));
+    }
     const material = new THREE.RawShaderMaterial({
       vertexShader, fragmentShader, uniforms, glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
     });
@@ -195,25 +247,26 @@ export async function startViewer(canvas, panel, params) {
   }
 
   const view = parseNumbers(params.get('camera') || '0,0.1,0.4,0,0.1,0,0,1,0,40', 10, 'camera');
-  const camera = new THREE.PerspectiveCamera(view[9], width / height, 1e-3, 1e3);
-  const orbit = { eye: new THREE.Vector3(view[0], view[1], view[2]), target: new THREE.Vector3(view[3], view[4], view[5]),
-                  up: new THREE.Vector3(view[6], view[7], view[8]), fovy: view[9] };
-  function placeCamera() {
-    const distance = orbit.eye.distanceTo(orbit.target);
-    camera.near = distance * 1e-3;
-    camera.far = distance * 1e3;
-    camera.fov = orbit.fovy;
-    camera.updateProjectionMatrix();
-    camera.position.copy(orbit.eye);
-    camera.up.copy(orbit.up);
-    camera.lookAt(orbit.target);
-  }
+  const view3d = orbitCamera(view, width, height);
+  const { camera, orbit } = view3d;
+  const placeCamera = () => view3d.place();
+
+  // referenceImage=URL: `prt reference --image` of this camera and size, shown beside the result (compare.js); the
+  // camera is locked to the reference's (the URL's camera, or referenceCamera=) while it is shown.
+  const referenceUrl = params.get('referenceImage');
+  const comparison = referenceUrl ? referencePanels(canvas, await loadSky(referenceUrl), width, height) : null;
+  const renderLinear = comparison ? linearReadback(renderer, width, height, uniforms.linearOutput) : null;
+  const referenceView = params.get('referenceCamera') ? parseNumbers(params.get('referenceCamera'), 10, 'referenceCamera') : view;
+  let referenceMetrics = null;
 
   const state = {
     map: Math.min(lightings.length - 1, Math.max(0, Number(params.get('map') || 0))),
     order: Math.min(t.order, Number(params.get('order') || t.order)), rotate: Number(params.get('rotate') || 0),
-    showError: false, showSky: params.get('showSky') !== '0',
+    showError: false, showSky: params.get('showSky') !== '0', hybrid: !!hybrid && params.get('hybrid') !== '0',
+    showReference: !!comparison && params.get('compare') === '1',
   };
+  // With a visibility file the turn stays where the visibility was cast (hybrid.js): the URL's rotate.
+  const lockedTurn = hybrid && hybrid.visibility ? state.rotate : null;
   let metrics = null;
   let lighting = null;
   let frameMs = null;
@@ -244,6 +297,18 @@ export async function startViewer(canvas, panel, params) {
     return { relativeRmse: Math.sqrt(squared / referenceSquared), meanRelativeError: relativeSum / vertexCount };
   }
 
+  // The result's linear radiance (no sky, no error colours) against the reference image; draws the two panels.
+  function compareWithReference() {
+    const [showError, skyVisible] = [uniforms.showError.value, sky.visible];
+    uniforms.showError.value = false;
+    sky.visible = false;
+    const result = renderLinear(scene, camera);
+    uniforms.showError.value = showError;
+    sky.visible = skyVisible;
+    comparison.update(result, uniforms.exposure.value);
+    return comparison.metrics();
+  }
+
   // One frame, finished (a 1-pixel read waits for the GPU): its milliseconds are the panel's frame time.
   const pixel = new Uint8Array(4);
   function draw() {
@@ -259,22 +324,39 @@ export async function startViewer(canvas, panel, params) {
   function update() {
     const source = lightings[state.map];
     const order = state.order, count = order * order;
-    // As prt relight: the lighting's bands shared with the transfer, turned about +Y; bands above `order` are off.
-    const fitted = fitLighting(source.coefficients, Math.min(source.order, t.order) ** 2);
-    const turned = rotateLightingY(fitted, Math.min(source.order, t.order), state.rotate);
-    lighting = new Float32Array(t.order * t.order * 3);
-    lighting.set(turned.subarray(0, Math.min(turned.length, count * 3)));
+    if (lockedTurn !== null) state.rotate = lockedTurn;
+    const hybridOn = state.hybrid && !!hybrid;
+    if (hybridOn) {
+      // As prt relight --lights: the residual turned in SH, the cones' directions turned, their projection windowed.
+      const turned = turnedHybridLighting(hybrid.lights, state.rotate, order);
+      lighting = turned.residual;
+      setHybridUniforms(uniforms, turned, kMaxCoefficients);
+    } else {
+      // As prt relight: the lighting's bands shared with the transfer, turned about +Y; bands above `order` are off.
+      const fitted = fitLighting(source.coefficients, Math.min(source.order, t.order) ** 2);
+      const turned = rotateLightingY(fitted, Math.min(source.order, t.order), state.rotate);
+      lighting = new Float32Array(t.order * t.order * 3);
+      lighting.set(turned.subarray(0, Math.min(turned.length, count * 3)));
+    }
+    uniforms.hybrid.value = hybridOn;
     for (let j = 0; j < kMaxCoefficients; ++j)
       uniforms.lighting.value[j].set(lighting[j * 3] || 0, lighting[j * 3 + 1] || 0, lighting[j * 3 + 2] || 0);
     uniforms.coefficients.value = count;
     uniforms.showError.value = state.showError && !!reference;
-    metrics = errorAgainstReference();
+    metrics = hybridOn ? null : errorAgainstReference(); // the CPU error sums plain SH only
+    if (state.showReference) {
+      view3d.set(referenceView);
+    }
+    if (comparison) comparison.show(state.showReference);
     draw();
+    referenceMetrics = state.showReference ? compareWithReference() : null;
     report();
   }
   function report() {
     if (panel) panel.update(state, metrics, { kind: isScene ? 'scene' : kind, vertexCount, receivers: receiverCount,
-                                               renderer: api.renderer, frameMs, hasSky: !!skies[state.map] });
+                                               renderer: api.renderer, frameMs, hasSky: !!skies[state.map],
+                                               lights: hybrid ? hybrid.lights.lights.length : 0,
+                                               turnLocked: lockedTurn !== null, referenceMetrics });
   }
 
   // The view as a query string: what was loaded, and the state (README "Query parameters"), to share a view.
@@ -287,6 +369,8 @@ export async function startViewer(canvas, panel, params) {
     q.set('rotate', String(state.rotate));
     q.set('exposure', String(uniforms.exposure.value));
     if (!state.showSky) q.set('showSky', '0'); else q.delete('showSky');
+    if (hybrid && !state.hybrid) q.set('hybrid', '0'); else q.delete('hybrid');
+    if (state.showReference) q.set('compare', '1'); else q.delete('compare');
     return q.toString().replace(/%2C/g, ',').replace(/%2F/g, '/');
   }
 
@@ -296,6 +380,12 @@ export async function startViewer(canvas, panel, params) {
     kind: isScene ? 'scene' : kind,
     vertexCount,
     receivers: receiverCount,
+    lights: hybrid ? hybrid.lights.lights.length : 0,
+    turnLocked: lockedTurn !== null,
+    hasReferenceImage: !!comparison,
+    referenceMetrics: () => referenceMetrics,
+    // With a reference image: the result's linear RGBA (A = coverage), row 0 at the top, as the comparison reads it.
+    linearPixels: () => (renderLinear ? Array.from(renderLinear(scene, camera)) : null),
     renderer: (() => {
       const debug = gl.getExtension('WEBGL_debug_renderer_info'); // the real GL behind Chromium's mask
       return debug ? gl.getParameter(debug.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER);
@@ -310,19 +400,12 @@ export async function startViewer(canvas, panel, params) {
     // Orbit about the target: `yaw` and `pitch` in degrees about the up axis and the camera's right axis, `zoom`
     // a factor on the distance. The pitch stops 1 degree short of the poles.
     orbit(yaw, pitch, zoom = 1) {
-      const up = orbit.up.clone().normalize();
-      const offset = orbit.eye.clone().sub(orbit.target);
-      offset.applyAxisAngle(up, -yaw * Math.PI / 180);
-      const right = offset.clone().cross(up).normalize();
-      const angle = offset.angleTo(up) * 180 / Math.PI;
-      const limited = Math.max(1 - angle, Math.min(179 - angle, pitch));
-      offset.applyAxisAngle(right, -limited * Math.PI / 180);
-      offset.multiplyScalar(zoom);
-      orbit.eye.copy(orbit.target).add(offset);
+      if (state.showReference) return; // the camera is the reference's while it is shown
+      view3d.turn(yaw, pitch, zoom);
       draw();
       report();
     },
-    camera: () => [...orbit.eye.toArray(), ...orbit.target.toArray(), ...orbit.up.toArray(), orbit.fovy],
+    camera: () => view3d.array(),
     metrics: () => metrics,
     frameMs: () => frameMs,
     state: () => ({ ...state, exposure: uniforms.exposure.value }),

@@ -41,6 +41,7 @@ struct RelightOptions {
     float exposure = 0.0f;
     bool irradiance = false; // rows of irradiance E instead of outgoing radiance
     std::string positions;   // also write each row's world-space position, [V,3] .npy
+    std::string visibilityOut; // --lights: also write each row's cone visibility, [rows, lights] .npy
     SpecularRelightArgs specular; // --brdf: relight_specular.cpp
 };
 
@@ -89,12 +90,14 @@ struct HybridRows {
     std::vector<float> points, spawn; // [rows][3]; spawn empty: the normals (points inside triangles)
     int width = 0, height = 0;        // texels: the atlas
     std::vector<uint8_t> covered;     // texels: 1 where the bake sampled the surface
+    bool scene = false;               // a scene bundle (its materials are not drawn by a hybrid picture)
 };
 
 HybridRows hybridRows(const RelightOptions& options) {
     HybridRows rows;
     Bundle bundle = readBundle(options.bundle);
     if (!options.texels) {
+        rows.scene = !!bundle.asset;
         rows.mesh = bundle.mesh;
         rows.model = hybridModel(std::move(bundle), options.bundle);
         rows.points = rows.mesh.positions;
@@ -145,12 +148,16 @@ std::vector<float> hybridVisibility(const HybridRows& rows, const std::vector<en
 
 // The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
 // an engine's shadow maps.
-void runHybridRelight(const RelightOptions& options, double start) {
+// With `camera` (--image), a picture of the per-vertex hybrid radiance as `prt render` draws per-vertex radiance.
+void runHybridRelight(const RelightOptions& options, double start, const PinholeCamera* camera) {
     if (!options.shJson.empty()) throw Error("", "--lights", "give --lights or --sh, not both", kExitUsage);
     if (options.lightSamples < 0 || options.lightSamples > 65536)
         throw Error("", "--light-samples", "outside 0..65536", kExitUsage);
     sh::Window window = sh::parseWindow(options.window);
     HybridRows rows = hybridRows(options);
+    if (camera && rows.scene)
+        throw Error(options.bundle, "--image", "a hybrid picture of a scene is not supported (its materials are drawn "
+                                               "per pixel by `prt render`)", kExitUsage);
     HybridModel& model = rows.model;
     HybridLighting lighting = readHybridLightingJson(options.lights);
     checkHybridOrder(model, lighting, options.lights);
@@ -197,7 +204,15 @@ void runHybridRelight(const RelightOptions& options, double start) {
                       "(their interreflected light is lost); bake with --bounces"
                     : "relight: the bundle has no \"transfer_bounce\" layer, so the lights light only directly "
                       "(their interreflected light is lost); make it with `prt transfer --mode interreflected`");
-    writeRelit(options.output, options.texels, rows.width, rows.height, std::move(radiance));
+    // The visibility first: a failure to write it leaves no radiance behind either.
+    if (!options.visibilityOut.empty()) {
+        writeNpy(options.visibilityOut, visibility, {size_t(model.total.vertexCount), cones.size()});
+        logInfo("relight: wrote " + options.visibilityOut + " (cone visibility per row and light)");
+    }
+    if (camera)
+        writeRenderedPicture(options.output, renderVertexRadiance(rows.mesh, radiance, *camera), options.exposure);
+    else
+        writeRelit(options.output, options.texels, rows.width, rows.height, std::move(radiance));
     logInfo("relight: wrote " + options.output);
     nlohmann::json record = {{"relight_seconds", relightSeconds}, {"visibility_seconds", visibilitySeconds},
                              {"visibility_rays", rays}, {"lights", cones.size()}};
@@ -224,7 +239,7 @@ void runRelight(const RelightOptions& options) {
         throw Error("", "--image", "--image and --camera go together", kExitUsage);
     PinholeCamera camera;
     if (imageMode) {
-        if (options.texels || !options.lights.empty())
+        if (options.texels)
             throw Error("", "--image", "pictures are of per-vertex relights (use `prt render --texels` for a bake)",
                         kExitUsage);
         if (!options.eye.empty())
@@ -243,7 +258,9 @@ void runRelight(const RelightOptions& options) {
                     "applies to per-vertex rows of diffuse transfer (not --texels, --image, --lights or --eye)", kExitUsage);
     if (!options.positions.empty() && fileExtension(options.positions) != "npy")
         throw Error(options.positions, "--positions", "must end in .npy", kExitUsage);
-    if (!options.lights.empty()) return runHybridRelight(options, start);
+    if (!options.visibilityOut.empty() && (options.lights.empty() || fileExtension(options.visibilityOut) != "npy"))
+        throw Error(options.visibilityOut, "--visibility-out", "goes with --lights and must end in .npy", kExitUsage);
+    if (!options.lights.empty()) return runHybridRelight(options, start, imageMode ? &camera : nullptr);
     if (options.env.empty() && options.shJson.empty()) throw Error("", "--env", "give --env, --sh or --lights", kExitUsage);
     if (!options.env.empty() && !options.shJson.empty()) throw Error("", "--env", "give --env or --sh, not both", kExitUsage);
 
@@ -406,7 +423,8 @@ void addRelightCommand(CLI::App& app) {
                       "With --eye or --image: the glossy part alone, without the diffuse SH");
     command->add_option("--image", options->imageSize,
                         "A W,H picture through --camera instead of per-vertex radiance (-o .exr linear RGBA or .png "
-                        "tone mapped); a glossy bundle's lobes are evaluated toward the camera's eye");
+                        "tone mapped); a glossy bundle's lobes are evaluated toward the camera's eye; with --lights the "
+                        "hybrid's per-vertex radiance as `prt render` draws it");
     command->add_option("--camera", options->camera,
                         "With --image: EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY (degrees), the camera of "
                         "`prt render` and `prt reference --image`");
@@ -419,6 +437,9 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--positions", options->positions,
                         "Also write each row's world-space position as [V,3] float32 .npy (rows: a scene's receivers in "
                         "node order, then their vertices), so other tools can match rows by position");
+    command->add_option("--visibility-out", options->visibilityOut,
+                        "With --lights: also write the cone visibility the relight used, float32 .npy [rows, lights] "
+                        "(the lights as turned by --rotate-y), e.g. for the browser viewer's hybrid");
     addSpecularRelightOptions(command, options->specular);
     command->callback([options] { runRelight(*options); });
 }

@@ -29,6 +29,7 @@ struct RenderOptions {
     int order = 0; // 0: the transfer's
     float exposure = 0.0f;
     bool texels = false;
+    bool background = false; // the map behind the mesh where rays escape
 };
 
 void runRender(const RenderOptions& options) {
@@ -95,6 +96,8 @@ void runRender(const RenderOptions& options) {
         image = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, environment, options.env, camera, false)
                        : renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
     }
+    // The map behind the mesh, turned with the lighting, as the viewer's sky (its tone map is the surface's).
+    if (options.background) drawEnvironmentBackground(image, environment, options.env, camera, options.rotateYDegrees);
     writeRenderedPicture(options.output, image, options.exposure);
     logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +
             std::to_string(camera.height) + ", " + (options.texels ? "per texel" : "per vertex") + ")");
@@ -131,6 +134,9 @@ void addRenderCommand(CLI::App& app) {
         ->capture_default_str();
     command->add_flag("--texels", options->texels,
                       "Relight the per-texel transfer (\"texel_transfer\") and look texels up at TEXCOORD_0");
+    command->add_flag("--background", options->background,
+                      "Draw the --env map where rays escape, turned by --rotate-y, bilinear between texel centres "
+                      "(equirectangular maps; the EXR's A stays the coverage)");
     command->callback([options] { runRender(*options); });
 }
 

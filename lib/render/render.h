@@ -11,6 +11,7 @@
 #include "raycast.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace prt {
@@ -55,6 +56,15 @@ RenderedImage renderTexelRadiance(const TriMesh& mesh, const Image& atlas, const
 // The atlas of a scene bake, its layer "lightmap_uv": [3 T][2], uv per triangle corner of bundle.mesh. Throws
 // prt::Error(source, ...) when the layer is absent, not a float32 corner layer of that shape, or not finite.
 std::vector<float> lightmapCorners(const Bundle& bundle, const std::string& source);
+
+// `prt render --background`: every pixel whose ray escapes (coverage 0) takes the environment's radiance along the
+// pixel's pinhole ray, turned with the lighting (the lighting turned by rotateYDegrees about +Y, R, shows the map at
+// R^T d), looked up bilinearly between texel centres (u repeats, v clamps), as the browser viewer's sky
+// (viewer/sky.js) does; coverage stays 0 there, so `prt compare --image` still measures the surface only. Pixels
+// that hit the mesh, back faces included, are left as they are. Needs an equirectangular map (throws
+// prt::Error(envSource, "--background", kExitUsage) for a cube strip) and an image of the camera's size.
+void drawEnvironmentBackground(RenderedImage& image, const EnvironmentMap& environment, const std::string& envSource,
+                               const PinholeCamera& camera, double rotateYDegrees);
 
 // Writes `image` atomically as a linear float RGBA OpenEXR, A = coverage (empty coverage: 1). For a tone-mapped
 // PNG, `prt render` passes the radiance through compare.h's toneMap, the one tone map of prt's pictures.

@@ -155,6 +155,57 @@ TEST_F(EnvlightCli, HybridRelightBeatsPlainSh) {
     EXPECT_FALSE(fs::exists(out));
 }
 
+// --visibility-out: the cone visibility the hybrid used, [V, lights] in [0, 1] (the sun overhead: the spheres' lower
+// halves dark, their tops open); relighting the bundle's model with it in the runtime gives the CLI's radiance. It goes with
+// --lights only.
+TEST_F(EnvlightCli, VisibilityOutIsTheVisibilityTheHybridUsed) {
+    std::string scene = (dir / "two.glb").string(), bundle = (dir / "two_t.glb").string();
+    ASSERT_EQ(run("scene two-spheres -o " + scene).exitCode, 0);
+    ASSERT_EQ(run("transfer " + scene + " -o " + bundle + " --mode interreflected --bounces 1 --samples 64 --order 3 "
+                  "--albedo 0.8").exitCode, 0);
+    Disc sun{unit(0.0, 1.0, 0.0), 4.0, {200.0, 200.0, 200.0}};
+    std::string map = writeMap("sun.exr", discMap(256, 0.5, {sun}));
+    std::string lights = (dir / "lights.json").string(), hybrid = (dir / "hybrid.npy").string();
+    std::string visibility = (dir / "visibility.npy").string();
+    ASSERT_EQ(run("envlight " + map + " -o " + lights + " --order 3").exitCode, 0);
+    CliRun r = run("relight " + bundle + " --lights " + lights + " --visibility-out " + visibility + " -o " + hybrid);
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    prt::HybridModel model = prt::loadHybridModel(bundle);
+    prt::HybridLighting lighting = prt::readHybridLightingJson(lights);
+    ASSERT_GE(lighting.lights.size(), 1u);
+    std::vector<size_t> shape;
+    std::vector<float> visible = prt::readNpy(visibility, &shape);
+    ASSERT_EQ(shape, (std::vector<size_t>{model.total.vertexCount, lighting.lights.size()}));
+    size_t shadowed = 0, open = 0;
+    for (float v : visible) {
+        EXPECT_GE(v, 0.0f);
+        EXPECT_LE(v, 1.0f);
+        shadowed += v < 0.5f;
+        open += v == 1.0f;
+    }
+    EXPECT_GT(shadowed, 0u);
+    EXPECT_GT(open, 0u);
+    std::vector<float> expected(size_t(model.total.vertexCount) * 3);
+    prt::relightHybrid(model, lighting, visible.data(), 0, model.total.vertexCount, expected.data());
+    std::vector<float> written = prt::readNpy(hybrid, &shape);
+    ASSERT_EQ(written.size(), expected.size());
+    for (size_t i = 0; i < expected.size(); ++i) EXPECT_NEAR(written[i], expected[i], 1e-5f * (1.0f + expected[i])) << i;
+
+    // --image with --lights: the picture of those rows (the upper sphere's top, lit by the sun, is bright).
+    std::string picture = (dir / "hybrid.exr").string();
+    r = run("relight " + bundle + " --lights " + lights + " --image 32,24 --camera 1,3,0,1,0,0,0,0,-1,20 -o " + picture);
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    prt::Image image = prt::readImage(picture);
+    ASSERT_EQ(image.width, 32);
+    EXPECT_GT(image.rgb[(12 * 32 + 16) * 3], 0.5f);
+
+    std::string out = (dir / "bad.npy").string();
+    EXPECT_EQ(run("relight " + bundle + " --env " + map + " --visibility-out " + out + " -o " + hybrid).exitCode, 2);
+    EXPECT_EQ(run("relight " + bundle + " --lights " + lights + " --visibility-out " + (dir / "v.csv").string() +
+                  " -o " + hybrid).exitCode, 2);
+    EXPECT_FALSE(fs::exists(out));
+}
+
 // The pipeline stage: envlight's lights feed relight; a second run is served from the cache with the same bytes.
 TEST_F(EnvlightCli, PipelineStageFeedsRelight) {
     ASSERT_EQ(run("scene two-spheres -o " + (dir / "two.glb").string()).exitCode, 0);

@@ -80,6 +80,25 @@ TEST_F(RenderCli, RendersLinearExrWithCoverageAndTonemappedPng) {
     EXPECT_EQ(png.values[0], 0.0f);
 }
 
+// --background: the constant sky (0.5) where rays escape, in the EXR and the PNG's tone map, coverage kept.
+TEST_F(RenderCli, BackgroundDrawsTheMapWhereRaysEscape) {
+    ASSERT_EQ(runPrt("render " + path("square.glb") + " --env " + path("sky.exr") + " " + camera +
+                     " --background --rotate-y 30 -o " + path("b.exr")),
+              0);
+    ASSERT_EQ(runPrt("render " + path("square.glb") + " --env " + path("sky.exr") + " " + camera +
+                     " --background -o " + path("b.png")),
+              0);
+    prt::Image image = prt::readImage(path("b.exr"));
+    std::vector<float> coverage = prt::readImageChannels(path("b.exr"), {"A"}).values;
+    size_t centre = 16 * 48 + 24;
+    EXPECT_EQ(coverage[centre], 1.0f);
+    EXPECT_EQ(coverage[0], 0.0f);
+    EXPECT_NEAR(image.rgb[0], 0.5f, 1e-6f);
+    EXPECT_NEAR(image.rgb[centre * 3 + 1], 0.5f, 1e-4f);
+    prt::ImageChannels png = prt::readImageChannels(path("b.png"), {"R", "G", "B"});
+    EXPECT_NEAR(png.values[0] * 255.0f, float(prt::toneMap(0.5f, 0.0f)), 1e-3f);
+}
+
 TEST_F(RenderCli, CompareImageMeasuresOverTheMaskAndDrawsPictures) {
     ASSERT_EQ(runPrt("render " + path("square.glb") + " --env " + path("sky.exr") + " " + camera + " -o " +
                      path("r.exr")),

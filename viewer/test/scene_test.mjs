@@ -6,7 +6,8 @@
 //     the same bundle and camera at sampled interior pixels, for two cameras and a turned environment;
 //   - with the map drawn behind (sky=URL), background pixels must match the map's radiance along prt's pinhole rays,
 //     turned with the lighting, bilinear between texel centres, tone-mapped as compare.h; computed here in double
-//     precision from the map decoded by three.js's EXRLoader;
+//     precision from the map decoded by three.js's EXRLoader, and `prt render --background` of the same camera and
+//     turn at every second background pixel;
 //   - orbit, the URL state (a view reloaded from api.query() draws the same pixels), the folder listing panel, the
 //     frame-time readout and the screenshot button.
 // Screenshots and agreement.json land in WORK_DIR.
@@ -64,6 +65,13 @@ for (const [i, c] of cases.entries())
   try { run('render', file('scene.prt.glb'), '--env', mapFile, '--camera', cameras[c.camera], '--size', size.join(','),
       '--rotate-y', String(c.rotate), '--order', String(c.order), '-o', file(`render_scene${i}.png`)); }
   catch (error) { renderError = error; }
+// The sky in prt render too (--background), turned with the lighting: the PNG to compare, the EXR for its coverage.
+const skyTurns = [0, 100];
+for (const rotate of skyTurns)
+  for (const ext of ['png', 'exr'])
+    try { run('render', file('scene.prt.glb'), '--env', mapFile, '--camera', cameras.front, '--size', size.join(','),
+        '--rotate-y', String(rotate), '--background', '-o', file(`render_sky${rotate}.${ext}`)); }
+    catch (error) { renderError = error; }
 
 // The sky's expected 8-bit values at pixel (x, y): prt's pinhole ray (raycast.cpp), the map at R^T d
 // (docs/conventions.md), bilinear between texel centres (u repeats, v clamps), then compare.h's tone map.
@@ -174,11 +182,46 @@ try {
   // 2. The sky behind it, turned with the lighting.
   results.sky = [];
   await open(query(cameras.front, '&sky=data/courtyard.exr'));
-  for (const rotate of [0, 100]) {
+  for (const rotate of skyTurns) {
     const points = [];
     for (const [x, y] of [[5, 3], [40, 6], [80, 4], [120, 8], [155, 2], [20, 14], [100, 12], [140, 16]]) points.push([x, y]);
     const viewer = await page.evaluate(({ rotate, points }) => { window.prt.set({ rotate }); return window.prt.read(points); },
                                        { rotate, points });
+    // Against prt render --background: every second background pixel whose 3x3 neighbourhood escapes in prt's
+    // render (its EXR's A channel is 0 there), so silhouettes, where the rasteriser and the rays may differ, are out.
+    if (!renderError) {
+      const coverage = exr.parse(fs.readFileSync(file(`render_sky${rotate}.exr`)).buffer.slice(0));
+      const escapes = (x, y) => coverage.data[((size[1] - 1 - y) * size[0] + x) * 4 + 3] === 0; // rows bottom-up
+      const background = [];
+      for (let y = 1; y < size[1] - 1; y += 2)
+        for (let x = 1; x < size[0] - 1; x += 2) {
+          let all = true;
+          for (let dy = -1; dy <= 1; ++dy) for (let dx = -1; dx <= 1; ++dx) all &&= escapes(x + dx, y + dy);
+          if (all) background.push([x, y]);
+        }
+      const png = fs.readFileSync(file(`render_sky${rotate}.png`)).toString('base64');
+      const r = await page.evaluate(async ({ png, size, background }) => {
+        const blob = await (await fetch(`data:image/png;base64,${png}`)).blob();
+        const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+        const context = new OffscreenCanvas(size[0], size[1]).getContext('2d');
+        context.drawImage(bitmap, 0, 0);
+        const rendered = context.getImageData(0, 0, size[0], size[1]).data;
+        const viewer = window.prt.read(background);
+        let max = 0, sum = 0;
+        background.forEach(([x, y], k) => {
+          for (let ch = 0; ch < 3; ++ch) {
+            const d = Math.abs(viewer[k][ch] - rendered[(y * size[0] + x) * 4 + ch]);
+            max = Math.max(max, d);
+            sum += d;
+          }
+        });
+        return { points: background.length, max, mean: sum / (3 * background.length) };
+      }, { png, size, background });
+      check(r.points >= 500 && r.max <= kSkyMaxLevels && r.mean <= kSkyMeanLevels,
+            `sky rotate ${rotate}: ${r.points} background pixels, max ${r.max} mean ${r.mean.toFixed(3)} levels against ` +
+            `prt render --background (tolerance max ${kSkyMaxLevels}, mean ${kSkyMeanLevels})`);
+      results.skyAgainstRender = [...(results.skyAgainstRender || []), { rotate, ...r }];
+    }
     let max = 0, sum = 0;
     points.forEach(([x, y], k) => {
       const expected = skyExpected(cameras.front, rotate, x, y);
