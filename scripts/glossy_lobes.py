@@ -33,11 +33,11 @@ VARIANTS = {
     "nocoh_radiance": (["--no-coherence"], "nocoh", {"PRT_GLOSSY_BLEND": "radiance"}),
 }
 
-def run(args, out=None, force=False, env=None):
+def run(args, out=None, force=False, env=None, prt=None):
     if out and os.path.exists(out) and not force:
         return
     print("+", " ".join(str(a) for a in args), file=sys.stderr, flush=True)
-    subprocess.run([PRT] + [str(a) for a in args] + ["--quiet"], check=True, env={**os.environ, **(env or {})})
+    subprocess.run([prt or PRT] + [str(a) for a in args] + ["--quiet"], check=True, env={**os.environ, **(env or {})})
 
 
 def rmse(a, b):
@@ -55,6 +55,9 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--diffuse-orders", default="", help="e.g. 2,3,4,5,6,8: the diffuse part's error per SH order")
     ap.add_argument("--diffuse-samples", type=int, default=1024)
+    ap.add_argument("--prt", default=None, help="the prt binary that relights (default build/prt), e.g. another "
+                    "branch's build, to compare runtimes on the same fits")
+    ap.add_argument("--tag", default="", help="prefix of the relight outputs and result keys (with --prt)")
     opts = ap.parse_args()
     os.makedirs(opts.out, exist_ok=True)
     o = lambda name: os.path.join(opts.out, name)
@@ -83,7 +86,7 @@ def main():
     for variant in opts.variants.split(","):
         glossy_flags, source, relight_env = VARIANTS[variant]
         for n in map(int, opts.lobes.split(",")):
-            name = f"{variant}_n{n}"
+            name = f"{opts.tag}{variant}_n{n}"
             fit_name = f"{source or variant}_n{n}"
             bundle = o(fit_name + ".glb")
             run(["glossy", mesh, "-o", bundle, "--brdf", f"phong:{EXPONENT},{KS}", "--albedo", ALBEDO, "--lobes", n,
@@ -97,7 +100,7 @@ def main():
                     for part in ("total", "glossy"):
                         path = o(f"{name}_{env}_{eye}_{part}.npy")
                         run(["relight", bundle, "--env", env_path(env), "--eye", eye_text(eye), "-o", path] +
-                            (["--glossy-only"] if part == "glossy" else []), path, env=relight_env)
+                            (["--glossy-only"] if part == "glossy" else []), path, env=relight_env, prt=opts.prt)
                         ref = oracle[(env, eye)][0 if part == "total" else 1]
                         row[f"{env}/{eye}/{part}"] = rmse(np.load(path), ref)
             results[name] = row
@@ -108,10 +111,11 @@ def main():
         print("| env | eye | " + " | ".join(f"{n} lobes" for n in opts.lobes.split(",")) + " |")
         for env in ENVS:
             for eye in EYES:
-                cells = [f"{100 * results[f'{variant}_n{n}'][f'{env}/{eye}/glossy']:.1f}% / "
-                         f"{100 * results[f'{variant}_n{n}'][f'{env}/{eye}/total']:.1f}%" for n in opts.lobes.split(",")]
+                cells = [f"{100 * results[f'{opts.tag}{variant}_n{n}'][f'{env}/{eye}/glossy']:.2f}% / "
+                         f"{100 * results[f'{opts.tag}{variant}_n{n}'][f'{env}/{eye}/total']:.2f}%"
+                         for n in opts.lobes.split(",")]
                 print(f"| {env} | {eye} | " + " | ".join(cells) + " |")
-        fits = [f"{100 * results[f'{variant}_n{n}']['mean_relative_error']:.1f}%" for n in opts.lobes.split(",")]
+        fits = [f"{100 * results[f'{opts.tag}{variant}_n{n}']['mean_relative_error']:.1f}%" for n in opts.lobes.split(",")]
         print("fit residual (grid): " + ", ".join(fits))
 
 

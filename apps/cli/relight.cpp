@@ -349,8 +349,12 @@ void runRelight(const RelightOptions& options) {
         throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map");
     if (glossy && !imageMode) { // a picture evaluates the lobes per pixel instead (below)
         double glossyStart = nowSeconds();
+        PrefilterOptions prefilterOptions; // the stack over the lobes' own sharpness range
+        glossySharpnessRange(*glossy, prefilterOptions.sharpnessMin, prefilterOptions.sharpnessMax);
+        const JobSystem jobs = cli::tbbJobs();
+        prefilterOptions.jobs = &jobs;
         PrefilteredEnvironment prefiltered = prefilterEnvironment(
-            environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height);
+            environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height, prefilterOptions);
         std::vector<float> glossyPart(radiance.size());
         glossyRadiance(*glossy, prefiltered, eye.data(), glossyPart.data());
         for (size_t i = 0; i < radiance.size(); ++i) radiance[i] = (options.glossyOnly ? 0.0f : radiance[i]) + glossyPart[i];

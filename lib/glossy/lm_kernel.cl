@@ -241,15 +241,16 @@ __kernel void fitLobes(int problems, int count, __global const float* table, __g
         project(trial, amplitudeMax, logMin, logMax);
         for (int a = 0; a < NP; ++a) stepNorm += (trial[a] - x[a]) * (trial[a] - x[a]), xNorm += x[a] * x[a];
         if (sqrt(stepNorm) <= parameterTolerance * (sqrt(xNorm) + parameterTolerance)) { --it; break; }
-        evaluate(trial, 0, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean,
+        // The normal equations at the candidate too: an accepted step then needs no second pass over the grid
+        // (the cost comes out bit-identical either way; a rejected step wastes the J^T J part).
+        evaluate(trial, 1, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean,
                  weightWidth, weightFlip, &t);
         real decrease = n.cost - t.cost;
         if (fabs(decrease) <= functionTolerance * n.cost) { --it; break; }
         real rho = decrease / modelDecrease;
         if (rho > 1e-3) { // min_relative_decrease
             for (int a = 0; a < NP; ++a) x[a] = trial[a];
-            evaluate(x, 1, count, p, table, dirX, dirY, dirZ, rootSolidAngle, energy, prior, priorWeight, weightMean,
-                     weightWidth, weightFlip, &n);
+            n = t;
             real q = 2 * rho - 1;
             radius = fmin(radius / fmax(1.0 / 3.0, 1 - q * q * q), 1e16);
             decreaseFactor = 2;

@@ -123,8 +123,16 @@ RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>
                                       std::to_string(mesh.vertexCount()));
     if (environment.layout != EnvLayout::Equirectangular)
         throw Error(envSource, "--env", "the glossy runtime needs an equirectangular (2:1) map");
+    // The stack over the lobes' own sharpness range only (the same texels as the whole stack there), rows on TBB.
+    PrefilterOptions options;
+    glossySharpnessRange(glossy, options.sharpnessMin, options.sharpnessMax);
+    JobSystem jobs;
+    jobs.parallelFor = [](void*, size_t count, TaskFunction task, void* data) {
+        tbb::parallel_for(size_t(0), count, [&](size_t i) { task(data, i); });
+    };
+    options.jobs = &jobs;
     const PrefilteredEnvironment env = prefilterEnvironment(environment.radiance.rgb.data(), environment.radiance.width,
-                                                            environment.radiance.height);
+                                                            environment.radiance.height, options);
     return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
         const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
         const float w[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};

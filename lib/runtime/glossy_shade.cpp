@@ -1,5 +1,5 @@
 // The glossy runtime: the 3 views around the eye direction, each view's lobes turned onto the eye's mirror
-// direction and integrated against a box-filtered environment chain, their radiances blended. Needs only the bundle reader and the standard library.
+// direction and looked up in the prefiltered environment (glossy_prefilter.cpp), their radiances blended. Needs only the bundle reader and the standard library.
 #include "runtime.h"
 
 #include <algorithm>
@@ -10,7 +10,6 @@ namespace prt {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
@@ -62,32 +61,78 @@ GlossyModel glossyModel(const Bundle& bundle, const std::string& source) {
     }
     model.positions = bundle.mesh.positions;
     model.normals = bundle.mesh.normals;
+    indexViewTriangles(model);
     return model;
+}
+
+namespace {
+
+// The weights of d in view triangle t (Cramer's rule with triple products) and the smallest of them over their
+// sum; -inf when d lies on the far side.
+double triangleWeights(const GlossyModel& model, size_t t, const float d[3], double w[3]) {
+    const uint32_t* tri = &model.triangles[t * 3];
+    const float* a = &model.views[tri[0] * 3];
+    const float* b = &model.views[tri[1] * 3];
+    const float* c = &model.views[tri[2] * 3];
+    auto triple = [](const float* x, const float* y, const float* z) {
+        return double(x[0]) * (double(y[1]) * z[2] - double(y[2]) * z[1]) -
+               double(x[1]) * (double(y[0]) * z[2] - double(y[2]) * z[0]) +
+               double(x[2]) * (double(y[0]) * z[1] - double(y[1]) * z[0]);
+    };
+    double det = triple(a, b, c);
+    w[0] = triple(d, b, c) / det, w[1] = triple(a, d, c) / det, w[2] = triple(a, b, d) / det;
+    double sum = w[0] + w[1] + w[2];
+    if (!(sum > 0)) return -1e300;
+    return std::min({w[0], w[1], w[2]}) / sum;
+}
+
+} // namespace
+
+void indexViewTriangles(GlossyModel& model) {
+    const size_t viewCount = model.viewCount();
+    model.viewTriangleOffsets.assign(viewCount + 1, 0);
+    for (uint32_t v : model.triangles) ++model.viewTriangleOffsets[v + 1];
+    for (size_t v = 0; v < viewCount; ++v) model.viewTriangleOffsets[v + 1] += model.viewTriangleOffsets[v];
+    model.viewTriangles.assign(model.triangles.size(), 0);
+    std::vector<uint32_t> fill(model.viewTriangleOffsets.begin(), model.viewTriangleOffsets.end() - 1);
+    for (size_t t = 0; t < model.triangles.size() / 3; ++t) // ascending triangles per view
+        for (int k = 0; k < 3; ++k) model.viewTriangles[fill[model.triangles[t * 3 + k]]++] = uint32_t(t);
 }
 
 void viewWeights(const GlossyModel& model, const float d[3], uint32_t views[3], float weights[3]) {
     double bestMin = -1e30;
-    for (size_t t = 0; t < model.triangles.size() / 3; ++t) {
+    auto keep = [&](size_t t, double low, const double* w) {
+        bestMin = low;
         const uint32_t* tri = &model.triangles[t * 3];
-        const float* a = &model.views[tri[0] * 3];
-        const float* b = &model.views[tri[1] * 3];
-        const float* c = &model.views[tri[2] * 3];
-        // d = wa a + wb b + wc c (up to scale): Cramer's rule with triple products.
-        auto triple = [](const float* x, const float* y, const float* z) {
-            return double(x[0]) * (double(y[1]) * z[2] - double(y[2]) * z[1]) -
-                   double(x[1]) * (double(y[0]) * z[2] - double(y[2]) * z[0]) +
-                   double(x[2]) * (double(y[0]) * z[1] - double(y[1]) * z[0]);
-        };
-        double det = triple(a, b, c);
-        double wa = triple(d, b, c) / det, wb = triple(a, d, c) / det, wc = triple(a, b, d) / det;
-        double sum = wa + wb + wc;
-        if (!(sum > 0)) continue;
-        double low = std::min({wa, wb, wc}) / sum;
+        views[0] = tri[0], views[1] = tri[1], views[2] = tri[2];
+        weights[0] = float(std::max(0.0, w[0])), weights[1] = float(std::max(0.0, w[1]));
+        weights[2] = float(std::max(0.0, w[2]));
+    };
+    bool found = false;
+    if (model.viewTriangleOffsets.size() == model.viewCount() + 1 && model.viewCount() > 0) {
+        // The triangles around the nearest view hold d but where d lies within rounding of an edge they do not
+        // share; the full scan below catches those.
+        size_t nearest = 0;
+        float bestDot = -2.0f;
+        for (size_t v = 0; v < model.viewCount(); ++v) {
+            float c = dot3(&model.views[v * 3], d);
+            if (c > bestDot) bestDot = c, nearest = v;
+        }
+        for (uint32_t i = model.viewTriangleOffsets[nearest]; i < model.viewTriangleOffsets[nearest + 1]; ++i) {
+            double w[3];
+            double low = triangleWeights(model, model.viewTriangles[i], d, w);
+            if (low >= 0) {
+                keep(model.viewTriangles[i], low, w);
+                found = true;
+                break;
+            }
+        }
+    }
+    for (size_t t = 0; !found && t < model.triangles.size() / 3; ++t) {
+        double w[3];
+        double low = triangleWeights(model, t, d, w);
         if (low > bestMin) { // the containing triangle has all weights >= 0; keep the best if rounding hides it
-            bestMin = low;
-            views[0] = tri[0], views[1] = tri[1], views[2] = tri[2];
-            weights[0] = float(std::max(0.0, wa)), weights[1] = float(std::max(0.0, wb));
-            weights[2] = float(std::max(0.0, wc));
+            keep(t, low, w);
             if (low >= 0) break;
         }
     }
@@ -108,82 +153,6 @@ void interpolateLobe(const GlossyModel& model, uint32_t vertex, int lobe, const 
     out[0] = float(a);
     for (int c = 0; c < 3; ++c) out[1 + c] = length > 0 ? float(mean[c] / length) : (c == 1 ? 1.0f : 0.0f);
     out[4] = float(std::exp(logSharpness));
-}
-
-PrefilteredEnvironment prefilterEnvironment(const float* rgb, int width, int height) {
-    if (width < 2 || height < 1 || width != 2 * height)
-        throw Error("", "environment", "the glossy runtime needs a 2:1 equirectangular map");
-    PrefilteredEnvironment env;
-    PrefilteredEnvironment::Level level;
-    level.width = width, level.height = height;
-    level.rgb.assign(rgb, rgb + size_t(width) * height * 3);
-    for (;;) {
-        level.solidAngle.resize(level.height);
-        for (int y = 0; y < level.height; ++y)
-            level.solidAngle[y] = float(2.0 * kPi / level.width *
-                                        (std::cos(kPi * y / level.height) - std::cos(kPi * (y + 1) / level.height)));
-        env.levels.push_back(level);
-        if (level.height % 2 || level.height < 4) break;
-        const PrefilteredEnvironment::Level& fine = env.levels.back();
-        PrefilteredEnvironment::Level coarse;
-        coarse.width = fine.width / 2, coarse.height = fine.height / 2;
-        coarse.rgb.assign(size_t(coarse.width) * coarse.height * 3, 0.0f);
-        for (int y = 0; y < coarse.height; ++y)
-            for (int x = 0; x < coarse.width; ++x)
-                for (int c = 0; c < 3; ++c) {
-                    // Solid-angle weighted: the two fine rows differ in texel size.
-                    double sum = 0.0, weight = 0.0;
-                    for (int dy = 0; dy < 2; ++dy)
-                        for (int dx = 0; dx < 2; ++dx) {
-                            double w = fine.solidAngle[2 * y + dy];
-                            sum += w * fine.rgb[((size_t(2 * y + dy) * fine.width) + 2 * x + dx) * 3 + c];
-                            weight += w;
-                        }
-                    coarse.rgb[(size_t(y) * coarse.width + x) * 3 + c] = float(sum / weight);
-                }
-        level = std::move(coarse);
-    }
-    return env;
-}
-
-void integrateLobe(const PrefilteredEnvironment& env, const float lobe[5], float radiance[3]) {
-    radiance[0] = radiance[1] = radiance[2] = 0.0f;
-    if (!(lobe[0] > 0.0f)) return;
-    const double sharpness = lobe[4], spread = 1.0 / std::sqrt(sharpness);
-    size_t chosen = 0; // finest unless a coarser level still resolves the lobe
-    for (size_t l = 0; l < env.levels.size(); ++l)
-        if (2.0 * kPi / env.levels[l].width <= spread / 4.0) chosen = l;
-    const PrefilteredEnvironment::Level& level = env.levels[chosen];
-    const double radius = std::min(kPi, 5.5 * spread), cosRadius = std::cos(radius);
-    const double mu[3] = {lobe[1], lobe[2], lobe[3]};
-    const double theta = std::acos(std::clamp(mu[1], -1.0, 1.0)), phi = std::atan2(mu[0], -mu[2]);
-    int rowBegin = std::max(0, int(std::floor((theta - radius) / kPi * level.height)));
-    int rowEnd = std::min(level.height, int(std::ceil((theta + radius) / kPi * level.height)));
-    double sum[3] = {0, 0, 0};
-    for (int y = rowBegin; y < rowEnd; ++y) {
-        double t = kPi * (y + 0.5) / level.height, st = std::sin(t), ct = std::cos(t);
-        // Azimuths within the cap on this row: cos(radius) <= ct cos(theta) + st sin(theta) cos(dphi).
-        double denominator = st * std::sin(theta);
-        double halfWidth = kPi;
-        if (denominator > 1e-12) {
-            double c = (cosRadius - ct * std::cos(theta)) / denominator;
-            if (c > 1.0) continue;
-            if (c > -1.0) halfWidth = std::acos(c) + 2.0 * kPi / level.width;
-        }
-        int columns = std::min(level.width, int(std::ceil(2.0 * halfWidth / (2.0 * kPi) * level.width)) + 1);
-        int center = int(std::floor((phi + kPi) / (2.0 * kPi) * level.width));
-        double rowSum[3] = {0, 0, 0};
-        for (int i = 0; i < columns; ++i) {
-            int x = ((center - columns / 2 + i) % level.width + level.width) % level.width;
-            double p = 2.0 * kPi * (x + 0.5) / level.width - kPi;
-            double w[3] = {st * std::sin(p), ct, -st * std::cos(p)};
-            double e = std::exp(sharpness * (mu[0] * w[0] + mu[1] * w[1] + mu[2] * w[2] - 1.0));
-            const float* L = &level.rgb[(size_t(y) * level.width + x) * 3];
-            for (int c = 0; c < 3; ++c) rowSum[c] += e * L[c];
-        }
-        for (int c = 0; c < 3; ++c) sum[c] += rowSum[c] * level.solidAngle[y];
-    }
-    for (int c = 0; c < 3; ++c) radiance[c] = float(lobe[0] * sum[c]);
 }
 
 void turnViewLobes(const GlossyModel& model, uint32_t vertex, uint32_t view, const float mirror[3], float* out) {
@@ -211,8 +180,25 @@ void turnViewLobes(const GlossyModel& model, uint32_t vertex, uint32_t view, con
     }
 }
 
+void glossySharpnessRange(const GlossyModel& model, double& sharpnessMin, double& sharpnessMax) {
+    sharpnessMin = 1.0, sharpnessMax = 0.0;
+    bool any = false;
+    for (size_t i = 0; i + 4 < model.values.size(); i += 5) {
+        if (!(model.values[i] > 0.0f)) continue;
+        const double sharpness = model.values[i + 4];
+        sharpnessMin = any ? std::min(sharpnessMin, sharpness) : sharpness;
+        sharpnessMax = any ? std::max(sharpnessMax, sharpness) : sharpness;
+        any = true;
+    }
+}
+
 void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment& env, uint32_t vertex,
                           const float d[3], float radiance[3]) {
+    glossyRadianceToward(model, env, vertex, d, radiance, LobeEvaluation::Prefiltered);
+}
+
+void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment& env, uint32_t vertex,
+                          const float d[3], float radiance[3], LobeEvaluation evaluation) {
     radiance[0] = radiance[1] = radiance[2] = 0.0f;
     const float* n = &model.normals[size_t(vertex) * 3];
     if (dot3(d, n) <= 0.0f) return; // the lobe sends nothing below the surface
@@ -232,14 +218,17 @@ void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment
         turnViewLobes(model, vertex, views[j], mirror, turned);
         for (int k = 0; k < lobes; ++k) {
             float lit[3];
-            integrateLobe(env, &turned[size_t(k) * 5], lit);
+            if (evaluation == LobeEvaluation::ExactSum)
+                integrateLobe(env, &turned[size_t(k) * 5], lit);
+            else
+                lookupLobe(env, &turned[size_t(k) * 5], lit);
             for (int i = 0; i < 3; ++i) radiance[i] += weights[j] * lit[i];
         }
     }
 }
 
 void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env, const float eye[3],
-                    float* radiance) {
+                    float* radiance, LobeEvaluation evaluation) {
     for (uint32_t v = 0; v < model.vertexCount; ++v) {
         float* out = radiance + size_t(v) * 3;
         out[0] = out[1] = out[2] = 0.0f;
@@ -248,7 +237,7 @@ void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env,
         float length = std::sqrt(dot3(d, d));
         if (!(length > 0.0f)) continue;
         for (float& c : d) c /= length;
-        glossyRadianceToward(model, env, v, d, out);
+        glossyRadianceToward(model, env, v, d, out, evaluation);
     }
 }
 

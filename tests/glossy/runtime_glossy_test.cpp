@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -50,6 +51,39 @@ TEST(GlossyRuntime, ViewWeightsAreBarycentricAndReproduceViews) {
         sum += w;
     }
     EXPECT_NEAR(sum, 1.0f, 1e-6f);
+}
+
+// The index (the triangles around the nearest view) finds the triangle the full scan finds: the same views with
+// the same weights, for directions everywhere including on views and near edges.
+TEST(GlossyRuntime, IndexedViewWeightsEqualTheFullScan) {
+    prt::GlossyModel plain = modelOf(1, std::vector<float>(92 * 5, 0.0f));
+    prt::GlossyModel indexed = plain;
+    prt::indexViewTriangles(indexed);
+    ASSERT_EQ(indexed.viewTriangleOffsets.size(), 93u);
+    std::vector<std::array<float, 3>> directions;
+    for (int v = 0; v < 92; ++v) directions.push_back({plain.views[v * 3], plain.views[v * 3 + 1], plain.views[v * 3 + 2]});
+    for (int i = 0; i < 4000; ++i) { // a spiral over the sphere
+        float z = 1.0f - 2.0f * (i + 0.5f) / 4000.0f, r = std::sqrt(1.0f - z * z), phi = 2.39996323f * i;
+        directions.push_back({r * std::cos(phi), r * std::sin(phi), z});
+    }
+    for (size_t t = 0; t < plain.triangles.size(); t += 3) { // edge midpoints
+        const float* a = &plain.views[plain.triangles[t] * 3];
+        const float* b = &plain.views[plain.triangles[t + 1] * 3];
+        float m[3] = {a[0] + b[0], a[1] + b[1], a[2] + b[2]}, l = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        directions.push_back({m[0] / l, m[1] / l, m[2] / l});
+    }
+    for (const auto& d : directions) {
+        uint32_t va[3], vb[3];
+        float wa[3], wb[3];
+        viewWeights(plain, d.data(), va, wa);
+        viewWeights(indexed, d.data(), vb, wb);
+        // The same weight per view (a view of weight 0 may differ between two triangles sharing an edge).
+        for (int j = 0; j < 3; ++j) {
+            float other = 0.0f;
+            for (int k = 0; k < 3; ++k) other += vb[k] == va[j] ? wb[k] : 0.0f;
+            EXPECT_NEAR(other, wa[j], 1e-6f);
+        }
+    }
 }
 
 TEST(GlossyRuntime, InterpolationBlendsLinearlyNormalisedAndInLog) {
@@ -129,7 +163,11 @@ TEST(GlossyRuntime, GlossyRadianceDoesNotDependOnLobeOrder) {
 
 TEST(GlossyRuntime, LobeIntegralUnderConstantAndGaussianLight) {
     // Constant L: a L 2 pi (1 - exp(-2 l)) / l, for wide and sharp lobes.
-    prt::PrefilteredEnvironment constant = prt::prefilterEnvironment(constantEquirect(512, 1.5f).data(), 512, 256);
+    // integrateLobe reads only the box chain: no stack (prefilter_test.cpp tests the stack's lookups).
+    prt::PrefilterOptions boxesOnly;
+    boxesOnly.sharpnessMin = 2.0, boxesOnly.sharpnessMax = 1.0;
+    prt::PrefilteredEnvironment constant =
+        prt::prefilterEnvironment(constantEquirect(512, 1.5f).data(), 512, 256, boxesOnly);
     for (float sharpness : {2.0f, 30.0f, 400.0f, 3000.0f}) {
         const float lobe[5] = {2.0f, 0.6f, 0.0f, 0.8f, sharpness};
         float radiance[3];
@@ -148,7 +186,7 @@ TEST(GlossyRuntime, LobeIntegralUnderConstantAndGaussianLight) {
             float value = float(std::exp(lightSharpness * (d[0] * w[0] + d[1] * w[1] + d[2] * w[2] - 1)));
             for (int c = 0; c < 3; ++c) rgb[(size_t(y) * width + x) * 3 + c] = value;
         }
-    prt::PrefilteredEnvironment gaussian = prt::prefilterEnvironment(rgb.data(), width, height);
+    prt::PrefilteredEnvironment gaussian = prt::prefilterEnvironment(rgb.data(), width, height, boxesOnly);
     const double mu[3] = {0.0, 0.8, -0.6}, sharpness = 80.0;
     const float lobe[5] = {1.0f, float(mu[0]), float(mu[1]), float(mu[2]), float(sharpness)};
     float radiance[3];

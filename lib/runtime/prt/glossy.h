@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "jobs.h"
+
 namespace prt {
 
 struct Bundle; // bundle.h
@@ -22,8 +24,15 @@ struct GlossyModel {
     std::vector<float> values;         // [V][viewCount][N][5]
     std::vector<float> positions;      // [V][3], the mesh's, for the direction toward the eye
     std::vector<float> normals;        // [V][3]
+    // The view triangles around each view, ascending (indexViewTriangles; glossyModel fills them): viewWeights
+    // then tests the few around the nearest view instead of all. Empty: viewWeights scans every triangle.
+    std::vector<uint32_t> viewTriangleOffsets; // [viewCount + 1]
+    std::vector<uint32_t> viewTriangles;       // [3 triangleCount]
     size_t viewCount() const { return views.size() / 3; }
 };
+
+// Fills model.viewTriangleOffsets and viewTriangles from model.views and model.triangles (indices < viewCount).
+void indexViewTriangles(GlossyModel& model);
 
 // Reads the lobes of `bundle`. Needs a vertex-domain "glossy_lobes" layer of semantic "sg_lobes" whose second
 // axis equals the number of params.views, params.view_triangles indexing those views, N in 1..4, five values
@@ -31,7 +40,8 @@ struct GlossyModel {
 GlossyModel glossyModel(const Bundle& bundle, const std::string& source);
 
 // The view triangle containing unit direction d and its barycentric weights (>= 0, summing to 1), by central
-// projection onto the triangle's plane.
+// projection onto the triangle's plane: among the triangles around the nearest view when the model is indexed
+// (indexViewTriangles), else (or when rounding hides it there) the first of all that holds d.
 void viewWeights(const GlossyModel& model, const float d[3], uint32_t views[3], float weights[3]);
 
 // Lobe k of vertex v toward unit direction d: the 3 enclosing views' lobes blended with the barycentric weights,
@@ -39,23 +49,78 @@ void viewWeights(const GlossyModel& model, const float d[3], uint32_t views[3], 
 void interpolateLobe(const GlossyModel& model, uint32_t vertex, int lobe, const uint32_t views[3],
                      const float weights[3], float out[5]);
 
-// An equirectangular environment (docs/conventions.md) as a chain of 2x2 box-filtered levels, each texel with
-// its solid angle, so a lobe of any width integrates over a level whose texels are narrower than the lobe.
+// An equirectangular environment (docs/conventions.md) prepared for the glossy runtime (docs/glossy.md, "Runtime"):
+// - `levels`, a chain of 2x2 solid-angle-weighted box-filtered levels, each texel with its solid angle, over which
+//   integrateLobe sums a lobe exactly (the reference path);
+// - `sharpnessLevels`, the map convolved with normalised spherical Gaussians at sharpness
+//   kStackSharpnessMin 2^(k / levelsPerOctave): texel (y, x) of a level holds the kernel-weighted mean radiance
+//   sum(G L dOmega) / sum(G dOmega) of integrateLobe's texel sum for a lobe of that sharpness at the texel's centre,
+//   so lookupLobe evaluates a lobe in O(1) (two bilinear lookups) where integrateLobe sums thousands of texels;
+// - `rotation`, the map as the runtime sees it: L'(d) = L(R^T d) for the stored L (row-major, d' = R d, as
+//   sh::rotationY), identity by default; both lookupLobe and integrateLobe turn the lobe mean by R^T, so a rotated
+//   map (`--rotate-y`) costs no new prefilter.
 struct PrefilteredEnvironment {
     struct Level {
         int width = 0, height = 0;
         std::vector<float> rgb;        // [height][width][3] radiance
         std::vector<float> solidAngle; // [height], per texel of the row
     };
-    std::vector<Level> levels; // finest first
+    struct SharpnessLevel {
+        double sharpness = 0.0;        // lambda of the normalised kernel
+        int width = 0, height = 0;     // one of `levels`' sizes, texel spacing <= 1 / (texelsPerWidth sqrt(lambda))
+        std::vector<float> rgb;        // [height][width][3] kernel-weighted mean radiance
+    };
+    std::vector<Level> levels;                   // finest first
+    std::vector<SharpnessLevel> sharpnessLevels; // ascending sharpness, consecutive on the global grid; may be empty
+    int firstSharpnessIndex = 0;                 // k of sharpnessLevels[0]
+    int levelsPerOctave = 0;
+    double rotation[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
 };
-// Needs width = 2 height, both >= 2 (a 2:1 map), rgb [height][width][3] finite. Throws prt::Error otherwise.
+
+// The sharpness grid of the stack: lambda_k = kStackSharpnessMin 2^(k / levelsPerOctave), k >= 0, up to
+// kStackSharpnessMax (the fit's bounds, glossy::FitBounds).
+constexpr double kStackSharpnessMin = 0.5;
+constexpr double kStackSharpnessMax = 8192.0;
+
+// What prefilterEnvironment builds. Every level on the grid whose interval touches [sharpnessMin, sharpnessMax] is
+// built (so a lobe inside the range always has both neighbours); levels are a function of the map, their index
+// and these two integers alone, so a range that holds them yields the same texels. sharpnessMax < sharpnessMin:
+// no stack (lookupLobe then sums exactly).
+struct PrefilterOptions {
+    double sharpnessMin = kStackSharpnessMin;
+    double sharpnessMax = kStackSharpnessMax;
+    int levelsPerOctave = 2;      // 1..8
+    int texelsPerWidth = 4;       // a level's texel spacing is at most 1 / (this sqrt(lambda)) (or the map's), 1..8
+    const JobSystem* jobs = nullptr; // the rows of the stack as tasks (serial when null); results do not depend on it
+};
+
+// Needs width = 2 height, both >= 2 (a 2:1 map), rgb [height][width][3] finite, options in range. Throws
+// prt::Error otherwise. The stack costs about what integrateLobe costs per texel it holds; see docs/glossy.md
+// "Runtime" for time and memory.
+PrefilteredEnvironment prefilterEnvironment(const float* rgb, int width, int height,
+                                            const PrefilterOptions& options);
+// The same with the default options: the whole sharpness range.
 PrefilteredEnvironment prefilterEnvironment(const float* rgb, int width, int height);
 
 // Integral of a exp(lambda (mu . w - 1)) L(w) over the sphere, per channel, for unit mu: summed over the texels
 // within 5.5 / sqrt(lambda) rad of mu (all of them for wide lobes) of the coarsest level whose texel spacing is
-// at most a quarter of the lobe's width 1 / sqrt(lambda).
+// at most a quarter of the lobe's width 1 / sqrt(lambda). The exact reference path (O(lambda^0) but thousands of
+// texels per lobe); the runtime uses lookupLobe.
 void integrateLobe(const PrefilteredEnvironment& env, const float lobe[5], float radiance[3]);
+
+// The same integral in O(1): a times the kernel's exact integral 2 pi / lambda (1 - exp(-2 lambda)) times the
+// kernel-weighted mean radiance, bilinear at mu (across the poles and the +-pi seam) in the two stack levels around
+// lambda, linear in log lambda between them. Exact for a constant map; otherwise within the interpolation error of
+// integrateLobe (docs/glossy.md "Runtime" and the tests). Falls back to integrateLobe for a lambda outside the
+// stack. Needs unit mu.
+void lookupLobe(const PrefilteredEnvironment& env, const float lobe[5], float radiance[3]);
+
+// The smallest and largest sharpness of the model's lobes with a > 0 ({1, 0} when none is lit): the range to
+// prefilter for it.
+void glossySharpnessRange(const GlossyModel& model, double& sharpnessMin, double& sharpnessMax);
+
+// How the runtime evaluates each lobe against the environment.
+enum class LobeEvaluation { Prefiltered, ExactSum }; // lookupLobe | integrateLobe
 
 // The lobes of vertex `vertex` at view `view`, each mean turned by the rotation that takes the view's mirror
 // direction about the vertex normal to unit `mirror` (amplitude and sharpness kept): out [lobes][5].
@@ -68,13 +133,17 @@ void turnViewLobes(const GlossyModel& model, uint32_t vertex, uint32_t view, con
 // Needs model.lobes in 1..4 (as glossyModel guarantees; more are not read).
 void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment& env, uint32_t vertex,
                           const float d[3], float radiance[3]);
+// The same with each lobe evaluated as `evaluation` says (the default above is Prefiltered).
+void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment& env, uint32_t vertex,
+                          const float d[3], float radiance[3], LobeEvaluation evaluation);
 
 // Glossy radiance of every vertex toward the point `eye`: for each of the 3 views around the eye direction, that
 // view's lobes turned onto the eye's mirror direction (turnViewLobes) and integrated against the environment, the
 // three radiances blended with the barycentric weights (docs/glossy.md, "Runtime": lobes are never paired across
-// views); zero where the eye is below a vertex's tangent plane. radiance [V][3].
+// views); zero where the eye is below a vertex's tangent plane. radiance [V][3]. Lobes by lookupLobe unless
+// `evaluation` says ExactSum.
 void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env, const float eye[3],
-                    float* radiance);
+                    float* radiance, LobeEvaluation evaluation = LobeEvaluation::Prefiltered);
 
 
 } // namespace prt
