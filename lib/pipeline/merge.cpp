@@ -193,6 +193,7 @@ void mergeShardFiles(const std::vector<std::string>& files, const std::string& o
     // Every shard's header is read (and its checksum checked) once, its mesh compared with the first's and
     // dropped; what stays per shard is its layers' descriptions and where their bytes lie.
     std::vector<BundleHeader> headers;
+    headers.reserve(files.size()); // `first` and the streams point into it
     headers.push_back(readBundleHeader(files[0]));
     const Bundle& first = headers[0].bundle;
     std::vector<std::vector<Layer>> parts = {describeLike(first, first)};

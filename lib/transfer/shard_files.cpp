@@ -363,9 +363,10 @@ void writeShardRows(const std::string& path, const ShardRun& run, const ShardRow
 namespace {
 
 // Opens shard rows of `run`'s shard and pass `pass`, checks the header and the payload's length, and fills the
-// header's fields of `rows`; the stream stands at the "total" section. exitantFloats is 0 when the rows hold none.
+// header's fields of `rows`; the stream stands at the "total" section. hasExitant says whether the rows hold an
+// exitant section (all passes but the last), exitantFloats its length.
 Reader openShardRows(const std::string& path, const ShardRun& run, int pass, ShardRows& rows, uint64_t& totalFloats,
-                     uint64_t& exitantFloats) {
+                     uint64_t& exitantFloats, bool& hasExitantRows) {
     Reader reader = openShardFile(path, "rows", "shard rows", run, true);
     rows.pass = readPass(reader, pass);
     rows.rowBegin = run.rowBegin;
@@ -382,6 +383,7 @@ Reader openShardRows(const std::string& path, const ShardRun& run, int pass, Sha
     exitantFloats = hasExitant.get<bool>() ? checkedProduct({rowCount(run), n, uint64_t(run.channels)},
                                                             "exitant values", path, "header") : 0;
     expectPayload(reader, (2 * totalFloats + exitantFloats) * 4);
+    hasExitantRows = hasExitant.get<bool>();
     return reader;
 }
 
@@ -390,8 +392,9 @@ Reader openShardRows(const std::string& path, const ShardRun& run, int pass, Sha
 ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, bool exitantOnly) {
     ShardRows rows;
     uint64_t totalFloats = 0, exitantFloats = 0;
-    Reader reader = openShardRows(path, run, pass, rows, totalFloats, exitantFloats);
-    if (exitantOnly && exitantFloats == 0) reader.fail("header", "holds no exitant rows (the last pass writes none)");
+    bool hasExitant = false;
+    Reader reader = openShardRows(path, run, pass, rows, totalFloats, exitantFloats, hasExitant);
+    if (exitantOnly && !hasExitant) reader.fail("header", "holds no exitant rows (the last pass writes none)");
     if (exitantOnly) {
         reader.skip(2 * totalFloats * 4);
     } else {
@@ -443,8 +446,9 @@ int gatherExitant(const std::vector<std::string>& parts, const ShardRun& run, co
             shard.rowEnd = range.end;
             ShardRows rows;
             uint64_t totalFloats = 0, exitantFloats = 0;
-            Reader reader = openShardRows(path, shard, pass, rows, totalFloats, exitantFloats);
-            if (exitantFloats == 0) reader.fail("header", "holds no exitant rows (the last pass writes none)");
+            bool hasExitant = false;
+            Reader reader = openShardRows(path, shard, pass, rows, totalFloats, exitantFloats, hasExitant);
+            if (!hasExitant) reader.fail("header", "holds no exitant rows (the last pass writes none)");
             reader.skip(2 * totalFloats * 4);
             uint64_t infinite = exitantFloats; // the first value that is not finite, reported once the checksum held
             for (uint64_t at = 0; at < exitantFloats; at += piece.size()) {
