@@ -365,10 +365,16 @@ std::string costLine(const nlohmann::json& record) {
     return line;
 }
 
-// Copies `file` atomically to `path` unless that already holds the same bytes (by the run's hash memo).
+// Copies `file` atomically to `path` unless that already holds the same bytes (by the run's hash memo). The copy
+// is the file system's (copy_file), so no output is held in memory whatever its size.
 void copyIfChanged(const std::string& file, const std::string& path, const std::string& hash, const std::string& memo) {
     std::error_code error;
-    if (!fs::is_regular_file(path, error) || hashFileMemo(path, memo) != hash) writeBytesAtomic(path, readFileBytes(file));
+    if (fs::is_regular_file(path, error) && hashFileMemo(path, memo) == hash) return;
+    writeFileAtomic(path, [&](const std::string& tmp) {
+        std::error_code copyError;
+        if (!fs::copy_file(file, tmp, fs::copy_options::overwrite_existing, copyError))
+            throw Error(path, "", "cannot copy " + file + ": " + copyError.message(), kExitOutput);
+    });
 }
 
 // (source, target) pairs for the companion files `names` of the bundle `bundleFile`: each goes next to the
