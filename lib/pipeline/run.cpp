@@ -2,6 +2,7 @@
 // run report.
 #include "pipeline_internal.h"
 
+#include "bundle_stream.h"
 #include "core.h"
 #include "json_input.h"
 
@@ -105,7 +106,8 @@ std::optional<StageInputs> resolveInputs(const PipelineStage& stage, const std::
 
 std::vector<std::string> bundleCompanionNames(const std::string& bundleFile) {
     std::vector<std::string> names;
-    for (const Layer& layer : readBundle(bundleFile).layers) {
+    // The header alone (its checksum checked as readBundle checks it): the layers' values are never needed here.
+    for (const Layer& layer : readBundleHeader(bundleFile).bundle.layers) {
         if (!layer.params.contains("files") || !layer.params["files"].is_array()) continue;
         for (const nlohmann::json& name : layer.params["files"]) {
             fs::path relative = name.get<std::string>();
