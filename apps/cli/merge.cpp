@@ -18,7 +18,7 @@ struct MergeArgs {
 
 void runMerge(const MergeArgs& args) {
     double start = nowSeconds();
-    writeBundle(args.output, mergeShardFiles(args.shards)); // one shard at a time
+    mergeShardFiles(args.shards, args.output); // streamed: no layer is held whole
     logInfo("merge: joined " + std::to_string(args.shards.size()) + " shards into " + args.output);
     StageCost cost;
     cost.stage = "merge";

@@ -2,6 +2,7 @@
 // joining all of them back into the transfer rows of every covered texel (docs/bundle.md "texel_range").
 #include "bake.h"
 
+#include "bundle_stream.h"
 #include "core.h"
 #include "json_input.h"
 
@@ -78,15 +79,21 @@ void writeTexelShard(const BakeOptions& options, const BakeSurface& surface, con
     writeBundle(options.output, bundle);
 }
 
+// Streams: each shard's header is read once (readBundleHeader, its checksum checked, its mesh dropped), and once
+// every shard is placed its rows are read by ranges straight into the joined arrays (readLayerFloats), so besides
+// them it holds one shard's mesh at a time and every shard's layer descriptions.
 std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface& surface, float& rayOffset,
                                    std::vector<float>& bounce) {
     const std::vector<std::string>& files = options.shardFiles;
-    std::vector<Bundle> shards;
+    std::vector<BundleHeader> shards;
     std::vector<const Layer*> layers;
     shards.reserve(files.size());
     for (const std::string& file : files) {
-        shards.push_back(readBundle(file));
-        const Layer* layer = findLayer(shards.back(), kShardLayer);
+        shards.push_back(readBundleHeader(file));
+        shards.back().bundle.mesh = {};
+        shards.back().bundle.objects.clear();
+        shards.back().bundle.asset.reset();
+        const Layer* layer = findLayer(shards.back().bundle, kShardLayer);
         if (!layer || layer->domain != "texel_range")
             throw Error(file, "", std::string("not a bake shard: no '") + kShardLayer +
                                       "' layer of domain texel_range (`prt bake --shard I/N` writes them)",
@@ -105,13 +112,19 @@ std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface
                                 ": the shard belongs to another bake (other inputs or options)",
                             kExitInput);
 
+    // A shard layer's index in its bundle, once its rows are checked to be `count` floats in the file.
+    auto rowsOf = [&](const BundleHeader& shard, const Layer& layer, uint64_t count) {
+        size_t index = size_t(&layer - shard.bundle.layers.data());
+        uint64_t bytes = layer.componentType == "float32" ? 4 : layer.componentType == "float16" ? 2 : 0;
+        return bytes != 0 && shard.extents[index].byteLength == count * bytes ? index : shard.bundle.layers.size();
+    };
     const size_t texels = surface.samples.texel.size();
     const size_t rowWidth = size_t(3) * options.order * options.order;
-    std::vector<float> rows;
-    rows.reserve(texels * rowWidth);
-    bounce.clear();
+    std::vector<float> rows(checkedProduct({texels, rowWidth}, "texel transfer values", files[0], kShardLayer));
+    bounce.assign(options.bounces > 0 ? rows.size() : 0, 0.0f);
     uint64_t next = 0;
     for (size_t index = 0; index < order.size(); ++index) {
+        const BundleHeader& shard = shards[order[index]];
         const std::string& file = files[order[index]];
         const Layer& layer = *layers[order[index]];
         uint64_t begin = rowParam(layer.params, "row_begin", file), end = rowParam(layer.params, "row_end", file);
@@ -122,8 +135,10 @@ std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface
                             " must start at texel " + std::to_string(next) + " and end by " +
                             std::to_string(texels),
                         kExitInput);
+        const uint64_t count = (end - begin) * rowWidth;
+        size_t rowsIndex = rowsOf(shard, layer, count);
         if (layer.shape.size() != 3 || layer.shape[0] != end - begin || layer.shape[1] * layer.shape[2] != rowWidth ||
-            layer.data.size() != (end - begin) * rowWidth)
+            rowsIndex == shard.bundle.layers.size())
             throw Error(file, std::string("layer ") + kShardLayer,
                         "holds no [" + std::to_string(end - begin) + ", " + std::to_string(rowWidth / 3) +
                             ", 3] rows for its range",
@@ -135,16 +150,17 @@ std::vector<float> joinTexelShards(const BakeOptions& options, const BakeSurface
             throw Error(file, std::string("layer ") + kShardLayer + ", params.ray_offset",
                         "differs from shard 0's: the shards traced other geometry", kExitInput);
         rayOffset = offset;
-        rows.insert(rows.end(), layer.data.begin(), layer.data.end());
+        readLayerFloats(shard, rowsIndex, rows.data() + begin * rowWidth);
         if (options.bounces > 0) {
-            const Layer* bounceLayer = findLayer(shards[order[index]], kShardBounceLayer);
+            const Layer* bounceLayer = findLayer(shard.bundle, kShardBounceLayer);
+            size_t bounceIndex = bounceLayer ? rowsOf(shard, *bounceLayer, count) : shard.bundle.layers.size();
             if (!bounceLayer || bounceLayer->domain != "texel_range" || bounceLayer->shape != layer.shape ||
-                bounceLayer->data.size() != layer.data.size())
+                bounceIndex == shard.bundle.layers.size())
                 throw Error(file, std::string("layer ") + kShardBounceLayer,
                             "is missing or not shaped like the shard's transfer rows (a bake with bounces keeps "
                             "their part apart)",
                             kExitInput);
-            bounce.insert(bounce.end(), bounceLayer->data.begin(), bounceLayer->data.end());
+            readLayerFloats(shard, bounceIndex, bounce.data() + begin * rowWidth);
         }
         next = end;
     }

@@ -2,6 +2,9 @@
 #pragma once
 
 #include "bundle.h"
+#include "bundle_stream.h"
+#include "core.h"
+#include "stream_hash.h"
 
 #include <tiny_gltf.h>
 
@@ -26,7 +29,24 @@ void appendCanonicalJson(const nlohmann::json& value, std::string& out);
 
 // The bundle checksum (docs/bundle.md, "Checksum"): hashBytes over the bytes of buffer 0 followed by the
 // canonical text of the extension object with its "checksum" member removed.
-std::string extensionChecksum(const std::vector<unsigned char>& buffer, nlohmann::json extension);
+// canonicalExtensionText is that text alone, for a checksum computed while the buffer streams (StreamHash).
+std::string extensionChecksum(const std::vector<unsigned char>& buffer, const nlohmann::json& extension);
+std::string canonicalExtensionText(nlohmann::json extension);
+
+// tinygltf's model of a glTF file's bytes (`path` names it in messages), with the checks readBundle makes before
+// tinygltf parses (truncation, JSON nesting); `jsonText` receives the glTF JSON as the bytes hold it.
+tinygltf::Model loadModelFromBytes(const std::string& path, const std::string& bytes, std::string& jsonText);
+
+// What readBundleHeader streamed of buffer 0, which its model holds only up to the first layer view.
+struct StreamedBuffer {
+    uint64_t length = 0;              // buffer 0's byteLength
+    StreamHash* hash = nullptr;       // fed with all of buffer 0; bundleFromModel adds the extension and checks it
+    std::vector<LayerExtent>* extents = nullptr; // receives each layer's view (byteOffset in buffer 0, byteLength)
+};
+
+// The bundle of a loaded model (readBundle after loading). With `streamed`, layers keep no values: their views go
+// to streamed->extents, and the checksum is the one streamed->hash completes.
+Bundle bundleFromModel(tinygltf::Model model, std::string jsonText, const std::string& path, StreamedBuffer* streamed);
 
 // The triangle mesh of a loaded glTF model, as readBundle describes. Throws Error(file, ...) for accessors that
 // reach outside their buffers, unsupported accessor kinds, malformed node trees and files without triangles.

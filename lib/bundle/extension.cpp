@@ -173,11 +173,19 @@ void appendCanonicalJson(const json& value, std::string& out) {
     }
 }
 
-std::string extensionChecksum(const std::vector<unsigned char>& buffer, json extension) {
+std::string canonicalExtensionText(json extension) {
     extension.erase("checksum");
-    std::string hashed(reinterpret_cast<const char*>(buffer.data()), buffer.size());
-    appendCanonicalJson(extension, hashed);
-    return hashBytes(hashed.data(), hashed.size());
+    std::string text;
+    appendCanonicalJson(extension, text);
+    return text;
+}
+
+std::string extensionChecksum(const std::vector<unsigned char>& buffer, const json& extension) {
+    StreamHash hash;
+    hash.add(buffer.data(), buffer.size());
+    std::string canonical = canonicalExtensionText(extension);
+    hash.add(canonical.data(), canonical.size());
+    return hash.digest();
 }
 
 } // namespace prt::detail

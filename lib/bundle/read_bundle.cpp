@@ -77,7 +77,14 @@ static bool refuseWrite(std::string* err, const std::string&, const std::vector<
 
 // `jsonText` receives the file's glTF JSON as written (a .glb's JSON chunk), which a scene keeps (asset.h).
 static tinygltf::Model loadModel(const std::string& path, std::string& jsonText) {
-    std::string bytes = readFileBytes(path);
+    return detail::loadModelFromBytes(path, readFileBytes(path), jsonText);
+}
+
+} // namespace prt
+
+namespace prt::detail {
+
+tinygltf::Model loadModelFromBytes(const std::string& path, const std::string& bytes, std::string& jsonText) {
     if (bytes.empty()) throw Error(path, "", "empty file");
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error(path, "", "larger than 4 GiB, the glTF limit");
     bool binary = bytes.compare(0, 4, "glTF") == 0;
@@ -130,6 +137,10 @@ static tinygltf::Model loadModel(const std::string& path, std::string& jsonText)
     return model;
 }
 
+} // namespace prt::detail
+
+namespace prt {
+
 // A member that must be a JSON object when present; absent (glTF leaves out empty objects) reads as {}.
 static json objectMember(const json& parent, const char* key, const std::string& path, const std::string& place) {
     if (!parent.contains(key)) return json::object();
@@ -142,8 +153,10 @@ static std::string stringMember(const json& parent, const char* key, const std::
     return parent[key].get<std::string>();
 }
 
+// One layer record. With `streamed`, the model's buffer holds only the bytes before the layers: the view is
+// checked against the whole buffer's length, and its place goes to streamed->extents instead of values to the layer.
 static Layer readLayer(const json& record, const tinygltf::Model& model, const Bundle& bundle, int version,
-                       const std::string& path, const std::string& place) {
+                       const std::string& path, const std::string& place, detail::StreamedBuffer* streamed) {
     auto refuse = [&](const std::string& problem) { throw Error(path, place, problem); };
     if (!record.is_object()) refuse("layer is not a JSON object");
     Layer layer;
@@ -181,6 +194,7 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, const B
         if (count != 0 && !external) refuse("layer has neither a bufferView nor params.uri");
         if (record.contains("componentType") && record["componentType"].is_string())
             layer.componentType = record["componentType"].get<std::string>();
+        if (streamed) streamed->extents->push_back({});
         return layer;
     }
     layer.componentType = record.value("componentType", "");
@@ -192,12 +206,17 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, const B
     const tinygltf::BufferView& view = model.bufferViews[record["bufferView"].get<size_t>()];
     if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size()) refuse("bufferView has no valid buffer");
     const std::vector<unsigned char>& buffer = model.buffers[view.buffer].data;
-    if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
+    const uint64_t bufferLength = streamed ? streamed->length : buffer.size();
+    if (view.byteOffset > bufferLength || view.byteLength > bufferLength - view.byteOffset)
         refuse("bufferView reaches past the end of its buffer");
     // Checked against the view, which lies inside the file, before anything is allocated.
     if (count > view.byteLength / size || view.byteLength != count * size)
         refuse("bufferView holds " + std::to_string(view.byteLength) + " bytes, shape needs " + std::to_string(count) + " " +
                layer.componentType);
+    if (streamed) {
+        streamed->extents->push_back({view.byteOffset, view.byteLength, ""});
+        return layer;
+    }
     const unsigned char* bytes = buffer.data() + view.byteOffset;
     if (layer.componentType == "float32") {
         layer.data.resize(count);
@@ -227,7 +246,7 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, const B
 }
 
 // The PRT_bundle object, after checking its version and checksum: nothing else in it is trusted before that.
-static json verifiedExtension(const tinygltf::Model& model, const std::string& path) {
+static json verifiedExtension(const tinygltf::Model& model, const std::string& path, const detail::StreamedBuffer* streamed) {
     const std::string place = kBundleExtension;
     json extension = json::parse(model.extensions_json_string).at(kBundleExtension);
     if (!extension.is_object()) throw Error(path, place, "is not a JSON object");
@@ -238,7 +257,15 @@ static json verifiedExtension(const tinygltf::Model& model, const std::string& p
     if (!extension.contains("checksum") || !extension["checksum"].is_string()) throw Error(path, place, "checksum is missing");
     static const std::vector<unsigned char> kNoBuffer;
     const std::vector<unsigned char>& buffer = model.buffers.empty() ? kNoBuffer : model.buffers[0].data;
-    if (extension["checksum"].get<std::string>() != detail::extensionChecksum(buffer, extension))
+    std::string checksum;
+    if (streamed) { // the whole buffer went through streamed->hash already
+        std::string canonical = detail::canonicalExtensionText(extension);
+        streamed->hash->add(canonical.data(), canonical.size());
+        checksum = streamed->hash->digest();
+    } else {
+        checksum = detail::extensionChecksum(buffer, extension);
+    }
+    if (extension["checksum"].get<std::string>() != checksum)
         throw Error(path, place, "checksum mismatch: the bundle is truncated or was modified");
     return extension;
 }
@@ -295,7 +322,8 @@ static void readInstances(const json& extension, const std::string& path, Bundle
     }
 }
 
-static void readRecords(const json& extension, const tinygltf::Model& model, const std::string& path, Bundle& bundle) {
+static void readRecords(const json& extension, const tinygltf::Model& model, const std::string& path, Bundle& bundle,
+                        detail::StreamedBuffer* streamed) {
     const std::string place = kBundleExtension;
     int version = extension["version"].get<int>();
     bundle.producer = objectMember(extension, "producer", path, place);
@@ -307,7 +335,7 @@ static void readRecords(const json& extension, const tinygltf::Model& model, con
     std::set<std::string> names;
     for (size_t i = 0; i < extension["layers"].size(); ++i) {
         std::string layerPlace = place + ".layers[" + std::to_string(i) + "]";
-        bundle.layers.push_back(readLayer(extension["layers"][i], model, bundle, version, path, layerPlace));
+        bundle.layers.push_back(readLayer(extension["layers"][i], model, bundle, version, path, layerPlace, streamed));
         if (!names.insert(bundle.layers.back().name).second) throw Error(path, layerPlace, "duplicate layer name");
     }
 }
@@ -363,13 +391,18 @@ static void dropLayerViews(tinygltf::Model& model, const json& extension) {
 Bundle readBundle(const std::string& path) {
     std::string jsonText;
     tinygltf::Model model = loadModel(path, jsonText);
+    return detail::bundleFromModel(std::move(model), std::move(jsonText), path, nullptr);
+}
+
+Bundle detail::bundleFromModel(tinygltf::Model model, std::string jsonText, const std::string& path, StreamedBuffer* streamed) {
     // tinygltf drops an extension whose value is not an object; the original JSON still names it, and a file that
     // claims to be a bundle is read as one (and refused), never silently as a plain mesh.
     bool hasExtension = model.extensions.count(kBundleExtension) > 0 ||
                         json::parse(model.extensions_json_string, nullptr, false).contains(kBundleExtension);
     Bundle bundle;
     try {
-        json extension = hasExtension ? verifiedExtension(model, path) : json();
+        if (streamed && !hasExtension) throw Error(path, "", "is a plain glTF file, not a prt bundle");
+        json extension = hasExtension ? verifiedExtension(model, path, streamed) : json();
         int version = hasExtension ? extension["version"].get<int>() : 0;
         // Plain glTF and version 3 scenes: the asset and its flattened mesh. Version 1: the scene's triangles,
         // merged. Version 2 (and 3 without a scene): each object from its own mesh.
@@ -384,7 +417,7 @@ Bundle readBundle(const std::string& path) {
         } else {
             bundle.mesh = detail::readGltfMesh(model, path);
         }
-        if (hasExtension) readRecords(extension, model, path, bundle);
+        if (hasExtension) readRecords(extension, model, path, bundle, streamed);
         if (asset) {
             asset->sourceJson = std::move(jsonText);
             if (hasExtension) dropLayerViews(model, extension);

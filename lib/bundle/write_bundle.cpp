@@ -1,12 +1,17 @@
 #include "bundle_internal.h"
 
+#include "bundle_stream.h"
 #include "core.h"
+#include "stream_hash.h"
 
 #include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <functional>
+#include <memory>
 #include <fstream>
 #include <limits>
 #include <set>
@@ -92,9 +97,14 @@ static void checkObjects(const std::string& path, const Bundle& bundle, int vers
     }
 }
 
-static void checkLayers(const std::string& path, const Bundle& bundle, int version) {
+static void checkLayers(const std::string& path, const Bundle& bundle, int version, const std::vector<LayerStream>& streams) {
+    if (!streams.empty() && streams.size() != bundle.layers.size())
+        throw Error(path, "", std::to_string(streams.size()) + " layer streams for " + std::to_string(bundle.layers.size()) +
+                                  " layers", kExitFailure);
     std::set<std::string> names;
-    for (const Layer& layer : bundle.layers) {
+    for (size_t index = 0; index < bundle.layers.size(); ++index) {
+        const Layer& layer = bundle.layers[index];
+        const bool streamed = !streams.empty() && streams[index].write;
         std::string place = "layer '" + layer.name + "'";
         auto refuse = [&](const std::string& problem) { throw Error(path, place, problem, kExitFailure); };
         if (layer.name.empty()) refuse("layer has no name");
@@ -113,8 +123,14 @@ static void checkLayers(const std::string& path, const Bundle& bundle, int versi
             refuse(std::string(floats ? "a float layer holds integers" : "an integer layer holds floats"));
         uint64_t count = elementCount(layer);
         bool dataless = count == 0 || hasExternalData(layer);
-        if (!(values == count || (dataless && values == 0)))
+        if (streamed) { // its values pass through the writer, which checks what needs checking as they go
+            if (values != 0) refuse("is streamed but also holds values");
+            if (count > std::numeric_limits<uint64_t>::max() / size || streams[index].byteLength != count * size)
+                refuse("stream gives " + std::to_string(streams[index].byteLength) + " bytes, shape needs " +
+                       std::to_string(count) + " " + layer.componentType);
+        } else if (!(values == count || (dataless && values == 0))) {
             refuse("holds " + std::to_string(values) + " values, shape needs " + std::to_string(count));
+        }
         if (layer.componentType == "float16")
             for (float value : layer.data)
                 if (!std::isfinite(value) || std::fabs(value) > 65504.0f) refuse("a value does not fit float16");
@@ -134,25 +150,43 @@ static void checkLayers(const std::string& path, const Bundle& bundle, int versi
     }
 }
 
-// Appends bytes to buffer 0 as a new buffer view, then pads the buffer to 4 bytes so that every view starts
-// 4-aligned whatever its element size.
-static int addView(tinygltf::Model& model, const void* data, size_t byteLength, int target) {
-    std::vector<unsigned char>& buffer = model.buffers[0].data;
+// Buffer 0 as the writer streams it: each part's bytes in order. A view's part is followed by zeros to the next
+// multiple of 4 (so every view starts 4-aligned whatever its element size); a scene's asset bytes, the first part,
+// are not.
+struct BinaryPart {
+    uint64_t byteLength = 0;
+    uint64_t padding = 0;
+    std::function<void(const ByteSink&)> write;
+};
+struct Binary {
+    std::vector<BinaryPart> parts;
+    uint64_t size = 0;
+};
+
+// Adds a buffer view over the next byteLength bytes of buffer 0, which `write` gives when the file is written.
+static int addView(tinygltf::Model& model, Binary& binary, uint64_t byteLength, std::function<void(const ByteSink&)> write,
+                   int target) {
     tinygltf::BufferView view;
     view.buffer = 0;
-    view.byteOffset = buffer.size();
+    view.byteOffset = binary.size;
     view.byteLength = byteLength;
     view.target = target;
-    const unsigned char* bytes = static_cast<const unsigned char*>(data);
-    buffer.insert(buffer.end(), bytes, bytes + byteLength);
-    buffer.resize((buffer.size() + 3) / 4 * 4, 0);
+    uint64_t padding = (4 - byteLength % 4) % 4;
+    binary.parts.push_back({byteLength, padding, std::move(write)});
+    binary.size += byteLength + padding;
     model.bufferViews.push_back(view);
     return int(model.bufferViews.size()) - 1;
 }
 
-static int addFloatAttribute(tinygltf::Model& model, const std::vector<float>& values, int width) {
+// A part that passes `size` bytes lying in memory at `data` (which must outlive the write).
+static std::function<void(const ByteSink&)> bytesAt(const void* data, uint64_t size) {
+    return [data, size](const ByteSink& sink) { sink(data, size); };
+}
+
+static int addFloatAttribute(tinygltf::Model& model, Binary& binary, const std::vector<float>& values, int width) {
     tinygltf::Accessor accessor;
-    accessor.bufferView = addView(model, values.data(), values.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+    accessor.bufferView = addView(model, binary, values.size() * sizeof(float), bytesAt(values.data(), values.size() * sizeof(float)),
+                                  TINYGLTF_TARGET_ARRAY_BUFFER);
     accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
     accessor.type = width == 2 ? TINYGLTF_TYPE_VEC2 : TINYGLTF_TYPE_VEC3;
     accessor.count = values.size() / width;
@@ -161,10 +195,10 @@ static int addFloatAttribute(tinygltf::Model& model, const std::vector<float>& v
 }
 
 // Adds `mesh` as glTF mesh number model.meshes.size() with material 0, and a node without transform showing it.
-static void addMesh(tinygltf::Model& model, const TriMesh& mesh, const std::string& name) {
+static void addMesh(tinygltf::Model& model, Binary& binary, const TriMesh& mesh, const std::string& name) {
     tinygltf::Primitive primitive;
     primitive.mode = TINYGLTF_MODE_TRIANGLES;
-    primitive.attributes["POSITION"] = addFloatAttribute(model, mesh.positions, 3);
+    primitive.attributes["POSITION"] = addFloatAttribute(model, binary, mesh.positions, 3);
     // glTF requires POSITION bounds.
     tinygltf::Accessor& position = model.accessors.back();
     position.minValues.assign(3, std::numeric_limits<double>::infinity());
@@ -173,12 +207,13 @@ static void addMesh(tinygltf::Model& model, const TriMesh& mesh, const std::stri
         position.minValues[i % 3] = std::min(position.minValues[i % 3], double(mesh.positions[i]));
         position.maxValues[i % 3] = std::max(position.maxValues[i % 3], double(mesh.positions[i]));
     }
-    if (!mesh.normals.empty()) primitive.attributes["NORMAL"] = addFloatAttribute(model, mesh.normals, 3);
-    if (!mesh.texcoords.empty()) primitive.attributes["TEXCOORD_0"] = addFloatAttribute(model, mesh.texcoords, 2);
-    if (!mesh.albedo.empty()) primitive.attributes["COLOR_0"] = addFloatAttribute(model, mesh.albedo, 3);
+    if (!mesh.normals.empty()) primitive.attributes["NORMAL"] = addFloatAttribute(model, binary, mesh.normals, 3);
+    if (!mesh.texcoords.empty()) primitive.attributes["TEXCOORD_0"] = addFloatAttribute(model, binary, mesh.texcoords, 2);
+    if (!mesh.albedo.empty()) primitive.attributes["COLOR_0"] = addFloatAttribute(model, binary, mesh.albedo, 3);
 
     tinygltf::Accessor indices;
-    indices.bufferView = addView(model, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t),
+    uint64_t indexBytes = mesh.indices.size() * sizeof(uint32_t);
+    indices.bufferView = addView(model, binary, indexBytes, bytesAt(mesh.indices.data(), indexBytes),
                                  TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
     indices.type = TINYGLTF_TYPE_SCALAR;
@@ -235,42 +270,57 @@ static json addScene(tinygltf::Model& model, const Bundle& bundle) {
     return instances;
 }
 
-static json layerRecord(tinygltf::Model& model, const Layer& layer) {
+// An in-memory layer's stored bytes, converted to its component type in pieces of kPiece values.
+static std::function<void(const ByteSink&)> layerBytes(const Layer& layer) {
+    static constexpr size_t kPiece = 1 << 16;
+    const std::string& type = layer.componentType;
+    if (type == "float32") return bytesAt(layer.data.data(), layer.data.size() * sizeof(float));
+    if (type == "uint32") return bytesAt(layer.integers.data(), layer.integers.size() * sizeof(uint32_t));
+    return [&layer, type](const ByteSink& sink) {
+        size_t count = type == "float16" ? layer.data.size() : layer.integers.size();
+        std::vector<uint16_t> wide(type == "uint8" ? 0 : std::min(count, kPiece));
+        std::vector<uint8_t> narrow(type == "uint8" ? std::min(count, kPiece) : 0);
+        for (size_t begin = 0; begin < count; begin += kPiece) {
+            size_t end = std::min(count, begin + kPiece);
+            for (size_t i = begin; i < end; ++i) {
+                if (type == "float16") wide[i - begin] = floatToHalf(layer.data[i]);
+                else if (type == "uint16") wide[i - begin] = uint16_t(layer.integers[i]);
+                else narrow[i - begin] = uint8_t(layer.integers[i]);
+            }
+            if (type == "uint8") sink(narrow.data(), end - begin);
+            else sink(wide.data(), (end - begin) * 2);
+        }
+    };
+}
+
+// The layer's record, with a view over its stored bytes when it has any: `stream` when set, else its values.
+static json layerRecord(tinygltf::Model& model, Binary& binary, const Layer& layer, const LayerStream* stream) {
     json record = {{"name", layer.name}, {"domain", layer.domain}, {"semantic", layer.semantic},
                    {"shape", layer.shape}, {"params", layer.params}};
     if (layer.object != 0) record["object"] = layer.object;
-    const std::string& type = layer.componentType;
-    if (layer.data.empty() && layer.integers.empty()) return record;
-    if (type == "float32") {
-        record["bufferView"] = addView(model, layer.data.data(), layer.data.size() * sizeof(float), 0);
-    } else if (type == "float16") {
-        std::vector<uint16_t> halves(layer.data.size());
-        for (size_t i = 0; i < halves.size(); ++i) halves[i] = floatToHalf(layer.data[i]);
-        record["bufferView"] = addView(model, halves.data(), halves.size() * 2, 0);
-    } else if (type == "uint32") {
-        record["bufferView"] = addView(model, layer.integers.data(), layer.integers.size() * 4, 0);
-    } else if (type == "uint16") {
-        std::vector<uint16_t> narrow(layer.integers.begin(), layer.integers.end());
-        record["bufferView"] = addView(model, narrow.data(), narrow.size() * 2, 0);
+    if (stream) {
+        if (stream->byteLength == 0) return record;
+        record["bufferView"] = addView(model, binary, stream->byteLength, stream->write, 0);
     } else {
-        std::vector<uint8_t> narrow(layer.integers.begin(), layer.integers.end());
-        record["bufferView"] = addView(model, narrow.data(), narrow.size(), 0);
+        if (layer.data.empty() && layer.integers.empty()) return record;
+        uint64_t count = layer.data.empty() ? layer.integers.size() : layer.data.size();
+        record["bufferView"] = addView(model, binary, count * detail::componentSize(layer.componentType), layerBytes(layer), 0);
     }
-    record["componentType"] = type;
+    record["componentType"] = layer.componentType;
     return record;
 }
 
 // Bundles of prt's own meshes (versions 1 and 2 layout): object k is mesh k and node k.
-static void addPrtMeshes(tinygltf::Model& model, const Bundle& bundle, int version, json& extension) {
+static void addPrtMeshes(tinygltf::Model& model, Binary& binary, const Bundle& bundle, int version, json& extension) {
     model.asset.version = "2.0";
     model.asset.generator = "prt";
     model.buffers.resize(1);
     addMaterial(model);
-    addMesh(model, bundle.mesh, version == 1 ? "" : objectName(bundle, 0));
+    addMesh(model, binary, bundle.mesh, version == 1 ? "" : objectName(bundle, 0));
     json objects = json::array();
     objects.push_back({{"name", objectName(bundle, 0)}, {"role", bundle.meshRole}, {"mesh", 0}, {"node", 0}});
     for (size_t k = 0; k < bundle.objects.size(); ++k) {
-        addMesh(model, bundle.objects[k].mesh, bundle.objects[k].name);
+        addMesh(model, binary, bundle.objects[k].mesh, bundle.objects[k].name);
         objects.push_back({{"name", bundle.objects[k].name}, {"role", bundle.objects[k].role}, {"mesh", k + 1}, {"node", k + 1}});
     }
     json instances = addScene(model, bundle);
@@ -334,66 +384,142 @@ static json sceneJson(const json& written, const std::string& sourceJson) {
     return out;
 }
 
-// A .glb of `text` (the JSON) and `binary` (buffer 0), as glTF 2.0 lays it out.
-static void writeGlb(std::ostream& out, std::string text, const std::vector<unsigned char>& binary) {
-    text.resize((text.size() + 3) / 4 * 4, ' ');
-    const uint32_t binaryLength = uint32_t((binary.size() + 3) / 4 * 4);
-    const uint32_t header[3] = {0x46546C67u, 2u, uint32_t(12 + 8 + text.size() + 8 + binaryLength)};
-    const uint32_t jsonChunk[2] = {uint32_t(text.size()), 0x4E4F534Au}, binaryChunk[2] = {binaryLength, 0x004E4942u};
-    out.write(reinterpret_cast<const char*>(header), sizeof header);
-    out.write(reinterpret_cast<const char*>(jsonChunk), sizeof jsonChunk);
-    out.write(text.data(), std::streamsize(text.size()));
-    out.write(reinterpret_cast<const char*>(binaryChunk), sizeof binaryChunk);
-    out.write(reinterpret_cast<const char*>(binary.data()), std::streamsize(binary.size()));
-    const char zeros[3] = {0, 0, 0};
-    out.write(zeros, std::streamsize(binaryLength - binary.size()));
+// The JSON tinygltf writes for `model` (whose buffer 0 holds no bytes: they are streamed), with buffer 0's
+// byteLength set to `bufferLength`; for a scene, merged into its asset's own JSON (sceneJson).
+static std::string glbJson(const tinygltf::Model& model, const Bundle& bundle, uint64_t bufferLength, const std::string& path) {
+    tinygltf::TinyGLTF writer;
+    std::ostringstream glb;
+    if (!writer.WriteGltfSceneToStream(&model, glb, false, true)) throw Error(path, "", "write failed", kExitOutput);
+    std::string bytes = glb.str();
+    uint32_t jsonLength = 0;
+    if (bytes.size() >= 20) std::memcpy(&jsonLength, bytes.data() + 12, 4);
+    if (bytes.size() < 20 + uint64_t(jsonLength)) throw Error(path, "", "tinygltf wrote no JSON chunk", kExitFailure);
+    json written = json::parse(bytes.substr(20, jsonLength));
+    written["buffers"][0]["byteLength"] = bufferLength;
+    if (bundle.asset && !bundle.asset->sourceJson.empty()) return sceneJson(written, bundle.asset->sourceJson).dump();
+    return written.dump();
 }
 
-void writeBundle(const std::string& path, const Bundle& bundle, int version) {
+// Writes the .glb of `text` (the JSON, holding `placeholder` once as its checksum) and buffer 0 as `binary`'s parts
+// give it, as glTF 2.0 lays a .glb out, to `file`; then writes over the placeholder the checksum of the buffer
+// followed by `canonical` (the extension's canonical text, docs/bundle.md "Checksum"). Streamed float16 layers
+// (float16Parts) are checked finite as they pass.
+static void writeGlbStreamed(std::FILE* file, const std::string& path, std::string text, const std::string& placeholder,
+                             const Binary& binary, const std::vector<bool>& float16Parts, const std::string& canonical,
+                             bool binaryChunk) {
+    auto put = [&](const void* bytes, size_t size) {
+        if (size > 0 && std::fwrite(bytes, 1, size, file) != size)
+            throw Error(path, "", std::string("write failed: ") + std::strerror(errno), kExitOutput);
+    };
+    const std::string member = "\"checksum\":\"";
+    size_t at = text.find(placeholder);
+    if (at == std::string::npos || at < member.size() || text.compare(at - member.size(), member.size(), member) != 0 ||
+        text.find(placeholder, at + 1) != std::string::npos)
+        throw Error(path, "", "the checksum's place in the JSON is not unique", kExitFailure);
+    const uint64_t checksumOffset = 20 + at;
+    text.resize((text.size() + 3) / 4 * 4, ' ');
+    const uint64_t binaryLength = (binary.size + 3) / 4 * 4;
+    const uint32_t header[3] = {0x46546C67u, 2u, uint32_t(12 + 8 + text.size() + (binaryChunk ? 8 + binaryLength : 0))};
+    const uint32_t jsonChunk[2] = {uint32_t(text.size()), 0x4E4F534Au};
+    const uint32_t binaryHeader[2] = {uint32_t(binaryLength), 0x004E4942u};
+    put(header, sizeof header);
+    put(jsonChunk, sizeof jsonChunk);
+    put(text.data(), text.size());
+    if (binaryChunk) put(binaryHeader, sizeof binaryHeader);
+
+    StreamHash hash; // over buffer 0, then the canonical extension text
+    const unsigned char zeros[4] = {0, 0, 0, 0};
+    for (size_t p = 0; p < binary.parts.size(); ++p) {
+        const BinaryPart& part = binary.parts[p];
+        uint64_t given = 0;
+        bool half = float16Parts[p];
+        unsigned char carry = 0; // a float16 value split between two pieces: its first byte
+        part.write([&](const void* bytes, size_t size) {
+            if (half) {
+                const unsigned char* b = static_cast<const unsigned char*>(bytes);
+                for (size_t i = 0; i < size; ++i) {
+                    if ((given + i) % 2 == 0) { carry = b[i]; continue; }
+                    uint16_t value = uint16_t(carry | (b[i] << 8));
+                    if ((value & 0x7C00u) == 0x7C00u)
+                        throw Error(path, "", "a streamed float16 value is not finite", kExitFailure);
+                }
+            }
+            given += size;
+            if (given > part.byteLength)
+                throw Error(path, "", "a layer stream gives more than its " + std::to_string(part.byteLength) + " bytes", kExitFailure);
+            put(bytes, size);
+            hash.add(bytes, size);
+        });
+        if (given != part.byteLength)
+            throw Error(path, "", "a layer stream gave " + std::to_string(given) + " of its " +
+                                      std::to_string(part.byteLength) + " bytes", kExitFailure);
+        put(zeros, part.padding);
+        hash.add(zeros, part.padding);
+    }
+    if (binaryChunk) put(zeros, binaryLength - binary.size);
+    hash.add(canonical.data(), canonical.size());
+    std::string checksum = hash.digest();
+    if (checksum.size() != placeholder.size()) throw Error(path, "", "checksum length changed", kExitFailure);
+    if (std::fseek(file, long(checksumOffset), SEEK_SET) != 0)
+        throw Error(path, "", std::string("seek failed: ") + std::strerror(errno), kExitOutput);
+    put(checksum.data(), checksum.size());
+}
+
+void writeBundle(const std::string& path, const Bundle& bundle, int version) { writeBundleStreamed(path, bundle, {}, version); }
+
+void writeBundleStreamed(const std::string& path, const Bundle& bundle, const std::vector<LayerStream>& streams, int version) {
     checkObjects(path, bundle, version);
-    checkLayers(path, bundle, version);
+    checkLayers(path, bundle, version, streams);
 
     tinygltf::Model model;
+    Binary binary;
     json extension = {{"version", version}, {"producer", bundle.producer}, {"inputs", bundle.inputs},
                       {"convention", bundle.convention}, {"layers", json::array()}};
     if (bundle.asset) {
-        // The asset as it came, with the layers appended to its buffer.
+        // The asset as it came, with the layers appended to its buffer (its bytes streamed from the asset itself).
         model = *bundle.asset->source;
+        const std::vector<unsigned char>& assetBytes = bundle.asset->source->buffers[0].data;
+        model.buffers[0].data = {};
+        binary.parts.push_back({assetBytes.size(), 0, bytesAt(assetBytes.data(), assetBytes.size())});
+        binary.size = assetBytes.size();
         extension["scene"] = sceneRecord(*bundle.asset, bundle.mesh);
     } else {
-        addPrtMeshes(model, bundle, version, extension);
+        addPrtMeshes(model, binary, bundle, version, extension);
     }
-    for (const Layer& layer : bundle.layers) extension["layers"].push_back(layerRecord(model, layer));
+    size_t meshParts = binary.parts.size();
+    for (size_t i = 0; i < bundle.layers.size(); ++i) {
+        const LayerStream* stream = !streams.empty() && streams[i].write ? &streams[i] : nullptr;
+        extension["layers"].push_back(layerRecord(model, binary, bundle.layers[i], stream));
+    }
+    std::vector<bool> float16Parts(binary.parts.size(), false); // streamed float16 layers, checked as they pass
+    for (size_t i = 0, part = meshParts; i < bundle.layers.size(); ++i) {
+        if (!extension["layers"][i].contains("bufferView")) continue;
+        float16Parts[part++] = !streams.empty() && streams[i].write && bundle.layers[i].componentType == "float16";
+    }
     extension = detail::storableJson(extension, path, kBundleExtension);
-    extension["checksum"] = detail::extensionChecksum(model.buffers[0].data, extension);
+    const std::string canonical = detail::canonicalExtensionText(extension);
+    const std::string placeholder = "xxh128:" + std::string(32, '?'); // a checksum's length; never a hash
+    extension["checksum"] = placeholder;
     model.extensions[kBundleExtension] = detail::toGltfValue(extension);
     model.extensionsUsed.push_back(kBundleExtension);
 
     // The GLB header stores the file length as a 32-bit integer; 16 MiB are left for the JSON chunk.
-    if (model.buffers[0].data.size() > std::numeric_limits<uint32_t>::max() - (uint64_t(1) << 24))
+    if (binary.size > std::numeric_limits<uint32_t>::max() - (uint64_t(1) << 24))
         throw Error(path, "", "bundle exceeds the 4 GiB limit of a glTF binary", kExitOutput);
+    std::string text = glbJson(model, bundle, binary.size, path);
+    model = {};
 
     writeFileAtomic(path, [&](const std::string& tmpPath) {
-        std::ofstream out(tmpPath, std::ios::binary);
-        if (!out) throw Error(path, "", std::string("cannot create: ") + std::strerror(errno), kExitOutput);
-        tinygltf::TinyGLTF writer;
-        bool written = true;
-        if (bundle.asset && !bundle.asset->sourceJson.empty()) {
-            std::ostringstream glb;
-            written = writer.WriteGltfSceneToStream(&model, glb, false, true);
-            std::string bytes = glb.str();
-            uint32_t jsonLength = 0;
-            if (written && bytes.size() >= 20) std::memcpy(&jsonLength, bytes.data() + 12, 4);
-            if (written) writeGlb(out, sceneJson(json::parse(bytes.substr(20, jsonLength)), bundle.asset->sourceJson).dump(),
-                                  model.buffers[0].data);
-        } else {
-            written = writer.WriteGltfSceneToStream(&model, out, false, true);
-        }
-        out.close();
-        if (!written || !out) throw Error(path, "", "write failed", kExitOutput);
+        std::vector<char> buffer(1 << 20); // outlives the file, which may be closed by the unique_ptr on a throw
+        std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(tmpPath.c_str(), "wb"), std::fclose);
+        if (!file) throw Error(path, "", std::string("cannot create: ") + std::strerror(errno), kExitOutput);
+        std::setvbuf(file.get(), buffer.data(), _IOFBF, buffer.size());
+        writeGlbStreamed(file.get(), path, text, placeholder, binary, float16Parts, canonical,
+                         bundle.asset || binary.size > 0);
+        if (std::fflush(file.get()) != 0 || std::fclose(file.release()) != 0)
+            throw Error(path, "", std::string("write failed: ") + std::strerror(errno), kExitOutput);
     });
 }
-
 
 json conventionRecord() {
     return {{"reference", "docs/conventions.md"},

@@ -1,9 +1,11 @@
 #include "core.h"
+#include "stream_hash.h"
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <new>
 #include <vector>
 // Header-only xxHash (XXH_INLINE_ALL): the digest code compiles into prt_core, so nothing that links prt (the
 // installed runtime included) needs libxxhash at run time.
@@ -32,5 +34,18 @@ std::string hashFile(const std::string& path) {
     if (std::ferror(file.get())) throw Error(path, "", "read failed");
     return hexDigest(XXH3_128bits_digest(state.get()));
 }
+
+StreamHash::StreamHash() : state_(XXH3_createState()) {
+    if (!state_) throw std::bad_alloc();
+    XXH3_128bits_reset(static_cast<XXH3_state_t*>(state_));
+}
+
+StreamHash::~StreamHash() { XXH3_freeState(static_cast<XXH3_state_t*>(state_)); }
+
+void StreamHash::add(const void* data, size_t size) {
+    if (size > 0) XXH3_128bits_update(static_cast<XXH3_state_t*>(state_), data, size);
+}
+
+std::string StreamHash::digest() const { return hexDigest(XXH3_128bits_digest(static_cast<XXH3_state_t*>(state_))); }
 
 } // namespace prt

@@ -354,7 +354,7 @@ std::string storedFile(const PipelineStage& stage, const std::map<std::string, s
     return file;
 }
 
-// Joins the stored shards of `stage`'s last pass into `dir`, by mergeShardFiles or by the stage itself
+// Joins the stored shards of `stage`'s last pass into `dir`, by mergeShardFiles (streamed) or by the stage itself
 // (spec.mergeFlag); returns the merge's cost.
 nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, const StageInputs& inputs,
                          const RunOptions& options, int shardCount, const std::string& label) {
@@ -371,7 +371,7 @@ nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, con
         extras.listFiles = files;
         return runStageIn(dir, stage, inputs, options, kMergeJob, shardCount, label, extras);
     }
-    writeBundle(dir + "/" + port.name + "." + port.extension, mergeShardFiles(files));
+    mergeShardFiles(files, dir + "/" + port.name + "." + port.extension);
     writeBytesAtomic(dir + "/stage.log", "merged " + std::to_string(shardCount) + " shards\n");
     return {{"seconds", nowSeconds() - start}, {"rays", 0}, {"peak_memory_bytes", peakMemoryBytes()}};
 }

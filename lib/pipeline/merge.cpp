@@ -1,11 +1,12 @@
-// Joins shard bundles (contiguous vertex ranges of one stage run) into the bundle the unsharded run writes.
+// Joins shard bundles (contiguous vertex ranges of one stage run) into the bundle the unsharded run writes: one
+// validator (checkShard, joinLayers) for the join in memory (mergeShards) and the streamed one (mergeShardFiles).
 #include "pipeline.h"
 
+#include "bundle_stream.h"
 #include "core.h"
 
 #include <algorithm>
 #include <functional>
-#include <map>
 #include <numeric>
 
 namespace prt {
@@ -30,16 +31,6 @@ uint64_t rowParam(const Layer& layer, const char* key, const std::string& file) 
     return uint64_t(value.get<double>());
 }
 
-} // namespace
-
-namespace {
-
-// One shard's rows of one sharded layer, moved out of the shard bundle, with the layer's description.
-struct LayerPart {
-    Layer meta; // the layer without its data
-    std::vector<float> data;
-};
-
 Layer describe(const Layer& layer) {
     Layer meta;
     meta.name = layer.name;
@@ -52,60 +43,70 @@ Layer describe(const Layer& layer) {
     return meta;
 }
 
-// Joins shards that `load(s)` gives one at a time (s in 0..count-1, each loaded once, in order), so that at most
-// one shard bundle besides the first is held at once: the others' meshes and whole layers are compared with the
-// first's and dropped, their sharded rows kept until they are joined.
-Bundle mergeShardsFrom(size_t count, const std::function<Bundle(size_t)>& load, const std::vector<std::string>& files) {
-    if (count == 0 || count != files.size()) throw Error("", "merge", "no shards to merge", kExitUsage);
-    Bundle merged = load(0);
-    const Bundle& first = merged;
-    std::vector<Layer> keyLayers(count); // each shard's layer named as the first's first layer, without data
-    std::vector<bool> hasKey(count, false);
-    std::map<std::string, std::vector<LayerPart>> parts; // by layer name, in load order
-    // Moves shard s's rows of every layer the first shard holds sharded into `parts`; keeps descriptions.
-    auto stash = [&](Bundle& shard, size_t s) {
-        if (!first.layers.empty())
-            if (const Layer* key = findLayer(shard, first.layers[0].name)) {
-                keyLayers[s] = describe(*key);
-                hasKey[s] = true;
-            }
-        for (const Layer& layer : first.layers) {
-            if (layer.domain != "vertex_range") continue;
-            LayerPart piece;
-            if (Layer* part = const_cast<Layer*>(findLayer(shard, layer.name))) {
-                piece.meta = describe(*part);
-                piece.data = std::move(part->data);
-                part->data = {};
-            } else {
-                piece.meta.name = ""; // missing: reported when the layer is joined
-            }
-            parts[layer.name].push_back(std::move(piece));
-        }
-    };
-    stash(merged, 0);
-    for (size_t s = 1; s < count; ++s) {
-        Bundle other = load(s);
-        const TriMesh &a = first.mesh, &b = other.mesh;
-        if (a.positions != b.positions || a.indices != b.indices || a.normals != b.normals ||
-            a.texcoords != b.texcoords || a.albedo != b.albedo)
-            throw Error(files[s], "mesh", "differs from the mesh of " + files[0] + ": shards of different inputs", kExitInput);
-        if (other.inputs != first.inputs || other.producer != first.producer || other.convention != first.convention)
-            throw Error(files[s], "", "was produced from other inputs or by another producer than " + files[0], kExitInput);
-        if (other.layers.size() != first.layers.size())
-            throw Error(files[s], "", "has " + std::to_string(other.layers.size()) + " layers, " + files[0] + " has " +
-                                          std::to_string(first.layers.size()), kExitInput);
-        for (const Layer& layer : first.layers) {
-            const Layer* same = findLayer(other, layer.name);
-            if (layer.domain != "vertex_range" &&
-                (!same || same->domain != layer.domain || same->params != layer.params || same->data != layer.data))
-                throw Error(files[s], "layer " + layer.name, "differs from " + files[0] + "'s, but is not sharded",
-                            kExitInput);
-        }
-        stash(other, s);
+// The index of the layer named `name` in `bundle`, or bundle.layers.size() when it has none.
+size_t layerIndex(const Bundle& bundle, const std::string& name) {
+    for (size_t i = 0; i < bundle.layers.size(); ++i)
+        if (bundle.layers[i].name == name) return i;
+    return bundle.layers.size();
+}
+
+// Whether a layer that every shard holds whole holds the same values in shard `other` as in the first.
+using SameValues = std::function<bool(const Layer& first, size_t firstIndex, const Layer& other, size_t otherIndex)>;
+
+// Checks that shard `other` (from `file`) belongs to the run of `first` (from `firstFile`): the same meshes, inputs,
+// producer and convention, as many layers, and every layer the first holds whole held alike (domain, params and
+// values). Throws prt::Error(file, ..., kExitInput) naming the difference.
+void checkShard(const Bundle& first, const std::string& firstFile, const Bundle& other, const std::string& file,
+                const SameValues& sameValues) {
+    const TriMesh &a = first.mesh, &b = other.mesh;
+    if (a.positions != b.positions || a.indices != b.indices || a.normals != b.normals || a.texcoords != b.texcoords ||
+        a.albedo != b.albedo)
+        throw Error(file, "mesh", "differs from the mesh of " + firstFile + ": shards of different inputs", kExitInput);
+    if (other.inputs != first.inputs || other.producer != first.producer || other.convention != first.convention)
+        throw Error(file, "", "was produced from other inputs or by another producer than " + firstFile, kExitInput);
+    if (other.layers.size() != first.layers.size())
+        throw Error(file, "", "has " + std::to_string(other.layers.size()) + " layers, " + firstFile + " has " +
+                                  std::to_string(first.layers.size()), kExitInput);
+    for (size_t k = 0; k < first.layers.size(); ++k) {
+        const Layer& layer = first.layers[k];
+        if (layer.domain == "vertex_range") continue;
+        size_t index = layerIndex(other, layer.name);
+        const Layer* same = index < other.layers.size() ? &other.layers[index] : nullptr;
+        if (!same || same->domain != layer.domain || same->params != layer.params || !sameValues(layer, k, *same, index))
+            throw Error(file, "layer " + layer.name, "differs from " + firstFile + "'s, but is not sharded", kExitInput);
     }
-    std::vector<const Layer*> sharded(count);
-    for (size_t s = 0; s < count; ++s) sharded[s] = hasKey[s] ? &keyLayers[s] : nullptr;
-    std::vector<size_t> order = orderShards(sharded, files);
+}
+
+// For each layer of `first`, the description (no values) of the layer of that name in `shard`, or a layer with no
+// name where it has none.
+std::vector<Layer> describeLike(const Bundle& first, const Bundle& shard) {
+    std::vector<Layer> parts(first.layers.size());
+    for (size_t k = 0; k < first.layers.size(); ++k) {
+        size_t index = layerIndex(shard, first.layers[k].name);
+        if (index < shard.layers.size()) parts[k] = describe(shard.layers[index]);
+    }
+    return parts;
+}
+
+// How the layers of the shards join.
+struct JoinPlan {
+    std::vector<size_t> order;  // order[I]: the position of shard I among the files
+    std::vector<Layer> layers;  // the first shard's layers, without values; sharded ones as the joined layer
+    std::vector<bool> sharded;  // per layer: joined from every shard's rows (else kept from the first)
+};
+
+// The join of shards whose layers `parts` describes (parts[s] = describeLike(first, shard s), parts[0] the first's
+// own), after checkShard passed for every other shard: the shards' order, and each "vertex_range" layer joined into
+// a "vertex" layer of the mesh's vertex count (shard bookkeeping dropped, counters summed). Throws prt::Error naming
+// the offending file for shards that are no shards of one run, for bake shards, and for ranges that do not tile
+// [0, vertex_count) exactly once in shard order.
+JoinPlan joinLayers(const Bundle& first, const std::vector<std::vector<Layer>>& parts, const std::vector<std::string>& files) {
+    const size_t count = parts.size();
+    JoinPlan plan;
+    std::vector<const Layer*> keys(count, nullptr); // each shard's layer named as the first's first layer
+    for (size_t s = 0; s < count; ++s)
+        if (!parts[s].empty() && !parts[s][0].name.empty()) keys[s] = &parts[s][0];
+    plan.order = orderShards(keys, files);
     for (const Layer& layer : first.layers)
         if (layer.domain == "texel_range")
             throw Error(files[0], "layer " + layer.name,
@@ -113,28 +114,30 @@ Bundle mergeShardsFrom(size_t count, const std::function<Bundle(size_t)>& load, 
                         "--merge SHARD...` with the shards' options instead",
                         kExitUsage);
 
-    for (Layer& layer : merged.layers) {
-        if (layer.domain != "vertex_range") continue; // layers every shard holds whole are kept as they are
+    for (size_t k = 0; k < first.layers.size(); ++k) {
+        Layer layer = describe(first.layers[k]);
+        plan.sharded.push_back(layer.domain == "vertex_range");
+        if (!plan.sharded.back()) { // layers every shard holds whole are kept as they are
+            plan.layers.push_back(std::move(layer));
+            continue;
+        }
         uint64_t vertices = rowParam(layer, "vertex_count", files[0]);
         if (vertices != first.mesh.vertexCount())
             throw Error(files[0], "layer " + layer.name, "vertex_count " + std::to_string(vertices) +
                                                              " does not match the mesh's " +
                                                              std::to_string(first.mesh.vertexCount()) + " vertices", kExitInput);
-        uint64_t rowWidth = std::accumulate(layer.shape.begin() + 1, layer.shape.end(), uint64_t(1), std::multiplies<>());
         nlohmann::json common = withoutShardParams(layer.params);
-        std::vector<float> data;
-        data.reserve(vertices * rowWidth);
         nlohmann::json counters = nlohmann::json::object();
         uint64_t nextRow = 0;
-        std::vector<LayerPart>& pieces = parts[layer.name];
         for (size_t index = 0; index < count; ++index) {
-            size_t s = order[index];
-            LayerPart& piece = pieces[s];
-            const Layer* part = piece.meta.name.empty() ? nullptr : &piece.meta;
+            size_t s = plan.order[index];
+            const Layer* part = parts[s][k].name.empty() ? nullptr : &parts[s][k];
             if (!part || part->domain != "vertex_range" || part->semantic != layer.semantic ||
+                part->componentType != layer.componentType ||
                 !std::equal(part->shape.begin() + 1, part->shape.end(), layer.shape.begin() + 1, layer.shape.end()) ||
                 part->shape.size() != layer.shape.size())
-                throw Error(files[s], "layer " + layer.name, "missing or of another domain, semantic or row shape", kExitInput);
+                throw Error(files[s], "layer " + layer.name, "missing or of another domain, semantic, type or row shape",
+                            kExitInput);
             if (withoutShardParams(part->params) != common)
                 throw Error(files[s], "layer " + layer.name, "parameters differ from " + files[0] + "'s", kExitInput);
             uint64_t begin = rowParam(*part, "row_begin", files[s]), end = rowParam(*part, "row_end", files[s]);
@@ -142,32 +145,88 @@ Bundle mergeShardsFrom(size_t count, const std::function<Bundle(size_t)>& load, 
                 throw Error(files[s], "layer " + layer.name, "rows [" + std::to_string(begin) + ", " + std::to_string(end) +
                                                                  ") do not continue at row " + std::to_string(nextRow), kExitInput);
             nextRow = end;
-            data.insert(data.end(), piece.data.begin(), piece.data.end());
-            piece.data = {}; // held once: joined rows grow as shard rows go
             for (const char* key : kCounterParams)
                 if (part->params.contains(key)) counters[key] = counters.value(key, uint64_t(0)) + part->params[key].get<uint64_t>();
         }
         if (nextRow != vertices)
-            throw Error(files[order[count - 1]], "layer " + layer.name, "shards end at row " + std::to_string(nextRow) +
-                                                                            " of " + std::to_string(vertices), kExitInput);
+            throw Error(files[plan.order[count - 1]], "layer " + layer.name, "shards end at row " + std::to_string(nextRow) +
+                                                                                 " of " + std::to_string(vertices), kExitInput);
         layer.domain = "vertex";
         layer.shape[0] = vertices;
-        layer.data = std::move(data);
         layer.params = common;
         layer.params.update(counters);
+        plan.layers.push_back(std::move(layer));
     }
-    return merged;
+    return plan;
 }
 
 } // namespace
 
 Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::string>& files) {
-    if (shards.size() != files.size()) throw Error("", "merge", "no shards to merge", kExitUsage);
-    return mergeShardsFrom(shards.size(), [&](size_t s) { return shards[s]; }, files);
+    if (shards.empty() || shards.size() != files.size()) throw Error("", "merge", "no shards to merge", kExitUsage);
+    const Bundle& first = shards[0];
+    std::vector<std::vector<Layer>> parts = {describeLike(first, first)};
+    SameValues sameValues = [](const Layer& a, size_t, const Layer& b, size_t) {
+        return a.componentType == b.componentType && a.data == b.data && a.integers == b.integers;
+    };
+    for (size_t s = 1; s < shards.size(); ++s) {
+        checkShard(first, files[0], shards[s], files[s], sameValues);
+        parts.push_back(describeLike(first, shards[s]));
+    }
+    JoinPlan plan = joinLayers(first, parts, files);
+    Bundle merged = first;
+    for (size_t k = 0; k < merged.layers.size(); ++k) {
+        if (!plan.sharded[k]) continue;
+        Layer joined = plan.layers[k];
+        for (size_t s : plan.order) {
+            const Layer& part = shards[s].layers[layerIndex(shards[s], joined.name)];
+            joined.data.insert(joined.data.end(), part.data.begin(), part.data.end());
+            joined.integers.insert(joined.integers.end(), part.integers.begin(), part.integers.end());
+        }
+        merged.layers[k] = std::move(joined);
+    }
+    return merged;
 }
 
-Bundle mergeShardFiles(const std::vector<std::string>& files) {
-    return mergeShardsFrom(files.size(), [&](size_t s) { return readBundle(files[s]); }, files);
+void mergeShardFiles(const std::vector<std::string>& files, const std::string& output) {
+    if (files.empty()) throw Error("", "merge", "no shards to merge", kExitUsage);
+    // Every shard's header is read (and its checksum checked) once, its mesh compared with the first's and
+    // dropped; what stays per shard is its layers' descriptions and where their bytes lie.
+    std::vector<BundleHeader> headers;
+    headers.reserve(files.size()); // `first` and the streams point into it
+    headers.push_back(readBundleHeader(files[0]));
+    const Bundle& first = headers[0].bundle;
+    std::vector<std::vector<Layer>> parts = {describeLike(first, first)};
+    for (size_t s = 1; s < files.size(); ++s) {
+        BundleHeader header = readBundleHeader(files[s]);
+        checkShard(first, files[0], header.bundle, files[s], [&](const Layer& a, size_t ai, const Layer& b, size_t bi) {
+            const LayerExtent &x = headers[0].extents[ai], &y = header.extents[bi];
+            return a.componentType == b.componentType && x.byteLength == y.byteLength && x.hash == y.hash;
+        });
+        parts.push_back(describeLike(first, header.bundle));
+        header.bundle.mesh = {};
+        header.bundle.objects.clear();
+        header.bundle.asset.reset();
+        headers.push_back(std::move(header));
+    }
+    JoinPlan plan = joinLayers(first, parts, files);
+
+    Bundle merged = std::move(headers[0].bundle); // the first's meshes and records, not copied
+    headers[0].bundle.layers = merged.layers;      // streamLayerBytes names them
+    merged.layers = plan.layers;
+    std::vector<LayerStream> streams(merged.layers.size());
+    for (size_t k = 0; k < merged.layers.size(); ++k) {
+        // The rows of shard I, in shard order, for a joined layer; the first shard's bytes for a whole one.
+        std::vector<std::pair<const BundleHeader*, size_t>> pieces;
+        if (!plan.sharded[k]) pieces.emplace_back(&headers[0], k);
+        else
+            for (size_t s : plan.order) pieces.emplace_back(&headers[s], layerIndex(headers[s].bundle, merged.layers[k].name));
+        for (const auto& [header, index] : pieces) streams[k].byteLength += header->extents[index].byteLength;
+        streams[k].write = [pieces](const ByteSink& sink) {
+            for (const auto& [header, index] : pieces) streamLayerBytes(*header, index, sink);
+        };
+    }
+    writeBundleStreamed(output, merged, streams);
 }
 
 } // namespace prt

@@ -181,9 +181,14 @@ void sweepStore(const std::string& store);
 // and other params in every shard, and row ranges that tile [0, vertex_count) exactly once; throws prt::Error
 // naming the offending shard file otherwise.
 Bundle mergeShards(const std::vector<Bundle>& shards, const std::vector<std::string>& files);
-// mergeShards over shard files, read one at a time: besides the first shard's bundle and the joined rows, at most
-// one other shard is held at once (its mesh and whole layers are compared with the first's and dropped).
-Bundle mergeShardFiles(const std::vector<std::string>& files);
+// mergeShards over shard files, streamed into `output` (written atomically): each shard's header is read once
+// (readBundleHeader, checksum checked) and its meshes compared with the first's and dropped; then the merged
+// bundle's JSON is computed from the headers alone and every layer's bytes are copied shard by shard in 1 MiB
+// pieces, each shard read by ranges (streamLayerBytes, which refuses bytes that changed since the check). The file
+// is the one writeBundle(output, mergeShards(...)) writes, byte for byte. Memory: the first shard's meshes, one
+// other shard's meshes at a time and every shard's layer descriptions, whatever the layers' sizes. Layers every
+// shard holds whole are compared by their bytes' XXH3-128 hashes. Throws as mergeShards, naming the shard file.
+void mergeShardFiles(const std::vector<std::string>& files, const std::string& output);
 
 // ---- running --------------------------------------------------------------------------------------------------
 

@@ -48,7 +48,8 @@ std::optional<StageInputs> resolveInputs(const PipelineStage& stage, const std::
 std::map<std::string, std::string> inputHashes(const StageInputs& inputs);
 
 // The external files a bundle's layers reference (params.files: plain names next to the bundle, docs/bundle.md),
-// read from the bundle. Throws prt::Error for a name that is not a plain file name.
+// read from the bundle's header (readBundleHeader: no layer values are held). Throws prt::Error for a name that
+// is not a plain file name.
 std::vector<std::string> bundleCompanionNames(const std::string& bundleFile);
 
 // Removes the store entry STORE/<hex> crash-safely (gc.cpp: one rename takes it out, then its files go); returns

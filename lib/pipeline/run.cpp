@@ -2,6 +2,7 @@
 // run report.
 #include "pipeline_internal.h"
 
+#include "bundle_stream.h"
 #include "core.h"
 #include "json_input.h"
 
@@ -105,7 +106,8 @@ std::optional<StageInputs> resolveInputs(const PipelineStage& stage, const std::
 
 std::vector<std::string> bundleCompanionNames(const std::string& bundleFile) {
     std::vector<std::string> names;
-    for (const Layer& layer : readBundle(bundleFile).layers) {
+    // The header alone (its checksum checked as readBundle checks it): the layers' values are never needed here.
+    for (const Layer& layer : readBundleHeader(bundleFile).bundle.layers) {
         if (!layer.params.contains("files") || !layer.params["files"].is_array()) continue;
         for (const nlohmann::json& name : layer.params["files"]) {
             fs::path relative = name.get<std::string>();
@@ -365,10 +367,16 @@ std::string costLine(const nlohmann::json& record) {
     return line;
 }
 
-// Copies `file` atomically to `path` unless that already holds the same bytes (by the run's hash memo).
+// Copies `file` atomically to `path` unless that already holds the same bytes (by the run's hash memo). The copy
+// is the file system's (copy_file), so no output is held in memory whatever its size.
 void copyIfChanged(const std::string& file, const std::string& path, const std::string& hash, const std::string& memo) {
     std::error_code error;
-    if (!fs::is_regular_file(path, error) || hashFileMemo(path, memo) != hash) writeBytesAtomic(path, readFileBytes(file));
+    if (fs::is_regular_file(path, error) && hashFileMemo(path, memo) == hash) return;
+    writeFileAtomic(path, [&](const std::string& tmp) {
+        std::error_code copyError;
+        if (!fs::copy_file(file, tmp, fs::copy_options::overwrite_existing, copyError))
+            throw Error(path, "", "cannot copy " + file + ": " + copyError.message(), kExitOutput);
+    });
 }
 
 // (source, target) pairs for the companion files `names` of the bundle `bundleFile`: each goes next to the

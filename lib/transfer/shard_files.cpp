@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -359,9 +360,14 @@ void writeShardRows(const std::string& path, const ShardRun& run, const ShardRow
     });
 }
 
-ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, bool exitantOnly) {
+namespace {
+
+// Opens shard rows of `run`'s shard and pass `pass`, checks the header and the payload's length, and fills the
+// header's fields of `rows`; the stream stands at the "total" section. hasExitant says whether the rows hold an
+// exitant section (all passes but the last), exitantFloats its length.
+Reader openShardRows(const std::string& path, const ShardRun& run, int pass, ShardRows& rows, uint64_t& totalFloats,
+                     uint64_t& exitantFloats, bool& hasExitantRows) {
     Reader reader = openShardFile(path, "rows", "shard rows", run, true);
-    ShardRows rows;
     rows.pass = readPass(reader, pass);
     rows.rowBegin = run.rowBegin;
     rows.rowEnd = run.rowEnd;
@@ -373,11 +379,22 @@ ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, 
     if (!offset.is_number() || !hasExitant.is_boolean()) reader.fail("header", "has no valid 'ray_offset' or 'has_exitant'");
     rows.rayOffset = jsonFloat(reader.head, "ray_offset", path, "header");
     uint64_t n = coefficients(run);
-    uint64_t totalFloats = checkedProduct({rowCount(run), n, 3}, "row values", path, "header");
-    uint64_t exitantFloats = hasExitant.get<bool>() ? checkedProduct({rowCount(run), n, uint64_t(run.channels)},
-                                                                     "exitant values", path, "header") : 0;
+    totalFloats = checkedProduct({rowCount(run), n, 3}, "row values", path, "header");
+    exitantFloats = hasExitant.get<bool>() ? checkedProduct({rowCount(run), n, uint64_t(run.channels)},
+                                                            "exitant values", path, "header") : 0;
     expectPayload(reader, (2 * totalFloats + exitantFloats) * 4);
-    if (exitantOnly && !hasExitant.get<bool>()) reader.fail("header", "holds no exitant rows (the last pass writes none)");
+    hasExitantRows = hasExitant.get<bool>();
+    return reader;
+}
+
+} // namespace
+
+ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, bool exitantOnly) {
+    ShardRows rows;
+    uint64_t totalFloats = 0, exitantFloats = 0;
+    bool hasExitant = false;
+    Reader reader = openShardRows(path, run, pass, rows, totalFloats, exitantFloats, hasExitant);
+    if (exitantOnly && !hasExitant) reader.fail("header", "holds no exitant rows (the last pass writes none)");
     if (exitantOnly) {
         reader.skip(2 * totalFloats * 4);
     } else {
@@ -391,41 +408,60 @@ ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, 
     return rows;
 }
 
+// Streams: the shards' headers are checked first (which shard each file is, the pass), then each shard's exitant
+// section is copied into the output in shard order, 1 MiB at a time, and checked at its end against its checksum,
+// then for finite values, as readShardRows checks (a failure removes the unfinished output: writeShardFile is
+// atomic). Memory: 1 MiB and the headers, whatever the vertex count.
 int gatherExitant(const std::vector<std::string>& parts, const ShardRun& run, const std::string& output) {
     if (parts.size() != size_t(run.shardCount) || parts.empty())
         throw Error("", "--gather", "needs the " + std::to_string(run.shardCount) + " shards of one pass, got " +
                                         std::to_string(parts.size()), kExitUsage);
-    uint64_t rowFloats = coefficients(run) * uint64_t(run.channels);
-    std::vector<float> exitant(checkedProduct({run.vertexCount, rowFloats}, "exitant values", "", "gather"));
-    std::vector<int> seen(parts.size(), -1);
+    checkedProduct({run.vertexCount, coefficients(run), uint64_t(run.channels)}, "exitant values", "", "gather");
+    std::vector<int> seen(parts.size(), -1); // seen[I]: the file of shard I
     int pass = -1;
     for (size_t s = 0; s < parts.size(); ++s) {
-        // The shard a file claims places its rows; readShardRows then checks every other field for that shard.
-        ShardRun shard = run;
-        {
-            Reader peek = openShardFile(parts[s], "rows", "shard rows", run, false);
-            const nlohmann::json claimed = peek.head.value("shard", nlohmann::json());
-            if (!claimed.is_array() || claimed.size() != 2 || claimed[1] != run.shardCount || !claimed[0].is_number_unsigned() ||
-                claimed[0].get<uint64_t>() >= uint64_t(run.shardCount))
-                peek.fail("header", "is not one of " + std::to_string(run.shardCount) + " shards (shard " +
-                                        describe(claimed) + ")");
-            shard.shardIndex = claimed[0].get<int>();
-            if (seen[shard.shardIndex] >= 0)
-                peek.fail("header", "is shard " + std::to_string(shard.shardIndex) + " again (also " +
-                                        parts[seen[shard.shardIndex]] + ")");
-            seen[shard.shardIndex] = int(s);
-            if (pass < 0) pass = readPass(peek, -1);
-        }
-        RowRange range = shardRows(run.vertexCount, shard.shardIndex, shard.shardCount);
-        shard.rowBegin = range.begin;
-        shard.rowEnd = range.end;
-        ShardRows rows = readShardRows(parts[s], shard, pass, true);
-        std::copy(rows.exitant.begin(), rows.exitant.end(), exitant.begin() + range.begin * rowFloats);
+        Reader peek = openShardFile(parts[s], "rows", "shard rows", run, false);
+        const nlohmann::json claimed = peek.head.value("shard", nlohmann::json());
+        if (!claimed.is_array() || claimed.size() != 2 || claimed[1] != run.shardCount || !claimed[0].is_number_unsigned() ||
+            claimed[0].get<uint64_t>() >= uint64_t(run.shardCount))
+            peek.fail("header", "is not one of " + std::to_string(run.shardCount) + " shards (shard " +
+                                    describe(claimed) + ")");
+        int index = claimed[0].get<int>();
+        if (seen[index] >= 0)
+            peek.fail("header", "is shard " + std::to_string(index) + " again (also " + parts[seen[index]] + ")");
+        seen[index] = int(s);
+        if (pass < 0) pass = readPass(peek, -1);
     }
-    // Every index seen once among shardCount files: the ranges tile [0, vertexCount).
+    // Every index seen once among shardCount files: the ranges tile [0, vertexCount) in index order.
     nlohmann::json head = header("exitant", run, false);
     head["pass"] = pass;
-    writeShardFile(output, head, {"exitant"}, [&](PayloadWriter& out) { out.write("exitant", exitant.data(), exitant.size()); });
+    writeShardFile(output, head, {"exitant"}, [&](PayloadWriter& out) {
+        std::vector<float> piece(kChecksumChunk / sizeof(float));
+        for (int index = 0; index < run.shardCount; ++index) {
+            const std::string& path = parts[seen[index]];
+            ShardRun shard = run;
+            shard.shardIndex = index;
+            RowRange range = shardRows(run.vertexCount, index, run.shardCount);
+            shard.rowBegin = range.begin;
+            shard.rowEnd = range.end;
+            ShardRows rows;
+            uint64_t totalFloats = 0, exitantFloats = 0;
+            bool hasExitant = false;
+            Reader reader = openShardRows(path, shard, pass, rows, totalFloats, exitantFloats, hasExitant);
+            if (!hasExitant) reader.fail("header", "holds no exitant rows (the last pass writes none)");
+            reader.skip(2 * totalFloats * 4);
+            uint64_t infinite = exitantFloats; // the first value that is not finite, reported once the checksum held
+            for (uint64_t at = 0; at < exitantFloats; at += piece.size()) {
+                size_t count = size_t(std::min<uint64_t>(piece.size(), exitantFloats - at));
+                reader.read(piece.data(), count, "exitant");
+                for (size_t i = 0; i < count && infinite == exitantFloats; ++i)
+                    if (!std::isfinite(piece[i])) infinite = at + i;
+                out.write("exitant", piece.data(), count);
+            }
+            reader.verify("exitant");
+            if (infinite < exitantFloats) reader.fail("exitant", "value " + std::to_string(infinite) + " is not finite");
+        }
+    });
     return pass;
 }
 

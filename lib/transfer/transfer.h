@@ -165,7 +165,7 @@ ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, 
 
 // Joins the exitant rows of one pass's shards (files in any order, one per shard of run.shardCount, each checked
 // against the run) into the whole array, written atomically to `output` for the next pass. Returns the pass.
-// Holds one shard's exitant rows at a time besides the array.
+// Streams: copies each shard's rows in 1 MiB pieces, so it holds neither the array nor a shard's rows.
 int gatherExitant(const std::vector<std::string>& parts, const ShardRun& run, const std::string& output);
 
 // Receivers of transfer that are not the mesh's own vertices (atlas texels, probe points): each a point with a

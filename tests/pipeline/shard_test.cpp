@@ -3,6 +3,7 @@
 #include "pipeline_test_util.h"
 
 #include "bundle.h"
+#include "core.h"
 #include "../scene_gltf.h"
 
 namespace prt {
@@ -158,6 +159,87 @@ TEST_F(Merge, RefusesShardsThatDoNotTileOneRun) {
     expectRefused({shard(0), shard(1), dir / "other.glb"}, "differs from the mesh");
 
     expectRefused({dir / "whole.glb"}, "not a shard bundle");
+}
+
+// The streamed merge (`prt merge`, the pipeline's merge job) writes the bytes of the in-memory one,
+// writeBundle(mergeShards(...)), for every kind of sharded layer: float32 transfer and transfer_bounce rows, float16
+// glossy lobes, uint8 and uint16 rows, and a layer every shard holds whole.
+TEST_F(Merge, StreamedMergeIsTheInMemoryMergeByteForByte) {
+    Bundle whole = readBundle(dir / "whole.glb");
+    const uint64_t vertices = whole.mesh.vertexCount();
+    auto add = [&](const std::string& name, const std::string& type, std::vector<uint64_t> shape, const std::string& domain) {
+        Layer layer;
+        layer.name = name;
+        layer.domain = domain;
+        layer.semantic = name == "glossy_lobes" ? "sg_lobes" : "test_" + name;
+        layer.componentType = type;
+        layer.shape = shape;
+        layer.params = {{"order", 3}, {"rays", 1000}};
+        uint64_t count = 1;
+        for (uint64_t extent : shape) count *= extent;
+        for (uint64_t i = 0; i < count; ++i) {
+            if (type == "float32") layer.data.push_back(float(i % 977) * 0.125f - 3.0f);
+            else if (type == "float16") layer.data.push_back(halfToFloat(floatToHalf(float(i % 1013) * 0.01f)));
+            else layer.integers.push_back(uint32_t(i * 37 % (type == "uint8" ? 256 : 65536)));
+        }
+        whole.layers.push_back(std::move(layer));
+    };
+    add("transfer_bounce", "float32", {vertices, 9, 3}, "vertex");
+    add("glossy_lobes", "float16", {vertices, 92, 2, 5}, "vertex");
+    add("codes", "uint8", {vertices, 3}, "vertex");
+    add("cluster_index", "uint16", {vertices}, "vertex");
+    add("diffuse", "float32", {vertices, 9, 3}, "vertex"); // held whole by every shard
+    std::vector<std::string> files;
+    std::vector<Bundle> shards;
+    for (int i = 0; i < 3; ++i) {
+        uint64_t begin = vertices * i / 3, end = vertices * (i + 1) / 3;
+        Bundle part = whole;
+        for (Layer& layer : part.layers) {
+            if (layer.name == "diffuse") continue;
+            uint64_t width = (layer.data.empty() ? layer.integers.size() : layer.data.size()) / vertices;
+            if (!layer.data.empty()) layer.data = std::vector<float>(layer.data.begin() + begin * width, layer.data.begin() + end * width);
+            else layer.integers = std::vector<uint32_t>(layer.integers.begin() + begin * width, layer.integers.begin() + end * width);
+            layer.shape[0] = end - begin;
+            markVertexShard(layer, begin, end, vertices, i, 3);
+            layer.params["rays"] = 1000 + i;
+        }
+        files.push_back(dir / ("kinds-" + std::to_string(i) + ".glb"));
+        writeBundle(files.back(), part);
+        shards.push_back(readBundle(files.back()));
+    }
+    writeBundle(dir / "in-memory.glb", mergeShards(shards, files));
+    mergeShardFiles({files[1], files[2], files[0]}, dir / "streamed.glb");
+    const std::string inMemory = readFileBytes(dir / "in-memory.glb");
+    EXPECT_EQ(readFileBytes(dir / "streamed.glb"), inMemory);
+    std::string output;
+    ASSERT_EQ(test::shell(test::kPrt + " --quiet merge " + files[2] + " " + files[0] + " " + files[1] + " -o " +
+                              (dir / "command.glb"), &output), 0) << output;
+    EXPECT_EQ(readFileBytes(dir / "command.glb"), inMemory);
+
+    // What the merge joined is the rows of the whole run, in vertex order, its counters summed.
+    Bundle merged = readBundle(dir / "streamed.glb");
+    for (const Layer& layer : whole.layers) {
+        const Layer* joined = findLayer(merged, layer.name);
+        ASSERT_NE(joined, nullptr) << layer.name;
+        EXPECT_EQ(joined->domain, "vertex");
+        EXPECT_EQ(joined->data, layer.data) << layer.name;
+        EXPECT_EQ(joined->integers, layer.integers) << layer.name;
+        if (layer.name != "diffuse") EXPECT_EQ(joined->params["rays"], 3003) << layer.name;
+    }
+}
+
+// `prt merge` checks every shard's checksum while it streams: a flipped byte in a shard's rows is refused by the
+// shard's name, exit 3, and no merged file is left.
+TEST_F(Merge, CommandRefusesACorruptedShardByName) {
+    std::string bytes = readFileBytes(shard(1));
+    bytes[bytes.size() - 9] ^= 0x01;
+    writeBytesAtomic(shard(1), bytes);
+    std::string output;
+    EXPECT_EQ(test::shell(test::kPrt + " merge " + shard(0) + " " + shard(1) + " " + shard(2) + " -o " + (dir / "merged.glb"),
+                          &output), kExitInput) << output;
+    EXPECT_NE(output.find(shard(1)), std::string::npos) << output;
+    EXPECT_NE(output.find("checksum mismatch"), std::string::npos) << output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "merged.glb"));
 }
 
 } // namespace
