@@ -224,7 +224,9 @@ TEST_F(Merge, StreamedMergeIsTheInMemoryMergeByteForByte) {
         EXPECT_EQ(joined->domain, "vertex");
         EXPECT_EQ(joined->data, layer.data) << layer.name;
         EXPECT_EQ(joined->integers, layer.integers) << layer.name;
-        if (layer.name != "diffuse") EXPECT_EQ(joined->params["rays"], 3003) << layer.name;
+        if (layer.name != "diffuse") {
+            EXPECT_EQ(joined->params["rays"], 3003) << layer.name;
+        }
     }
 }
 
