@@ -41,9 +41,10 @@ TEST(FivSources, ASunIsTakenOutWholeAndAConstantMapKeepsEverything) {
         EXPECT_DOUBLE_EQ(sources.power[size_t(c)], 1e4 * (c + 1) * solidAngle[sun]);
         EXPECT_EQ(env.radiance.rgb[3 * sun + c], 0.0f);
     }
-    for (size_t t = 0; t < solidAngle.size(); ++t)
-        if (t != sun)
-            for (int c = 0; c < 3; ++c) ASSERT_EQ(env.radiance.rgb[3 * t + c], original.radiance.rgb[3 * t + c]);
+    for (size_t t = 0; t < solidAngle.size(); ++t) {
+        if (t == sun) continue;
+        for (int c = 0; c < 3; ++c) ASSERT_EQ(env.radiance.rgb[3 * t + c], original.radiance.rgb[3 * t + c]);
+    }
 
     EnvironmentMap flat = constantMap(64, 2.0f);
     EXPECT_TRUE(extractSmallSources(flat).direction.empty());
