@@ -108,7 +108,7 @@ void runFiv(const FivStageOptions& options) {
         for (Layer& layer : bundle.layers)
             if (layer.name == "fiv") {
                 layer.params["rays"] = vis.rays, layer.params["naive_rays"] = vis.naiveRays;
-                if (options.sources) layer.params["source_rays"] = sourceRays;
+                if (sourceRays > 0) layer.params["source_rays"] = sourceRays; // a map without sources: same bytes
             }
         writeBundle(options.output, bundle);
         char line[160];
