@@ -36,7 +36,7 @@ cmake --build build
 ctest --test-dir build --output-on-failure -j"$jobs"
 
 sanitized=(test_core test_bundle test_mesh test_image test_raycast)
-fuzzers=(mesh_obj mesh_ply mesh_off mesh_stl mesh_gltf mesh_glb exr pipeline bundle npy lights shard fiv)
+fuzzers=(mesh_obj mesh_ply mesh_off mesh_stl mesh_gltf mesh_glb exr pipeline bundle npy lights shard fiv glossy adaptive)
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang-14 \
   -DCMAKE_CXX_COMPILER=clang++-14 -DPRT_SANITIZE=ON -DPRT_FUZZ=ON \
   -DPRT_FUZZ_SMOKE_SECONDS="${PRT_FUZZ_SMOKE_SECONDS:-10}" >/dev/null

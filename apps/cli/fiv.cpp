@@ -87,6 +87,10 @@ static void addFivOptions(CLI::App* command, const std::shared_ptr<FivArgs>& arg
     command->add_flag("--allow-open", args->stage.visibility.allowOpen,
                       "Accept an open occluder: samples count as inside when most of 26 rays first hit a back face");
     command->add_flag("--float32", args->float32, "Store the grid as float32 (default float16)");
+    if (!visibilityStage)
+        command->add_flag("--sources", args->stage.sources,
+                          "Shadow the map's dominant small sources (a sun) by rays toward their own texels, not "
+                          "through the cube (docs/fiv.md, decision 13)");
     command->add_option("--threads", args->stage.visibility.threads, "Worker threads (default: all)");
     command->callback([args, visibilityStage] {
         if (visibilityStage) args->stage.visibilityOnly = true;

@@ -163,6 +163,35 @@ struct FivGrid {
 // Errors (a row with fewer bits than its candidates) name `source`, the visibility's file.
 FivGrid reduceVisibility(const Visibility& vis, const CubeEnvironment& env, const std::string& source = "");
 
+// ---- small sources, shadowed from their own texels --------------------------------------------------------
+// A sun smaller than a cube texel is smeared over it, and its shadow comes from the texel centre's mask bit. So
+// the map's dominant small sources can be taken out of the cube (the reduction then sees the rest) and shadowed
+// by rays toward each of their own map texels (addSourceShadows).
+struct SmallSourceOptions {
+    int maxSources = 4;            // at most this many sources, brightest first
+    double radiusDegrees = 5.0;    // a source: texels within this angle of its peak texel ...
+    double floorFraction = 0.01;   // ... whose luminance is at least this fraction of the peak's ...
+    double minPowerFraction = 0.1; // ... taken only when together they hold this fraction of the map's power
+};
+struct SmallSources {
+    std::vector<double> direction; // [texel][3], unit map-texel centres
+    std::vector<double> power;     // [texel][3], radiance x exact solid angle
+    std::vector<double> powerFraction; // per source: its share of the map's luminance power
+    std::vector<size_t> texelCount;    // per source: its texels
+};
+// Finds the sources (repeatedly the brightest remaining texel; the texels of its cone above the floor; kept when
+// they hold minPowerFraction of the whole map's power, otherwise the search ends), copies their texels out and sets
+// them to 0 in `env`, so env + sources is the map again, power for power. A map without such a source (courtyard,
+// a constant map) gives no texels and is left as it was. Deterministic.
+SmallSources extractSmallSources(EnvironmentMap& env, const SmallSourceOptions& options = {});
+
+// Adds to every valid sample of `grid` the sources' light the occluder hides from its receiver point: one ray per
+// source texel from the point (as sampleVisibility places it), traced only when it can meet the bounding sphere;
+// a hit adds the texel's power to grid.power and power x direction to grid.fiv. Needs `grid` reduced from `vis`
+// of this `occluder`. Deterministic for any thread count (`threads` 0: all). Returns the rays cast.
+uint64_t addSourceShadows(const TriMesh& occluder, const Visibility& vis, const SmallSources& sources, FivGrid& grid,
+                          int threads = 0);
+
 // ---- bundles -------------------------------------------------------------------------------------------------
 // The visibility bundle (object 0 the occluder mesh, layers fiv_mask_offsets, fiv_mask_bits, fiv_valid) and its
 // reader. readVisibility throws prt::Error(path, layer, problem) when a layer is missing, its size disagrees with
@@ -215,6 +244,7 @@ struct FivStageOptions {
     std::vector<std::string> merge;  // with visibilityOnly: visibility shards to join instead of sampling
     int difmapSize = 32;
     bool half = true;                // FIV layers as float16 (else float32)
+    bool sources = false;            // the map's dominant small sources shadowed from their own texels
 };
 // `prt fiv`: (a) from a mesh input, unless the input is a visibility bundle already; then (b) unless
 // visibilityOnly. With visibilityOnly and `merge`, joins those visibility shards into one visibility bundle. Writes one bundle atomically, logs rays against the naive count, reports its cost.

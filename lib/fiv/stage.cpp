@@ -82,7 +82,21 @@ void runFiv(const FivStageOptions& options) {
         EnvironmentMap env = readEnvironmentMap(options.env);
         std::string envHash = hashFile(options.env);
         CubeEnvironment cube = resampleToCube(env, vis.cube);
-        FivGrid grid = reduceVisibility(vis, cube, options.inputs[0]);
+        FivGrid grid;
+        uint64_t sourceRays = 0;
+        if (options.sources) { // the masks see the map without its small sources; those get rays of their own
+            EnvironmentMap residual = env;
+            SmallSources sources = extractSmallSources(residual);
+            grid = reduceVisibility(vis, resampleToCube(residual, vis.cube), options.inputs[0]);
+            sourceRays = addSourceShadows(occluder, vis, sources, grid, options.visibility.threads);
+            std::string shares;
+            for (double f : sources.powerFraction) shares += (shares.empty() ? "" : ", ") + std::to_string(f);
+            logInfo("fiv: " + std::to_string(sources.powerFraction.size()) + " small sources (" +
+                    std::to_string(sources.direction.size() / 3) + " texels, power shares " + (shares.empty() ? "-" : shares) +
+                    ") shadowed by " + std::to_string(sourceRays) + " rays of their own");
+        } else {
+            grid = reduceVisibility(vis, cube, options.inputs[0]);
+        }
         std::vector<float> difmap = difMap(cube, options.difmapSize);
         std::array<double, 9> fivEnv = environmentFiv(cube);
         inputs["env"] = envHash;
@@ -92,7 +106,10 @@ void runFiv(const FivStageOptions& options) {
         bundleOptions.envHash = envHash;
         Bundle bundle = fivBundle(occluder, grid, difmap, fivEnv, bundleOptions, inputs);
         for (Layer& layer : bundle.layers)
-            if (layer.name == "fiv") layer.params["rays"] = vis.rays, layer.params["naive_rays"] = vis.naiveRays;
+            if (layer.name == "fiv") {
+                layer.params["rays"] = vis.rays, layer.params["naive_rays"] = vis.naiveRays;
+                if (sourceRays > 0) layer.params["source_rays"] = sourceRays; // a map without sources: same bytes
+            }
         writeBundle(options.output, bundle);
         char line[160];
         std::snprintf(line, sizeof line, "fiv: reduction in %.2f s, %d bytes per sample", nowSeconds() - t0,

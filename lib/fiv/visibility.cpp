@@ -90,6 +90,31 @@ struct BitWriter {
     }
 };
 
+// Grid row `row`'s direction d, the vector from its receiver point to the sphere centre (rho R d) and the point
+// itself (as float, where every ray of the row starts); returns rho.
+double receiverPoint(const Visibility& vis, const std::vector<double>& radii, size_t row, double d[3],
+                     double toCentre[3], float origin[3]) {
+    const GridSpec& grid = vis.grid;
+    int i = int(row % size_t(grid.azimuth)), j = int(row / size_t(grid.azimuth) % size_t(grid.polar));
+    int k = int(row / (size_t(grid.azimuth) * grid.polar));
+    double rho = radii[size_t(k)], radius = vis.sphere.radius;
+    gridDirection(grid, i, j, d);
+    for (int c = 0; c < 3; ++c) {
+        toCentre[c] = rho * radius * d[c];
+        origin[c] = float(vis.sphere.centre[size_t(c)] - toCentre[c]);
+    }
+    return rho;
+}
+
+// Whether a ray from a receiver point at rho R from the sphere centre (toCentre: the vector to it, world units)
+// along unit w can meet the bounding sphere: always from inside (rho < 1), else it must point at it and pass
+// within R of the centre.
+bool canMeetSphere(const double toCentre[3], double rho, double radius, const double w[3]) {
+    if (rho < 1.0) return true;
+    double along = toCentre[0] * w[0] + toCentre[1] * w[1] + toCentre[2] * w[2];
+    return along > 0.0 && !(along * along < rho * rho * radius * radius - radius * radius);
+}
+
 // Per-thread buffers of sampleMask: the sample's candidates, and its rays with the candidate each belongs to.
 struct MaskScratch {
     std::vector<uint32_t> candidates;
@@ -103,23 +128,13 @@ struct MaskScratch {
 // in packets.
 bool sampleMask(const Tracer& tracer, const CubeTexels& cube, const Visibility& vis, const std::vector<double>& radii,
                 size_t row, MaskScratch& scratch, std::vector<uint8_t>& bytes, uint64_t& rays) {
-    const GridSpec& grid = vis.grid;
-    int i = int(row % size_t(grid.azimuth)), j = int(row / size_t(grid.azimuth) % size_t(grid.polar));
-    int k = int(row / (size_t(grid.azimuth) * grid.polar));
-    double rho = radii[size_t(k)], radius = vis.sphere.radius;
-    double d[3];
-    gridDirection(grid, i, j, d);
-    double toCentre[3]; // from the receiver point to the sphere centre
+    double d[3], toCentre[3];
     float origin[3];
-    for (int c = 0; c < 3; ++c) {
-        toCentre[c] = rho * radius * d[c];
-        origin[c] = float(vis.sphere.centre[size_t(c)] - toCentre[c]);
-    }
+    double rho = receiverPoint(vis, radii, row, d, toCentre, origin), radius = vis.sphere.radius;
     if (rho < 1.0 && tracer.inside(origin, rays)) return false;
     std::vector<uint32_t>& candidates = scratch.candidates;
     candidates.clear();
     candidateTexels(cube, d, rho, candidates);
-    double distance2 = rho * rho * radius * radius, slack = distance2 - radius * radius;
     int s = vis.supersample;
     scratch.rays.clear();
     scratch.rayCandidate.clear();
@@ -128,10 +143,7 @@ bool sampleMask(const Tracer& tracer, const CubeTexels& cube, const Visibility& 
             for (int sx = 0; sx < s; ++sx) {
                 double w[3];
                 subsampleDirection(cube, candidates[c], sx, sy, s, w);
-                if (rho >= 1.0) { // outside the sphere: the ray must point at it and pass within R of the centre
-                    double along = toCentre[0] * w[0] + toCentre[1] * w[1] + toCentre[2] * w[2];
-                    if (along <= 0.0 || along * along < slack) continue;
-                }
+                if (!canMeetSphere(toCentre, rho, radius, w)) continue;
                 float wf[3] = {float(w[0]), float(w[1]), float(w[2])};
                 scratch.rays.push_back(makeRay(origin, wf));
                 scratch.rayCandidate.push_back(c);
@@ -271,6 +283,62 @@ Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& op
     }
     vis.offsets[rows] = uint32_t(vis.bits.size());
     return vis;
+}
+
+uint64_t addSourceShadows(const TriMesh& occluder, const Visibility& vis, const SmallSources& sources, FivGrid& grid,
+                          int threads) {
+    const size_t samples = vis.grid.sampleCount(), texels = sources.direction.size() / 3;
+    if (texels == 0) return 0;
+    if (grid.fiv.size() != 9 * samples || grid.power.size() != 3 * samples || vis.valid.size() != samples ||
+        vis.rowBegin != 0 || vis.rowEnd != samples)
+        throw Error("", "fiv", "source shadows need the whole grid reduced from its visibility", kExitFailure);
+    const std::vector<double> radii = shellRadii(vis.grid);
+    std::atomic<uint64_t> rays{0};
+    tbb::task_arena arena(threads > 0 ? threads : int(tbb::task_arena::automatic));
+    arena.execute([&] {
+        EmbreeScene embree(occluder);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, samples, 256), [&](const tbb::blocked_range<size_t>& range) {
+            std::vector<RTCRay> batch;
+            std::vector<uint32_t> texelOf;
+            uint64_t cast = 0;
+            for (size_t row = range.begin(); row < range.end(); ++row) {
+                if (!vis.valid[row]) continue;
+                double d[3], toCentre[3];
+                float origin[3];
+                double rho = receiverPoint(vis, radii, row, d, toCentre, origin);
+                batch.clear();
+                texelOf.clear();
+                for (size_t t = 0; t < texels; ++t) {
+                    const double* w = &sources.direction[3 * t];
+                    if (!canMeetSphere(toCentre, rho, vis.sphere.radius, w)) continue;
+                    float wf[3] = {float(w[0]), float(w[1]), float(w[2])};
+                    batch.push_back(makeRay(origin, wf));
+                    texelOf.push_back(uint32_t(t));
+                }
+                if (batch.empty()) continue;
+                RTCIntersectContext context;
+                rtcInitIntersectContext(&context);
+                context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+                rtcOccluded1M(embree.scene, &context, batch.data(), unsigned(batch.size()), sizeof(RTCRay));
+                cast += batch.size();
+                double fiv[9] = {0}, occluded[3] = {0};
+                for (size_t r = 0; r < batch.size(); ++r) {
+                    if (!(batch[r].tfar < 0.0f)) continue;
+                    const size_t t = texelOf[r];
+                    for (int c = 0; c < 3; ++c) {
+                        occluded[c] += sources.power[3 * t + size_t(c)];
+                        for (int a = 0; a < 3; ++a)
+                            fiv[3 * c + a] += sources.power[3 * t + size_t(c)] * sources.direction[3 * t + size_t(a)];
+                    }
+                }
+                for (int e = 0; e < 9; ++e) grid.fiv[9 * row + size_t(e)] = float(double(grid.fiv[9 * row + size_t(e)]) + fiv[e]);
+                for (int c = 0; c < 3; ++c)
+                    grid.power[3 * row + size_t(c)] = float(double(grid.power[3 * row + size_t(c)]) + occluded[c]);
+            }
+            rays += cast;
+        });
+    });
+    return rays;
 }
 
 Visibility joinShards(std::vector<Visibility> shards, const std::vector<std::string>& files) {

@@ -24,6 +24,9 @@ const Layer& requireLayer(const Bundle& bundle, const nlohmann::json& params, co
     return *layer;
 }
 
+// The layer's shape is `shape` and its component type `type`: an exact type ("uint32"), "float" (float16 or
+// float32, values in data) or "uint" (uint8, uint16 or uint32, values in integers), so no reader reads the storage
+// a layer of another type leaves empty; and that storage holds exactly the shape's values.
 void requireShape(const Layer& layer, const std::vector<uint64_t>& shape, const std::string& type,
                   const std::string& source) {
     const std::string place = "layer \"" + layer.name + "\"";
@@ -32,8 +35,13 @@ void requireShape(const Layer& layer, const std::vector<uint64_t>& shape, const 
         for (uint64_t axis : shape) expected += (expected.empty() ? "" : ", ") + std::to_string(axis);
         throw Error(source, place, "shape does not match [" + expected + "]");
     }
-    if (!type.empty() && layer.componentType != type)
-        throw Error(source, place, "is " + layer.componentType + ", expected " + type);
+    const std::string& held = layer.componentType;
+    bool typed = type == "float"  ? held == "float16" || held == "float32"
+                 : type == "uint" ? held == "uint8" || held == "uint16" || held == "uint32"
+                                  : held == type;
+    if (!typed)
+        throw Error(source, place, "is " + held + ", expected " +
+                                       (type == "float" ? "float16 or float32" : type == "uint" ? "uint8, uint16 or uint32" : type));
     uint64_t count = 1;
     for (uint64_t axis : shape) count *= axis;
     bool integer = layer.componentType.rfind("uint", 0) == 0;
@@ -107,7 +115,7 @@ RelightModel raggedModel(Bundle& bundle, const std::string& source) {
     if (type == "float32" || type == "float16") {
         if (data.semantic != "sh_transfer_rgb")
             throw Error(source, place, "semantic \"" + data.semantic + "\", expected sh_transfer_rgb");
-        requireShape(data, {rows, 3}, "", source);
+        requireShape(data, {rows, 3}, "float", source);
         checkFiniteRows(data.data, 3, source, place, "row");
         if (type == "float32") {
             model.transfer = std::move(data.data);
@@ -119,7 +127,7 @@ RelightModel raggedModel(Bundle& bundle, const std::string& source) {
     } else if (type == "uint8" || type == "uint16") {
         if (data.semantic != "sh_transfer_rgb_quantised")
             throw Error(source, place, "semantic \"" + data.semantic + "\", expected sh_transfer_rgb_quantised");
-        requireShape(data, {rows, 3}, "", source);
+        requireShape(data, {rows, 3}, type, source);
         const int bits = type == "uint8" ? 8 : 16;
         const uint32_t centre = (1u << (bits - 1)) - 1;
         const Layer& scales = requireLayer(bundle, data.params, "scale_layer", source, place);
@@ -129,8 +137,8 @@ RelightModel raggedModel(Bundle& bundle, const std::string& source) {
             const Layer& clusterLayer = requireLayer(bundle, data.params, "cluster_layer", source, place);
             if (scales.shape.size() != 2) throw Error(source, "layer \"" + scales.name + "\"", "shape is not [clusters, order]");
             clusterCount = scales.shape[0];
-            requireShape(scales, {clusterCount, uint64_t(order)}, "", source);
-            requireShape(clusterLayer, {V}, "", source);
+            requireShape(scales, {clusterCount, uint64_t(order)}, "float", source);
+            requireShape(clusterLayer, {V}, "uint", source);
             for (size_t v = 0; v < V; ++v)
                 if (clusterLayer.integers[v] >= clusterCount)
                     throw Error(source, "layer \"" + clusterLayer.name + "\", vertex " + std::to_string(v),
@@ -139,7 +147,7 @@ RelightModel raggedModel(Bundle& bundle, const std::string& source) {
         } else if (scales.domain == domain + "_bands") {
             uint64_t bands = 0;
             for (size_t v = 0; v < V; ++v) bands += uint64_t(std::lround(std::sqrt(double(offsets[v + 1] - offsets[v]))));
-            requireShape(scales, {bands}, "", source);
+            requireShape(scales, {bands}, "float", source);
         } else {
             throw Error(source, "layer \"" + scales.name + "\"", "domain \"" + scales.domain + "\", expected " + domain +
                                                               "_bands or cluster");
@@ -185,7 +193,7 @@ RelightModel cpcaModel(Bundle& bundle, const std::string& source) {
     const Layer& weights = requireLayer(bundle, basis.params, "weights_layer", source, place);
     const Layer& cluster = requireLayer(bundle, basis.params, "cluster_layer", source, place);
     requireShape(weights, {V, components}, "float32", source);
-    requireShape(cluster, {V}, "", source);
+    requireShape(cluster, {V}, "uint", source);
     for (const Layer* layer : {&weights, &cluster})
         if (layer->domain != (texels ? "texel" : "vertex"))
             throw Error(source, "layer \"" + layer->name + "\"", "domain \"" + layer->domain + "\" is not the basis's");

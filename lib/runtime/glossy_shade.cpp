@@ -13,6 +13,42 @@ namespace {
 
 float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+double triple(const float* x, const float* y, const float* z) {
+    return double(x[0]) * (double(y[1]) * z[2] - double(y[2]) * z[1]) -
+           double(x[1]) * (double(y[0]) * z[2] - double(y[2]) * z[0]) +
+           double(x[2]) * (double(y[0]) * z[1] - double(y[1]) * z[0]);
+}
+
+// Whether the view triangles tile the sphere exactly once, which viewWeights needs to find, for every direction,
+// a triangle holding it with weights >= 0: each triangle counter-clockwise seen from outside (positive triple
+// product), each directed edge once and its reverse once (a closed surface), and their solid angles (Van
+// Oosterom-Strackee) summing to 4 pi. A closed surface has one covering degree everywhere, total / 4 pi, and with
+// every triangle positive that degree counts the triangles over each direction. Returns the problem, or "".
+std::string viewTilingProblem(const std::vector<float>& views, const std::vector<uint32_t>& triangles) {
+    const size_t count = triangles.size() / 3;
+    std::vector<uint64_t> edges;
+    edges.reserve(triangles.size());
+    double total = 0.0;
+    for (size_t t = 0; t < count; ++t) {
+        const uint32_t* tri = &triangles[3 * t];
+        const float *a = &views[3 * size_t(tri[0])], *b = &views[3 * size_t(tri[1])], *c = &views[3 * size_t(tri[2])];
+        double det = triple(a, b, c);
+        if (!(det > 0.0))
+            return "view triangle " + std::to_string(t) + " is degenerate or not counter-clockwise from outside";
+        total += 2.0 * std::atan2(det, 1.0 + double(dot3(a, b)) + dot3(b, c) + dot3(c, a));
+        for (int e = 0; e < 3; ++e) edges.push_back(uint64_t(tri[e]) << 32 | tri[(e + 1) % 3]);
+    }
+    std::sort(edges.begin(), edges.end());
+    for (size_t e = 0; e < edges.size(); ++e) {
+        if (e > 0 && edges[e] == edges[e - 1]) return "two view triangles share a directed edge";
+        uint64_t reverse = (edges[e] & 0xffffffffu) << 32 | edges[e] >> 32;
+        if (!std::binary_search(edges.begin(), edges.end(), reverse))
+            return "an edge of the view triangles has no triangle on its other side (they leave a hole)";
+    }
+    if (!(std::abs(total - 4.0 * kPi) < 1e-3)) return "the view triangles do not cover the sphere once";
+    return "";
+}
+
 } // namespace
 
 GlossyModel glossyModel(const Bundle& bundle, const std::string& source) {
@@ -49,6 +85,13 @@ GlossyModel glossyModel(const Bundle& bundle, const std::string& source) {
             model.triangles.push_back(i.get<uint32_t>());
         }
     }
+    if (std::string problem = viewTilingProblem(model.views, model.triangles); !problem.empty())
+        throw bad("params.view_triangles: " + problem);
+    // Read from the float storage only: a layer of another component type holds its values elsewhere.
+    if (layer->componentType != "float32" && layer->componentType != "float16")
+        throw bad("component type is " + layer->componentType + ", not float16 or float32");
+    if (layer->data.size() != layer->shape[0] * layer->shape[1] * layer->shape[2] * 5)
+        throw bad("holds " + std::to_string(layer->data.size()) + " values, not the V x views x N x 5 of its shape");
     model.vertexCount = uint32_t(layer->shape[0]);
     model.lobes = int(layer->shape[2]);
     model.values = layer->data;
@@ -74,11 +117,6 @@ double triangleWeights(const GlossyModel& model, size_t t, const float d[3], dou
     const float* a = &model.views[tri[0] * 3];
     const float* b = &model.views[tri[1] * 3];
     const float* c = &model.views[tri[2] * 3];
-    auto triple = [](const float* x, const float* y, const float* z) {
-        return double(x[0]) * (double(y[1]) * z[2] - double(y[2]) * z[1]) -
-               double(x[1]) * (double(y[0]) * z[2] - double(y[2]) * z[0]) +
-               double(x[2]) * (double(y[0]) * z[1] - double(y[1]) * z[0]);
-    };
     double det = triple(a, b, c);
     w[0] = triple(d, b, c) / det, w[1] = triple(a, d, c) / det, w[2] = triple(a, b, d) / det;
     double sum = w[0] + w[1] + w[2];
@@ -101,6 +139,9 @@ void indexViewTriangles(GlossyModel& model) {
 
 void viewWeights(const GlossyModel& model, const float d[3], uint32_t views[3], float weights[3]) {
     double bestMin = -1e30;
+    // glossyModel guarantees a tiling, so some triangle holds d; these only keep the outputs defined if none does.
+    views[0] = views[1] = views[2] = 0;
+    weights[0] = 1.0f, weights[1] = weights[2] = 0.0f;
     auto keep = [&](size_t t, double low, const double* w) {
         bestMin = low;
         const uint32_t* tri = &model.triangles[t * 3];

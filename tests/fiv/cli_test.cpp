@@ -381,3 +381,32 @@ TEST(FivCli, HardenedReadersRefuseEveryCrashClassWithoutOutput) {
     EXPECT_EQ(run("fivscene " + f / "plane.glb --occluder " + f / "sphere.fiv.glb --at 0,-1e30,0 -o " + glb, &message), 2);
     EXPECT_FALSE(std::filesystem::exists(npy) || std::filesystem::exists(glb));
 }
+
+// `prt fiv --sources`: a map with a one-texel sun holding most of its power gets rays toward the sun of its own (the
+// bundle records them and its grid differs); a map without a small source comes out byte for byte as without it.
+TEST(FivCli, SourcesShadowASunByItsOwnRaysAndLeaveAMapWithoutOneAlone) {
+    const Files& f = files();
+    TempDir dir;
+    Image flat;
+    flat.width = 32, flat.height = 16;
+    flat.rgb.assign(32 * 16 * 3, 1.0f);
+    writeImage(dir / "flat.exr", flat);
+    Image sunny = flat;
+    for (int c = 0; c < 3; ++c) sunny.rgb[3 * (5 * 32 + 20) + size_t(c)] = 4000.0f;
+    writeImage(dir / "sunny.exr", sunny);
+    const std::string common = f / "sphere.glb --grid 16,9,6 --cube 8 --threads 1 ";
+    for (const char* map : {"flat", "sunny"}) {
+        ASSERT_EQ(run("fiv " + common + "--env " + dir / (std::string(map) + ".exr") + " -o " + dir / (std::string(map) + ".glb")), 0);
+        ASSERT_EQ(run("fiv " + common + "--sources --env " + dir / (std::string(map) + ".exr") + " -o " +
+                      dir / (std::string(map) + ".sources.glb")), 0);
+    }
+    EXPECT_EQ(readFileBytes(dir / "flat.glb"), readFileBytes(dir / "flat.sources.glb"));
+    Bundle plain = readBundle(dir / "sunny.glb"), sources = readBundle(dir / "sunny.sources.glb");
+    const Layer* a = findLayer(plain, "fiv");
+    const Layer* b = findLayer(sources, "fiv");
+    ASSERT_TRUE(a && b);
+    EXPECT_FALSE(a->params.contains("source_rays"));
+    ASSERT_TRUE(b->params.contains("source_rays"));
+    EXPECT_GT(b->params["source_rays"].get<uint64_t>(), 0u);
+    EXPECT_NE(a->data, b->data);
+}

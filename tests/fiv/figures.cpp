@@ -1,6 +1,6 @@
 // The FIV figures of docs/results.md, measured in one run and printed as JSON (not a test: it takes minutes).
 //   fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--quick] [--grids 32x17x15,...] [--scenes "one bunny,self-shadow"]
-//               [--maps sunrise,courtyard]
+//               [--maps sunrise,courtyard] [--sources]
 // Scenes (receiver 8x8 plane of 65x65 vertices unless said): the bunny scaled to 2 units hovering 0.5 above the
 // plane; two bunnies with overlapping shadows; three; one straddling the plane; one 0.05 above it (close); one
 // low beside the plane (grazing); the bunny as its own receiver. Maps: courtyard, sunrise (sharp sun), constant.
@@ -112,6 +112,7 @@ int main(int argc, char** argv) {
     }
     std::string bunnyPath = argv[1], envDir = argv[2], outDir = argv[3];
     bool quick = false;
+    bool sources = false; // --sources: the map's small sources shadowed from their own texels (extractSmallSources)
     std::string gridList, sceneList, mapList;
     for (int a = 4; a < argc; ++a) {
         std::string flag = argv[a];
@@ -119,6 +120,7 @@ int main(int argc, char** argv) {
         else if (flag == "--grids" && a + 1 < argc) gridList = argv[++a];
         else if (flag == "--scenes" && a + 1 < argc) sceneList = argv[++a];
         else if (flag == "--maps" && a + 1 < argc) mapList = argv[++a];
+        else if (flag == "--sources") sources = true;
         else {
             std::fprintf(stderr, "fiv_figures: unknown option %s\n", flag.c_str());
             return 2;
@@ -264,11 +266,24 @@ int main(int argc, char** argv) {
             for (const std::string& m : maps) {
                 double r0 = nowSeconds();
                 fiv::CubeEnvironment cube = fiv::resampleToCube(envs[m], 32);
-                fiv::FivGrid grid = fiv::reduceVisibility(vis, cube);
+                fiv::FivGrid grid;
+                json sourceReport;
+                if (sources) {
+                    EnvironmentMap residual = envs[m];
+                    fiv::SmallSources found = fiv::extractSmallSources(residual);
+                    grid = fiv::reduceVisibility(vis, fiv::resampleToCube(residual, 32));
+                    uint64_t sourceRays = fiv::addSourceShadows(bunny, vis, found, grid, 2);
+                    sourceReport = {{"texels", found.texelCount}, {"power_fraction", found.powerFraction},
+                                    {"rays", sourceRays}};
+                    std::fprintf(stderr, "sources %s: %zu texels, %llu rays\n", m.c_str(), found.direction.size() / 3,
+                                 (unsigned long long)sourceRays);
+                } else {
+                    grid = fiv::reduceVisibility(vis, cube);
+                }
                 std::vector<float> difmap = fiv::difMap(cube, 32);
                 std::array<double, 9> fivEnv = fiv::environmentFiv(cube);
                 double reductionSeconds = nowSeconds() - r0;
-                reductions.push_back({{"map", m}, {"seconds", reductionSeconds}});
+                reductions.push_back({{"map", m}, {"seconds", reductionSeconds}, {"sources", sourceReport}});
                 for (bool half : {true, false}) {
                     fiv::FivBundleOptions bundleOptions;
                     bundleOptions.half = half;

@@ -222,6 +222,51 @@ TEST(GlossyRuntime, LoaderRefusesALobeLayerThatDisagreesWithItsViewSet) {
     EXPECT_THROW(prt::glossyModel(bundle, "b.glb"), prt::Error);
 }
 
+// Crash classes of untrusted glossy bundles (issue 20): view triangles that leave part of the sphere uncovered
+// left viewWeights' outputs unset (SIGSEGV), and a lobe layer of an integer type left the float storage empty.
+// Each must be refused by the loader with a message naming the layer.
+TEST(GlossyRuntime, LoaderRefusesViewTrianglesThatDoNotTileTheSphereAndLobesOfAnIntegerType) {
+    prt::Bundle bundle;
+    bundle.mesh.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    bundle.mesh.normals = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+    bundle.mesh.indices = {0, 1, 2};
+    prt::glossy::GlossyLobes lobes;
+    lobes.lobes = 1;
+    lobes.vertexEnd = 3;
+    lobes.values.assign(3 * 92 * 5, 1.0f);
+    const prt::Layer layer = prt::glossy::lobeLayer(lobes, prt::glossy::GlossyOptions{}, 3);
+    auto refused = [&](const prt::Layer& bad, const std::string& words) {
+        bundle.layers = {bad};
+        try {
+            prt::glossyModel(bundle, "b.glb");
+            ADD_FAILURE() << "accepted: " << words;
+        } catch (const prt::Error& e) {
+            EXPECT_EQ(e.exitCode(), prt::kExitInput);
+            EXPECT_NE(std::string(e.what()).find("glossy_lobes"), std::string::npos) << e.what();
+            EXPECT_NE(e.problem().find(words), std::string::npos) << e.what();
+        }
+    };
+    prt::Layer holed = layer; // one triangle fewer: a hole
+    holed.params["view_triangles"].erase(holed.params["view_triangles"].size() - 1);
+    refused(holed, "hole");
+    prt::Layer twice = layer; // the first triangle twice, the last one gone: closed count, wrong cover
+    twice.params["view_triangles"].back() = twice.params["view_triangles"][0];
+    refused(twice, "view triangles");
+    prt::Layer flipped = layer; // one triangle clockwise
+    std::swap(flipped.params["view_triangles"][3][1], flipped.params["view_triangles"][3][2]);
+    refused(flipped, "counter-clockwise");
+    prt::Layer single = layer; // only one triangle, all three of its corners on valid views
+    single.params["view_triangles"] = nlohmann::json::array({layer.params["view_triangles"][0]});
+    refused(single, "hole");
+    prt::Layer integers = layer; // the values in the integer storage, the float storage empty
+    integers.componentType = "uint8";
+    integers.data.clear();
+    integers.integers.assign(3 * 92 * 5, 1u);
+    refused(integers, "component type");
+    bundle.layers = {layer};
+    EXPECT_NO_THROW(prt::glossyModel(bundle, "b.glb"));
+}
+
 } // namespace
 
 namespace {

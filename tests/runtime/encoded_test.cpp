@@ -1,6 +1,7 @@
 // Relighting straight from encoded transfer (u8 / u16 codes, halves, clustered PCA), the job-system hook and the
 // no-throw API. Oracles: the float kernel on the decoded rows, exact sums in double, and closed-form float rounding
 // bounds (gamma_n = n u / (1 - n u), u = 2^-24; Higham, "Accuracy and Stability of Numerical Algorithms", 3.1).
+#include "core.h"
 #include "prt/nothrow.h"
 #include "prt/runtime.h"
 
@@ -343,4 +344,48 @@ TEST(NoThrow, StatusForMissingCorruptAndGoodFilesAndBadRanges) {
     EXPECT_EQ(tryReadLightingJson(good, &order).status().code, StatusCode::Corrupt);
     EXPECT_STREQ(statusName(StatusCode::Corrupt), "corrupt");
     fs::remove_all(dir);
+}
+
+// Crash classes of untrusted adaptive bundles (issue 20, layer type confusion): band scales or cluster indices of
+// the other storage kind passed the shape check, and relight then read the empty storage (SIGSEGV). Every adaptive
+// layer's component type is checked with its shape: each swap is refused (exit 3) naming the layer.
+TEST(EncodedRelight, LayersOfTheWrongStorageKindAreRefusedNamingTheLayer) {
+    auto refused = [](Bundle bundle, const std::string& layerName) {
+        try {
+            relightModel(std::move(bundle), "q.glb");
+            ADD_FAILURE() << "accepted " << layerName << " of the wrong type";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.exitCode(), kExitInput);
+            EXPECT_NE(std::string(e.what()).find(layerName), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("expected"), std::string::npos) << e.what();
+        }
+    };
+    auto swapStorage = [](Layer& l, const std::string& type) {
+        if (type.rfind("uint", 0) == 0) {
+            for (float v : l.data) l.integers.push_back(uint32_t(std::max(0.0f, v)));
+            l.data.clear();
+        } else {
+            for (uint32_t v : l.integers) l.data.push_back(float(v));
+            l.integers.clear();
+        }
+        l.componentType = type;
+    };
+    for (bool perCluster : {false, true}) {
+        Quantised q = quantisedBundle(300, 4, 8, perCluster, 5);
+        ASSERT_NO_THROW(relightModel(q.bundle, "q.glb"));
+        for (Layer& l : q.bundle.layers) {
+            Bundle bad = q.bundle;
+            Layer& target = *std::find_if(bad.layers.begin(), bad.layers.end(), [&](const Layer& x) { return x.name == l.name; });
+            swapStorage(target, target.componentType.rfind("uint", 0) == 0 ? "float32" : "uint32");
+            refused(bad, l.name);
+        }
+    }
+    Bundle cpca = cpcaBundle(200, 3, 2, 2, 9);
+    ASSERT_NO_THROW(relightModel(cpca, "c.glb"));
+    for (const Layer& l : cpca.layers) {
+        Bundle bad = cpca;
+        Layer& target = *std::find_if(bad.layers.begin(), bad.layers.end(), [&](const Layer& x) { return x.name == l.name; });
+        swapStorage(target, target.componentType.rfind("uint", 0) == 0 ? "float32" : "uint32");
+        refused(bad, l.name);
+    }
 }
