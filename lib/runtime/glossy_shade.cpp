@@ -10,6 +10,7 @@ namespace prt {
 
 namespace {
 
+constexpr double kPi = std::numbers::pi;
 
 float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
