@@ -2,6 +2,7 @@
 // code and message it must give, and the rule that nothing is left in the output folder afterwards.
 // One table; each row names the reader it aims at. docs/results.md counts the rows by reader.
 #include "bundle.h"
+#include "cli_util.h"
 #include "bundle_internal.h"
 #include "core.h"
 #include "gltf_data_uri.h"
@@ -24,22 +25,8 @@ using nlohmann::json;
 
 namespace {
 
-struct Result {
-    int exitCode;
-    std::string output;
-};
-
-Result runShell(const std::string& command) {
-    Result result{-1, {}};
-    FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-    if (!pipe) return result;
-    std::array<char, 4096> chunk;
-    size_t got;
-    while ((got = fread(chunk.data(), 1, chunk.size(), pipe)) > 0) result.output.append(chunk.data(), got);
-    int status = pclose(pipe);
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
+using Result = prt::test::ShellRun;
+using prt::test::runShell; // stdout and stderr together
 
 std::string bytesOf(std::initializer_list<uint32_t> words) {
     std::string out;
@@ -174,12 +161,14 @@ std::function<std::string()> glossyBundle(float lambda) {
         layer.name = "glossy_lobes";
         layer.domain = "vertex";
         layer.semantic = "sg_lobes";
-        layer.shape = {bundle.mesh.vertexCount(), 92, 1, 5};
-        for (size_t i = 0; i < bundle.mesh.vertexCount() * 92; ++i)
+        // The octahedron's 6 views and 8 faces (counter-clockwise from outside): a valid tiling, so that only the
+        // sharpness is wrong.
+        layer.shape = {bundle.mesh.vertexCount(), 6, 1, 5};
+        for (size_t i = 0; i < bundle.mesh.vertexCount() * 6; ++i)
             layer.data.insert(layer.data.end(), {1.0f, 0.0f, 1.0f, 0.0f, lambda});
-        json views = json::array();
-        for (int v = 0; v < 92; ++v) views.push_back({0, 1, 0});
-        layer.params = {{"views", views}, {"view_triangles", {{0, 1, 2}}}};
+        json views = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        json triangles = {{0, 2, 4}, {1, 4, 2}, {0, 4, 3}, {0, 5, 2}, {1, 3, 4}, {1, 2, 5}, {0, 3, 5}, {1, 5, 3}};
+        layer.params = {{"views", views}, {"view_triangles", triangles}};
         bundle.layers.push_back(layer);
         std::string path = base + ".glossy.glb";
         prt::writeBundle(path, bundle);

@@ -1,3 +1,4 @@
+#include "cli_util.h"
 #include "core.h"
 
 #include <gtest/gtest.h>
@@ -12,23 +13,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-    int exitCode;
-    std::string output; // stdout and stderr together
-};
+using Result = prt::test::ShellRun; // stdout and stderr together
 
-Result runPrt(const std::string& args) {
-    std::string command = std::string(PRT_BINARY_DIR) + "/prt " + args + " 2>&1";
-    Result result{-1, {}};
-    FILE* pipe = popen(command.c_str(), "r");
-    if (!pipe) return result;
-    std::array<char, 4096> chunk;
-    size_t got;
-    while ((got = fread(chunk.data(), 1, chunk.size(), pipe)) > 0) result.output.append(chunk.data(), got);
-    int status = pclose(pipe);
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
+Result runPrt(const std::string& args) { return prt::test::runShell(std::string(PRT_BINARY_DIR) + "/prt " + args); }
 
 fs::path scratch() {
     fs::path dir = fs::temp_directory_path() / ("prt_cli_test_" + std::to_string(getpid()));

@@ -1,6 +1,7 @@
 // OpenImageIO is loaded only by stages that read or write an image (lib/image/image_library.h): the driver does not
 // link it, a cache key (`prt --build-info`) never loads it yet still covers it, and a broken module is refused by
 // name.
+#include "cli_util.h"
 #include "core.h"
 
 #include <gtest/gtest.h>
@@ -17,22 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Ran {
-    int exitCode;
-    std::string output; // stdout, and stderr when `withStderr`
-};
+using Ran = prt::test::ShellRun;
 
-Ran run(const std::string& command, bool withStderr = true) {
-    Ran result{-1, {}};
-    FILE* pipe = popen((command + (withStderr ? " 2>&1" : " 2>/dev/null")).c_str(), "r");
-    if (!pipe) return result;
-    std::array<char, 4096> chunk;
-    size_t got;
-    while ((got = fread(chunk.data(), 1, chunk.size(), pipe)) > 0) result.output.append(chunk.data(), got);
-    int status = pclose(pipe);
-    result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
+Ran run(const std::string& command, bool withStderr = true) { return prt::test::runShell(command, withStderr); }
 
 const std::string kBuild = PRT_BINARY_DIR;
 
