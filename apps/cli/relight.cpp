@@ -6,6 +6,7 @@
 #include "compare.h"
 #include "core.h"
 #include "envlight.h"
+#include "glossy_lights.h"
 #include "material.h"
 #include "raycast.h"
 #include "render.h"
@@ -34,6 +35,7 @@ struct RelightOptions {
     std::string lights;
     int lightSamples = 64;
     std::string bounceWindow = "hann";
+    std::string residualNegatives = "keep"; // glossy bundles with --lights: the residual map's negative texels
     std::string eye; // "X,Y,Z": add the glossy lobes' radiance toward this point
     bool glossyOnly = false;
     std::string imageSize; // "W,H": a picture through --camera instead of per-vertex radiance
@@ -226,6 +228,56 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
     reportCost(cost);
 }
 
+// A glossy bundle under cone lights (docs/glossy.md, "Lights through the glossy path"): the diffuse hybrid, the
+// lights' exact Phong lobe with their per-sample visibility, and the lobes against the map minus the lights; per
+// vertex toward --eye, or a picture through --camera with the glossy part per pixel.
+void runGlossyHybridRelight(const RelightOptions& options, bool imageMode, const PinholeCamera& camera, double start) {
+    if (!options.shJson.empty()) throw Error("", "--lights", "give --lights or --sh, not both", kExitUsage);
+    if (options.texels)
+        throw Error("", "--texels", "glossy lobes are per vertex: --texels does not combine with --eye or --image",
+                    kExitUsage);
+    if (options.rotateYDegrees != 0.0)
+        throw Error("", "--rotate-y", "does not combine with glossy lobes (they are fitted to the map as it is)",
+                    kExitUsage);
+    if (imageMode && !options.eye.empty())
+        throw Error("", "--eye", "with --image the eye is the camera's (--camera)", kExitUsage);
+    if (!imageMode && options.eye.empty()) throw Error("", "--glossy-only", "needs --eye or --image", kExitUsage);
+    if (!options.visibilityOut.empty())
+        throw Error("", "--visibility-out", "does not combine with glossy lobes (--eye or --image of a glossy bundle)",
+                    kExitUsage);
+    GlossyHybridOptions setup{options.bundle, options.env, options.lights, options.lightSamples, options.bounceWindow,
+                              options.window, options.residualNegatives};
+    GlossyHybrid hybrid = prepareGlossyHybrid(setup);
+    std::vector<float> diffuse;
+    if (!options.glossyOnly) diffuse = glossyHybridDiffuse(hybrid);
+    char line[320];
+    std::snprintf(line, sizeof line,
+                  "relight: glossy hybrid, %u vertices, %zu lights (%d samples each, %llu rays), residual map: lights "
+                  "%.1f%% of the map's energy, negative texels %.3f%% (%s)",
+                  hybrid.glossy.vertexCount, hybrid.cones.lights.size(), hybrid.cones.samples,
+                  (unsigned long long)hybrid.rays, 100.0 * hybrid.residualStats.lightsEnergy,
+                  100.0 * hybrid.residualStats.negativeEnergy, options.residualNegatives.c_str());
+    logInfo(line);
+    if (imageMode) {
+        RenderedImage picture = renderGlossyRadiance(hybrid.mesh, diffuse, hybrid.glossy, hybrid.residual, options.env,
+                                                     camera, options.glossyOnly, &hybrid.cones);
+        writeRenderedPicture(options.output, picture, options.exposure);
+    } else {
+        std::array<float, 3> eye = parsePoint(options.eye, "--eye");
+        std::vector<float> radiance = glossyHybridGlossy(hybrid, eye.data());
+        if (!options.glossyOnly)
+            for (size_t i = 0; i < radiance.size(); ++i) radiance[i] += diffuse[i];
+        writeVertexRadiance(options.output, radiance);
+    }
+    logInfo("relight: wrote " + options.output);
+    StageCost cost;
+    cost.stage = "relight";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = hybrid.rays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
 void runRelight(const RelightOptions& options) {
     if (!options.specular.brdf.empty())
         return runSpecularRelight(options.specular, options.bundle, options.env, options.eye, options.output,
@@ -260,6 +312,14 @@ void runRelight(const RelightOptions& options) {
         throw Error(options.positions, "--positions", "must end in .npy", kExitUsage);
     if (!options.visibilityOut.empty() && (options.lights.empty() || fileExtension(options.visibilityOut) != "npy"))
         throw Error(options.visibilityOut, "--visibility-out", "goes with --lights and must end in .npy", kExitUsage);
+    // A glossy bundle under lights goes through the glossy path (--eye, --glossy-only, or a picture of one).
+    if (!options.lights.empty() &&
+        (!options.eye.empty() || options.glossyOnly ||
+         (imageMode && findLayer(readBundle(options.bundle), "glossy_lobes") != nullptr)))
+        return runGlossyHybridRelight(options, imageMode, camera, start);
+    if (options.residualNegatives != "keep")
+        throw Error("", "--residual-negatives", "applies to glossy bundles with --lights and --eye or --image",
+                    kExitUsage);
     if (!options.lights.empty()) return runHybridRelight(options, start, imageMode ? &camera : nullptr);
     if (options.env.empty() && options.shJson.empty()) throw Error("", "--env", "give --env, --sh or --lights", kExitUsage);
     if (!options.env.empty() && !options.shJson.empty()) throw Error("", "--env", "give --env or --sh, not both", kExitUsage);
@@ -418,6 +478,10 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--bounce-window", options->bounceWindow,
                         "With --lights: window on the lights' SH where they meet the bounce layer: none, hann (default), "
                         "lanczos; or off: the lights light only directly (to measure what their bounce adds)");
+    command->add_option("--residual-negatives", options->residualNegatives,
+                        "Glossy bundle with --lights and --eye or --image: the lobes integrate the map minus the lights; "
+                        "where a light claims more than a texel holds, keep the negative difference (keep, default: "
+                        "lights + residual = the map) or clamp it to 0 (clamp)");
     command->add_option("-o,--output", options->output,
                         "Per-vertex radiance [V,3]: .npy (float32) or .csv; with --texels an RGB float .exr atlas")
         ->required();

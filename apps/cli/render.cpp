@@ -4,6 +4,7 @@
 #include "bundle.h"
 #include "compare.h"
 #include "core.h"
+#include "glossy_lights.h"
 #include "image.h"
 #include "material.h"
 #include "raycast.h"
@@ -30,7 +31,32 @@ struct RenderOptions {
     float exposure = 0.0f;
     bool texels = false;
     bool background = false; // the map behind the mesh where rays escape
+    std::string lights; // prt-lights JSON: a glossy bundle through the glossy path with cone lights
+    int lightSamples = 64;
+    std::string bounceWindow = "hann";
+    std::string residualNegatives = "keep";
+    std::string vertexRadiance; // a [V,3] .npy to draw instead of relighting (e.g. a per-vertex reference)
 };
+
+// A glossy bundle under cone lights (docs/glossy.md, "Lights through the glossy path"): the diffuse hybrid per
+// vertex, the lights' exact lobe and the lobes against the residual map per pixel; what `prt relight --lights
+// --image` draws.
+RenderedImage renderGlossyHybrid(const RenderOptions& options, const PinholeCamera& camera) {
+    if (options.texels)
+        throw Error("", "--lights", "goes with a glossy bundle's vertices, not --texels", kExitUsage);
+    if (options.rotateYDegrees != 0.0)
+        throw Error("", "--rotate-y", "does not combine with glossy lobes (they are fitted to the map as it is)",
+                    kExitUsage);
+    if (options.order != 0) throw Error("", "--order", "does not combine with --lights (the lights' order is the bundle's)", kExitUsage);
+    GlossyHybridOptions setup{options.bundle, options.env, options.lights, options.lightSamples, options.bounceWindow,
+                              options.window, options.residualNegatives};
+    GlossyHybrid hybrid = prepareGlossyHybrid(setup);
+    std::vector<float> diffuse = glossyHybridDiffuse(hybrid);
+    RenderedImage image = renderGlossyRadiance(hybrid.mesh, diffuse, hybrid.glossy, hybrid.residual, options.env,
+                                               camera, false, &hybrid.cones);
+    image.rays += hybrid.rays;
+    return image;
+}
 
 void runRender(const RenderOptions& options) {
     double start = nowSeconds();
@@ -40,6 +66,45 @@ void runRender(const RenderOptions& options) {
     PinholeCamera camera;
     parsePinholeCamera(options.size, "--size", options.camera, camera);
     sh::Window window = sh::parseWindow(options.window);
+    if (!options.vertexRadiance.empty()) {
+        // Given per-vertex radiance drawn as every relit bundle is (Gouraud): a per-vertex reference beside a relight.
+        if (!options.env.empty() || !options.lights.empty() || options.texels)
+            throw Error("", "--vertex-radiance", "draws the given radiance: no --env, --lights or --texels", kExitUsage);
+        Bundle bundle = readBundle(options.bundle);
+        if (bundle.asset)
+            throw Error(options.bundle, "--vertex-radiance", "a scene's pictures need its materials; give a mesh",
+                        kExitUsage);
+        std::vector<float> radiance = readVertexRadiance(options.vertexRadiance);
+        if (radiance.size() != bundle.mesh.vertexCount() * 3)
+            throw Error(options.vertexRadiance, "--vertex-radiance",
+                        std::to_string(radiance.size() / 3) + " rows for " + std::to_string(bundle.mesh.vertexCount()) +
+                            " vertices of " + options.bundle,
+                        kExitInput);
+        RenderedImage image = renderVertexRadiance(bundle.mesh, radiance, camera);
+        writeRenderedPicture(options.output, image, options.exposure);
+        logInfo("render: wrote " + options.output + " (given per-vertex radiance)");
+        return;
+    }
+    if (options.env.empty()) throw Error("", "--env", "give --env (or --vertex-radiance)", kExitUsage);
+    if (!options.lights.empty()) {
+        RenderedImage image = renderGlossyHybrid(options, camera);
+        if (options.background)
+            drawEnvironmentBackground(image, readEnvironmentMap(options.env), options.env, camera, 0.0);
+        writeRenderedPicture(options.output, image, options.exposure);
+        logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +
+                std::to_string(camera.height) + ", glossy lobes and cone lights per pixel)");
+        StageCost cost;
+        cost.stage = "render";
+        cost.seconds = nowSeconds() - start;
+        cost.rays = image.rays;
+        cost.peakMemoryBytes = peakMemoryBytes();
+        reportCost(cost);
+        return;
+    }
+    for (auto [given, flag] : {std::pair{options.residualNegatives != "keep", "--residual-negatives"},
+                               std::pair{options.lightSamples != 64, "--light-samples"},
+                               std::pair{options.bounceWindow != "hann", "--bounce-window"}})
+        if (given) throw Error("", flag, "needs --lights", kExitUsage);
 
     // The runtime relights exactly as `prt relight` does; only the picture is new.
     Bundle bundle = readBundle(options.bundle);
@@ -118,7 +183,10 @@ void addRenderCommand(CLI::App& app) {
         "render", "Picture of a relit bundle from a pinhole camera (the camera of `prt reference --image`)");
     command->add_option("bundle", options->bundle, "Bundle (.glb) with a \"transfer\" layer (or, with --texels, a bake)")
         ->required();
-    command->add_option("--env", options->env, "Environment map: 2:1 equirect or 1:6 cube strip")->required();
+    command->add_option("--env", options->env, "Environment map: 2:1 equirect or 1:6 cube strip");
+    command->add_option("--vertex-radiance", options->vertexRadiance,
+                        "Instead of --env: draw this per-vertex radiance ([V,3] .npy, the bundle's vertex order, e.g. "
+                        "`prt reference` rows) interpolated per vertex, as a relit bundle is drawn");
     command->add_option("--camera", options->camera, "EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY (degrees)")
         ->required();
     command->add_option("--size", options->size, "Image W,H in pixels, e.g. 640,480")->required();
@@ -137,6 +205,16 @@ void addRenderCommand(CLI::App& app) {
     command->add_flag("--background", options->background,
                       "Draw the --env map where rays escape, turned by --rotate-y, bilinear between texel centres "
                       "(equirectangular maps; the EXR's A stays the coverage)");
+    command->add_option("--lights", options->lights,
+                        "Cone lights plus SH residual of `prt envlight` made from --env (prt-lights JSON, the bundle's "
+                        "order), for a glossy bundle: the lights through the exact Phong lobe with their shadowed cone "
+                        "visibility, the lobes against the map minus the lights, the diffuse part the hybrid relight");
+    command->add_option("--light-samples", options->lightSamples,
+                        "With --lights: occlusion rays per vertex and light over each cone (default 64)");
+    command->add_option("--bounce-window", options->bounceWindow,
+                        "With --lights: window on the lights' SH where they meet the bounce layer (hann, none, lanczos, off)");
+    command->add_option("--residual-negatives", options->residualNegatives,
+                        "With --lights: keep (default) or clamp the residual map's negative texels");
     command->callback([options] { runRender(*options); });
 }
 

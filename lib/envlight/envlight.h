@@ -14,6 +14,7 @@
 //   choose.cpp     K per map from the decomposition's own (band-weighted) error, or plain SH when lights do not pay
 //   document.cpp   the prt-lights JSON document
 //   render.cpp     the decomposed lighting back as an equirectangular map (for `prt reference --lights`)
+//   residual_map.cpp  the map minus the cone lights, as a map (the smooth part the glossy lobes integrate)
 //   visibility.cpp each light's soft (cone-sampled) visibility at surface points, by Embree rays (lib/raycast):
 //                  what `prt relight --lights` uses in place of an engine's shadow maps
 //
@@ -254,6 +255,20 @@ void checkLightsInput(const std::string& lightsPath, const std::string& envPath)
 EnvironmentMap renderLighting(const std::vector<ConeLight>& lights, const std::vector<double>& residual, int order,
                               int width, int supersample, double* negativeEnergy = nullptr);
 
+// ---- the residual as a map (the glossy path, docs/glossy.md "Lights through the glossy path") -----------------
+// What the glossy lobes integrate when the cone lights are shaded exactly: the map minus each cone's coverage of
+// every texel times its radiance (the cones exactly as renderLighting renders them, `supersample`^2 stratified
+// points per texel near a rim), per channel. Where a cone claims more than the texel holds the difference is
+// negative: kept (clampNegative false: the map is exactly residual + cones) or set to 0 (true: no negative
+// radiance, but residual + cones then exceed the map by the clamped part). Equirectangular maps only.
+struct ResidualMapStats {
+    double negativeEnergy = 0.0; // luminance energy of the negative texels over the map's luminance energy
+    double lightsEnergy = 0.0;   // the cones' share of the map's luminance energy
+};
+// Needs a 2:1 equirectangular `env`, supersample >= 1. Throws Error(kExitInput) for another layout.
+EnvironmentMap subtractConeLights(const EnvironmentMap& env, const std::vector<ConeLight>& lights, int supersample,
+                                  bool clampNegative, ResidualMapStats* stats = nullptr);
+
 // ---- visibility -----------------------------------------------------------------------------------------------
 // For each point p_i with unit normal n_i and each light k: the cosine-weighted visible fraction of cone k,
 //   sum_s V(p_i, w_s) max(0, n_i . w_s) / sum_s max(0, n_i . w_s)
@@ -266,5 +281,25 @@ EnvironmentMap renderLighting(const std::vector<ConeLight>& lights, const std::v
 std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
                                   const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
                                   int samples, uint64_t* rays = nullptr);
+
+// The sample directions coneVisibility casts toward `light`: `samples` unit vectors [samples][3], a Hammersley set
+// on the cap uniform in solid angle (sample s at cos theta = 1 - (s + 0.5) / samples (1 - cos r), azimuth the
+// base-2 radical inverse of s). The same for every point, so a runtime can shade with them.
+std::vector<float> coneSampleDirections(const ConeLight& light, int samples);
+
+// Per point, light and sample: 1 where the sample direction w_s (coneSampleDirections) is unoccluded from p_i and
+// above its horizon (n_i . w_s > 0), else 0, by the same rays from the same origins as coneVisibility (which is
+// the cosine-weighted mean of these). What the glossy path needs: the Phong lobe weights the samples unequally, so
+// one visible fraction per light is not enough. Returns [points][lights][samples]. Same needs and guarantees as
+// coneVisibility.
+std::vector<uint8_t> coneSampleVisibility(const TriMesh& mesh, const float* points, const float* normals,
+                                          const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
+                                          int samples, uint64_t* rays = nullptr);
+
+// coneVisibility's cosine-weighted visible fraction from coneSampleVisibility's bits (`visible` [count][lights]
+// [samples]) and the same directions (`directions` [lights][samples][3], coneSampleDirections), summed in the same
+// order, so equal to coneVisibility bit for bit without casting its rays again. Returns [count][lights].
+std::vector<float> coneVisibilityFromSamples(const float* normals, size_t count, size_t lights, int samples,
+                                             const float* directions, const uint8_t* visible);
 
 } // namespace prt::envlight

@@ -23,8 +23,9 @@ double radicalInverse2(uint32_t k) {
     return double(k) * (1.0 / 4294967296.0);
 }
 
-// Directions uniform in solid angle over the cone about `light`'s direction: [samples][3].
-std::vector<float> coneSamples(const ConeLight& light, int samples) {
+} // namespace
+
+std::vector<float> coneSampleDirections(const ConeLight& light, int samples) {
     const double* d = light.direction.data();
     double helper[3] = {std::abs(d[0]) < 0.9 ? 1.0 : 0.0, std::abs(d[0]) < 0.9 ? 0.0 : 1.0, 0.0};
     double t1[3] = {d[1] * helper[2] - d[2] * helper[1], d[2] * helper[0] - d[0] * helper[2],
@@ -44,15 +45,13 @@ std::vector<float> coneSamples(const ConeLight& light, int samples) {
     return out;
 }
 
-} // namespace
-
 std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
                                   const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
                                   int samples, uint64_t* rays) {
     std::vector<float> visibility(count * lights.size(), 0.0f);
     if (lights.empty() || count == 0) return visibility;
     std::vector<std::vector<float>> directions;
-    for (const ConeLight& light : lights) directions.push_back(coneSamples(light, samples));
+    for (const ConeLight& light : lights) directions.push_back(coneSampleDirections(light, samples));
     EmbreeScene scene(mesh);
     const float offset = rayOffset(mesh);
     std::atomic<uint64_t> cast{0};
@@ -84,6 +83,62 @@ std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, cons
     });
     if (rays) *rays = cast.load();
     return visibility;
+}
+
+std::vector<uint8_t> coneSampleVisibility(const TriMesh& mesh, const float* points, const float* normals,
+                                          const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
+                                          int samples, uint64_t* rays) {
+    const size_t lightCount = lights.size(), perPoint = lightCount * size_t(samples);
+    std::vector<uint8_t> visible(count * perPoint, 0);
+    if (lights.empty() || count == 0 || samples <= 0) return visible;
+    std::vector<std::vector<float>> directions;
+    for (const ConeLight& light : lights) directions.push_back(coneSampleDirections(light, samples));
+    EmbreeScene scene(mesh);
+    const float offset = rayOffset(mesh);
+    std::atomic<uint64_t> cast{0};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 256), [&](const tbb::blocked_range<size_t>& range) {
+        uint64_t local = 0;
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            const float* n = normals + i * 3;
+            float origin[3];
+            spawnOrigin(points + i * 3, (spawnNormals ? spawnNormals : normals) + i * 3, offset, origin);
+            for (size_t k = 0; k < lightCount; ++k)
+                for (int s = 0; s < samples; ++s) {
+                    const float* w = &directions[k][s * 3];
+                    if (n[0] * w[0] + n[1] * w[1] + n[2] * w[2] <= 0.0f) continue; // below the horizon: 0
+                    RTCRay ray;
+                    spawnRay(ray, origin, w[0], w[1], w[2]);
+                    rtcOccluded1(scene.scene, &context, &ray);
+                    ++local;
+                    visible[i * perPoint + k * samples + s] = ray.tfar >= 0.0f ? 1 : 0;
+                }
+        }
+        cast += local;
+    });
+    if (rays) *rays = cast.load();
+    return visible;
+}
+
+std::vector<float> coneVisibilityFromSamples(const float* normals, size_t count, size_t lights, int samples,
+                                             const float* directions, const uint8_t* visible) {
+    std::vector<float> fraction(count * lights, 0.0f);
+    for (size_t i = 0; i < count; ++i) {
+        const float* n = normals + i * 3;
+        for (size_t k = 0; k < lights; ++k) {
+            double seen = 0.0, total = 0.0;
+            for (int s = 0; s < samples; ++s) {
+                const float* w = directions + (k * samples + s) * 3;
+                float cosine = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
+                if (cosine <= 0.0f) continue;
+                total += cosine;
+                if (visible[(i * lights + k) * samples + s]) seen += cosine;
+            }
+            fraction[i * lights + k] = total > 0.0 ? float(seen / total) : 0.0f;
+        }
+    }
+    return fraction;
 }
 
 } // namespace prt::envlight

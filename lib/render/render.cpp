@@ -114,7 +114,7 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
                                    const EnvironmentMap& environment, const std::string& envSource,
-                                   const PinholeCamera& camera, bool glossyOnly) {
+                                   const PinholeCamera& camera, bool glossyOnly, const GlossyConeLights* lights) {
     if (!glossyOnly && diffuse.size() != mesh.vertexCount() * 3)
         throw Error("", "render", std::to_string(diffuse.size() / 3) + " radiance rows for " +
                                       std::to_string(mesh.vertexCount()) + " vertices");
@@ -131,6 +131,7 @@ RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>
         tbb::parallel_for(size_t(0), count, [&](size_t i) { task(data, i); });
     };
     options.jobs = &jobs;
+    if (lights) checkGlossyConeLights(glossy, *lights, "render");
     const PrefilteredEnvironment env = prefilterEnvironment(environment.radiance.rgb.data(), environment.radiance.width,
                                                             environment.radiance.height, options);
     return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
@@ -149,6 +150,9 @@ RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>
             if (!(length > 0.0f)) continue;
             float lit[3];
             glossyRadianceToward(glossy, env, corner[k], d, lit);
+            for (int a = 0; a < 3; ++a) out[a] += w[k] * lit[a];
+            if (!lights) continue;
+            glossyConeLightsToward(glossy, *lights, corner[k], d, lit);
             for (int a = 0; a < 3; ++a) out[a] += w[k] * lit[a];
         }
     });

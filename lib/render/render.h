@@ -16,7 +16,8 @@
 
 namespace prt {
 
-struct GlossyModel; // prt/glossy.h
+struct GlossyModel;      // prt/glossy.h
+struct GlossyConeLights; // prt/glossy.h
 
 struct RenderedImage {
     Image radiance;              // linear RGB, row 0 at the top
@@ -40,9 +41,13 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 // across a triangle as the camera does, where per-vertex glossy radiance would cross-fade between its corners.
 // With glossyOnly the diffuse radiance is left out (it may then be empty). Needs a model of this mesh's vertices and
 // an equirectangular map (prefiltered here once); throws prt::Error(envSource, "--env", ...) for another layout.
+// With `lights` (docs/glossy.md "Lights through the glossy path"; `environment` is then the residual map) each
+// corner also adds its cone lights' glossy radiance toward the pixel's direction (glossyConeLightsToward, with that
+// corner's per-sample visibility), blended the same way.
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
                                    const EnvironmentMap& environment, const std::string& envSource,
-                                   const PinholeCamera& camera, bool glossyOnly);
+                                   const PinholeCamera& camera, bool glossyOnly,
+                                   const GlossyConeLights* lights = nullptr);
 
 // Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0, or
 // through `cornerUv` ([3 T][2], a scene bake's layer "lightmap_uv": corner k of triangle t at 3 t + k) when given.

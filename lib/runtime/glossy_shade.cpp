@@ -106,6 +106,16 @@ GlossyModel glossyModel(const Bundle& bundle, const std::string& source) {
     model.positions = bundle.mesh.positions;
     model.normals = bundle.mesh.normals;
     indexViewTriangles(model);
+    const nlohmann::json& brdf = layer->params.value("brdf", nlohmann::json());
+    if (brdf.is_object() && brdf.value("model", "") == "phong") {
+        const nlohmann::json& exponent = brdf.value("exponent", nlohmann::json());
+        const nlohmann::json& ks = brdf.value("ks", nlohmann::json());
+        if (!exponent.is_number() || !ks.is_number() || !(exponent.get<double>() > 0.0) ||
+            !std::isfinite(exponent.get<double>()) || !(ks.get<double>() >= 0.0 && ks.get<double>() <= 1.0))
+            throw bad("params.brdf needs an exponent > 0 and ks in [0, 1]");
+        model.exponent = exponent.get<double>();
+        model.ks = ks.get<double>();
+    }
     return model;
 }
 

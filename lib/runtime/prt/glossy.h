@@ -1,6 +1,8 @@
 // prt/glossy.h: glossy spherical-Gaussian lobes (bundles from `prt glossy`; docs/glossy.md "Runtime").
 #pragma once
 
+#include "hybrid.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -28,6 +30,7 @@ struct GlossyModel {
     // then tests the few around the nearest view instead of all. Empty: viewWeights scans every triangle.
     std::vector<uint32_t> viewTriangleOffsets; // [viewCount + 1]
     std::vector<uint32_t> viewTriangles;       // [3 triangleCount]
+    double exponent = 0.0, ks = 0.0;   // the fitted Phong lobe (params.brdf); 0, 0 when the layer records none
     size_t viewCount() const { return views.size() / 3; }
 };
 
@@ -144,6 +147,41 @@ void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment
 // `evaluation` says ExactSum.
 void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env, const float eye[3],
                     float* radiance, LobeEvaluation evaluation = LobeEvaluation::Prefiltered);
+
+// ---- cone lights through the glossy path (lib/runtime/glossy_lights.cpp, docs/glossy.md "Lights through the
+// glossy path") ----------------------------------------------------------------------------------------------------
+// The cone lights of `prt envlight`, shaded with the exact Phong lobe over sample directions of each cone and the
+// caller's visibility of each sample (Embree rays in prt, an engine's shadow-map lookups), while the lobes
+// integrate only the residual map (the map minus the cones). Per row v, light k and sample s:
+//   directions [k][s][3] (uniform in solid angle over cone k; envlight::coneSampleDirections),
+//   visible [v][k][s] in {0, 1} (0 also below the horizon).
+struct GlossyConeLights {
+    std::vector<HybridConeLight> lights;
+    int samples = 0;               // per light
+    std::vector<float> directions; // [lights][samples][3]
+    std::vector<uint8_t> visible;  // [rows][lights][samples]
+};
+
+// The normalised Phong lobe of docs/conventions.md ("Glossy BRDF"), ks (n + 2) / (2 pi) max(0, r . w)^n, for unit
+// mirror direction r and incoming w.
+double phongLobeValue(const float mirror[3], const float incoming[3], double exponent, double ks);
+
+// The lights' glossy radiance at vertex `vertex` toward unit direction d (surface to viewer):
+//   sum_k radiance_k solidAngle_k / S sum_s f(w_ks, d) max(0, n . w_ks) visible[v][k][s]
+// with f the model's Phong lobe (phongLobeValue about d's mirror direction) and n the vertex normal; zero where d is
+// below the tangent plane. The Monte Carlo (stratified) estimate of the lobe times the shadowed cone, converging to
+// the exact integral as S grows. Needs lights.visible sized model.vertexCount * lights * samples and
+// lights.directions lights * samples * 3 (checkGlossyConeLights).
+void glossyConeLightsToward(const GlossyModel& model, const GlossyConeLights& lights, uint32_t vertex, const float d[3],
+                            float radiance[3]);
+
+// The same for every vertex toward the point `eye`: radiance [V][3].
+void glossyConeLightRadiance(const GlossyModel& model, const GlossyConeLights& lights, const float eye[3],
+                             float* radiance);
+
+// Throws prt::Error naming `source` unless lights' arrays fit the model's vertices (kExitFailure) and the model
+// records its Phong lobe (exponent > 0, kExitInput: bundles written before params.brdf must be refitted).
+void checkGlossyConeLights(const GlossyModel& model, const GlossyConeLights& lights, const std::string& source);
 
 
 } // namespace prt
