@@ -82,8 +82,8 @@ std::vector<float> glossyHybridDiffuse(const GlossyHybrid& hybrid) {
 std::vector<float> glossyHybridGlossy(const GlossyHybrid& hybrid, const float eye[3]) {
     const size_t values = size_t(hybrid.glossy.vertexCount) * 3;
     std::vector<float> lobes(values), lights(values);
-    PrefilterOptions prefilter; // the stack over the lobes' own sharpness range, rows on TBB (as prt relight --eye)
-    glossySharpnessRange(hybrid.glossy, prefilter.sharpnessMin, prefilter.sharpnessMax);
+    PrefilterOptions prefilter; // as prt relight --eye: the lobes' range, or exact sums for a small pass; rows on TBB
+    choosePrefilterRange(hybrid.glossy, size_t(3) * hybrid.glossy.lobes * hybrid.glossy.vertexCount, prefilter);
     const JobSystem jobs = tbbJobs();
     prefilter.jobs = &jobs;
     const PrefilteredEnvironment residual =

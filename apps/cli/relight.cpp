@@ -409,8 +409,8 @@ void runRelight(const RelightOptions& options) {
         throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map");
     if (glossy && !imageMode) { // a picture evaluates the lobes per pixel instead (below)
         double glossyStart = nowSeconds();
-        PrefilterOptions prefilterOptions; // the stack over the lobes' own sharpness range
-        glossySharpnessRange(*glossy, prefilterOptions.sharpnessMin, prefilterOptions.sharpnessMax);
+        PrefilterOptions prefilterOptions; // the lobes' own sharpness range, or exact sums for a small pass
+        choosePrefilterRange(*glossy, size_t(3) * glossy->lobes * glossy->vertexCount, prefilterOptions);
         const JobSystem jobs = cli::tbbJobs();
         prefilterOptions.jobs = &jobs;
         PrefilteredEnvironment prefiltered = prefilterEnvironment(

@@ -1,6 +1,7 @@
 // One glossy path: the diffuse-plus-Phong BRDF of docs/conventions.md, with next-event estimation of the
 // environment and a mixture of cosine and Phong-lobe sampling, combined by the power heuristic.
 #include "path_tracer.h"
+#include "prt/glossy.h"
 
 #include <algorithm>
 #include <cmath>
@@ -30,9 +31,7 @@ float powerHeuristic(float pdf, float otherPdf) { return pdf * pdf / (pdf * pdf 
 } // namespace
 
 float phongLobe(const float mirror[3], const float incoming[3], double exponent, double ks) {
-    float c = dot(mirror, incoming);
-    if (c <= 0.0f) return 0.0f;
-    return float(ks * (exponent + 2.0) / (2.0 * std::numbers::pi) * std::pow(double(c), exponent));
+    return float(phongLobeValue(mirror, incoming, exponent, ks)); // the formula lives once, in the runtime
 }
 
 void estimateGlossyRadiance(const SceneTracer& scene, const EnvironmentSampler& environment,

@@ -244,6 +244,14 @@ void glossySharpnessRange(const GlossyModel& model, double& sharpnessMin, double
     }
 }
 
+void choosePrefilterRange(const GlossyModel& model, size_t lobeEvaluations, PrefilterOptions& options) {
+    if (lobeEvaluations >= kStackBreakEvenLobes) {
+        glossySharpnessRange(model, options.sharpnessMin, options.sharpnessMax);
+    } else {
+        options.sharpnessMin = 1.0, options.sharpnessMax = 0.0; // no stack
+    }
+}
+
 void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment& env, uint32_t vertex,
                           const float d[3], float radiance[3]) {
     glossyRadianceToward(model, env, vertex, d, radiance, LobeEvaluation::Prefiltered);

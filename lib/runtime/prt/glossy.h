@@ -122,6 +122,15 @@ void lookupLobe(const PrefilteredEnvironment& env, const float lobe[5], float ra
 // prefilter for it.
 void glossySharpnessRange(const GlossyModel& model, double& sharpnessMin, double& sharpnessMax);
 
+// Below this many lobe evaluations per map, summing each lobe exactly costs less than building the stack (measured
+// on 1024x512 maps, docs/glossy.md "Runtime"; both costs grow alike with the map's size).
+constexpr size_t kStackBreakEvenLobes = 32768;
+
+// Sets options' sharpness range for a pass of `lobeEvaluations` lobe integrations of `model` against one map: the
+// lobes' own range (glossySharpnessRange) when the pass reaches kStackBreakEvenLobes, else no stack, so that
+// lookupLobe sums every lobe exactly (integrateLobe). Either way within about 1% of the other (docs/glossy.md).
+void choosePrefilterRange(const GlossyModel& model, size_t lobeEvaluations, PrefilterOptions& options);
+
 // How the runtime evaluates each lobe against the environment.
 enum class LobeEvaluation { Prefiltered, ExactSum }; // lookupLobe | integrateLobe
 
