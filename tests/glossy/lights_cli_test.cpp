@@ -1,10 +1,13 @@
 // `prt relight --lights` and `prt render --lights` of a glossy bundle end to end: zero lights give the plain lobes,
 // the picture of relight and render agree, and every bad combination is refused by name with no output.
 #include "bundle.h"
+#include "cli_util.h"
 #include "compare.h"
 #include "core.h"
 #include "image.h"
 #include "render.h"
+
+#include "cli_util.h"
 
 #include <gtest/gtest.h>
 
@@ -23,19 +26,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct PrtRun {
-    int exitCode;
-    std::string text;
-};
-
-PrtRun runPrt(const std::string& arguments, const fs::path& dir) {
-    fs::path log = dir / "stderr.txt";
-    std::string command = std::string(PRT_EXECUTABLE) + " " + arguments + " 2> " + log.string();
-    int status = std::system(command.c_str());
-    std::stringstream text;
-    text << std::ifstream(log).rdbuf();
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
-}
+using prt::test::runPrt; // stderr captured in DIR/stderr.txt
 
 // One fit and one lights file for the suite (the fit is most of its time).
 class GlossyLightsCli : public ::testing::Test {
@@ -77,16 +68,16 @@ TEST_F(GlossyLightsCli, ZeroLightsGiveThePlainLobesAndLightsChangeOnlyTheSplit) 
     const std::string eye = " --eye 0.5,1,4";
     ASSERT_EQ(runPrt("relight " + path("g.glb") + " --env " + env + eye + " --glossy-only -o " + path("plain.npy") +
                       " --quiet", dir).exitCode, 0);
-    PrtRun none = runPrt("relight " + path("g.glb") + " --env " + env + " --lights " + path("none.json") + eye +
+    prt::test::CliRun none = runPrt("relight " + path("g.glb") + " --env " + env + " --lights " + path("none.json") + eye +
                           " --glossy-only -o " + path("none.npy") + " --quiet", dir);
-    ASSERT_EQ(none.exitCode, 0) << none.text;
+    ASSERT_EQ(none.exitCode, 0) << none.stderrText;
     EXPECT_EQ(rows(path("none.npy")), rows(path("plain.npy")));
-    PrtRun lit = runPrt("relight " + path("g.glb") + " --env " + env + " --lights " + path("l.json") + eye + " -o " +
+    prt::test::CliRun lit = runPrt("relight " + path("g.glb") + " --env " + env + " --lights " + path("l.json") + eye + " -o " +
                          path("lit.npy") + " --quiet", dir);
-    ASSERT_EQ(lit.exitCode, 0) << lit.text;
-    PrtRun glossy = runPrt("relight " + path("g.glb") + " --env " + env + " --lights " + path("l.json") + eye +
+    ASSERT_EQ(lit.exitCode, 0) << lit.stderrText;
+    prt::test::CliRun glossy = runPrt("relight " + path("g.glb") + " --env " + env + " --lights " + path("l.json") + eye +
                             " --glossy-only -o " + path("lit_glossy.npy") + " --quiet", dir);
-    ASSERT_EQ(glossy.exitCode, 0) << glossy.text;
+    ASSERT_EQ(glossy.exitCode, 0) << glossy.stderrText;
     const std::vector<float> total = rows(path("lit.npy")), part = rows(path("lit_glossy.npy"));
     ASSERT_EQ(total.size(), part.size());
     for (size_t i = 0; i < total.size(); ++i) {
@@ -95,9 +86,9 @@ TEST_F(GlossyLightsCli, ZeroLightsGiveThePlainLobesAndLightsChangeOnlyTheSplit) 
     }
     EXPECT_NE(part, rows(path("plain.npy")));
     // `prt render --vertex-radiance` draws those rows as renderVertexRadiance does.
-    PrtRun drawn = runPrt("render " + path("g.glb") + " --vertex-radiance " + path("lit.npy") +
+    prt::test::CliRun drawn = runPrt("render " + path("g.glb") + " --vertex-radiance " + path("lit.npy") +
                               " --size 16,12 --camera 0,0.5,4,0,0,0,0,1,0,35 -o " + path("lit.exr") + " --quiet", dir);
-    ASSERT_EQ(drawn.exitCode, 0) << drawn.text;
+    ASSERT_EQ(drawn.exitCode, 0) << drawn.stderrText;
     prt::PinholeCamera camera;
     camera.eye = {0.0f, 0.5f, 4.0f};
     camera.fovyDegrees = 35.0f;
@@ -110,12 +101,12 @@ TEST_F(GlossyLightsCli, ZeroLightsGiveThePlainLobesAndLightsChangeOnlyTheSplit) 
 // `prt relight --lights --image` and `prt render --lights` draw the same picture.
 TEST_F(GlossyLightsCli, RelightImageAndRenderAgree) {
     const std::string camera = " --camera 0,0.5,4,0,0,0,0,1,0,35";
-    PrtRun picture = runPrt("relight " + path("g.glb") + " --env " + env + " --lights " + path("l.json") +
+    prt::test::CliRun picture = runPrt("relight " + path("g.glb") + " --env " + env + " --lights " + path("l.json") +
                              " --image 24,20" + camera + " -o " + path("pic.exr") + " --quiet", dir);
-    ASSERT_EQ(picture.exitCode, 0) << picture.text;
-    PrtRun render = runPrt("render " + path("g.glb") + " --env " + env + " --lights " + path("l.json") + " --size 24,20" +
+    ASSERT_EQ(picture.exitCode, 0) << picture.stderrText;
+    prt::test::CliRun render = runPrt("render " + path("g.glb") + " --env " + env + " --lights " + path("l.json") + " --size 24,20" +
                             camera + " -o " + path("render.exr") + " --quiet", dir);
-    ASSERT_EQ(render.exitCode, 0) << render.text;
+    ASSERT_EQ(render.exitCode, 0) << render.stderrText;
     const prt::Image a = prt::readImage(path("pic.exr")), b = prt::readImage(path("render.exr"));
     ASSERT_EQ(a.rgb.size(), b.rgb.size());
     double sum = 0.0;
@@ -161,9 +152,9 @@ TEST_F(GlossyLightsCli, BadCombinationsAreRefusedByName) {
         {"render " + path("g.glb") + " --size 8,8 --camera 0,0,4,0,0,0,0,1,0,35 -o " + path("bad.exr"), 2, "--env"},
     };
     for (const Case& c : cases) {
-        PrtRun run = runPrt(c.arguments, dir);
-        EXPECT_EQ(run.exitCode, c.exitCode) << c.arguments << "\n" << run.text;
-        EXPECT_NE(run.text.find(c.names), std::string::npos) << c.arguments << "\n" << run.text;
+        prt::test::CliRun run = runPrt(c.arguments, dir);
+        EXPECT_EQ(run.exitCode, c.exitCode) << c.arguments << "\n" << run.stderrText;
+        EXPECT_NE(run.stderrText.find(c.names), std::string::npos) << c.arguments << "\n" << run.stderrText;
     }
     EXPECT_FALSE(fs::exists(dir / "bad.npy"));
     EXPECT_FALSE(fs::exists(dir / "bad.exr"));
