@@ -7,8 +7,6 @@
 #include "image.h"
 #include "render.h"
 
-#include "cli_util.h"
-
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
