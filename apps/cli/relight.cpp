@@ -237,7 +237,7 @@ void runGlossyHybridRelight(const RelightOptions& options, bool imageMode, const
         throw Error("", "--texels", "glossy lobes are per vertex: --texels does not combine with --eye or --image",
                     kExitUsage);
     if (options.rotateYDegrees != 0.0)
-        throw Error("", "--rotate-y", "does not combine with glossy lobes (they are fitted to the map as it is)",
+        throw Error("", "--rotate-y", "does not combine with --lights on glossy lobes (the lights and their shadows are of the map as it is)",
                     kExitUsage);
     if (imageMode && !options.eye.empty())
         throw Error("", "--eye", "with --image the eye is the camera's (--camera)", kExitUsage);
@@ -351,9 +351,6 @@ void runRelight(const RelightOptions& options) {
         } else if (options.glossyOnly) {
             throw Error(options.bundle, "layers", "has no \"glossy_lobes\" layer for --glossy-only (prt glossy writes one)");
         }
-        if (glossy && options.rotateYDegrees != 0.0)
-            throw Error("", "--rotate-y", "does not combine with glossy lobes (--eye, or --image of a glossy bundle)",
-                        kExitUsage);
         if (imageMode) mesh = bundle.mesh;
         if (imageMode && bundle.asset) {
             if (glossy) throw Error(options.bundle, "layers", "glossy lobes of a scene are not supported", kExitInput);
@@ -415,6 +412,7 @@ void runRelight(const RelightOptions& options) {
         prefilterOptions.jobs = &jobs;
         PrefilteredEnvironment prefiltered = prefilterEnvironment(
             environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height, prefilterOptions);
+        if (rotation) std::copy_n(rotation, 9, prefiltered.rotation); // the map turned: the lookup turns
         std::vector<float> glossyPart(radiance.size());
         glossyRadiance(*glossy, prefiltered, eye.data(), glossyPart.data());
         for (size_t i = 0; i < radiance.size(); ++i) radiance[i] = (options.glossyOnly ? 0.0f : radiance[i]) + glossyPart[i];
@@ -431,7 +429,7 @@ void runRelight(const RelightOptions& options) {
         // the pixel's own view direction.
         double pictureStart = nowSeconds();
         RenderedImage picture = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, environment, options.env, camera,
-                                                              options.glossyOnly)
+                                                              options.glossyOnly, nullptr, rotation)
                                        : renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
         if (glossy) {
             char line[160];

@@ -45,7 +45,7 @@ RenderedImage renderGlossyHybrid(const RenderOptions& options, const PinholeCame
     if (options.texels)
         throw Error("", "--lights", "goes with a glossy bundle's vertices, not --texels", kExitUsage);
     if (options.rotateYDegrees != 0.0)
-        throw Error("", "--rotate-y", "does not combine with glossy lobes (they are fitted to the map as it is)",
+        throw Error("", "--rotate-y", "does not combine with --lights on glossy lobes (the lights and their shadows are of the map as it is)",
                     kExitUsage);
     if (options.order != 0) throw Error("", "--order", "does not combine with --lights (the lights' order is the bundle's)", kExitUsage);
     GlossyHybridOptions setup{options.bundle, options.env, options.lights, options.lightSamples, options.bounceWindow,
@@ -123,9 +123,6 @@ void runRender(const RenderOptions& options) {
     std::optional<GlossyModel> glossy;
     if (!options.texels && findLayer(bundle, "glossy_lobes")) {
         if (bundle.asset) throw Error(options.bundle, "layers", "glossy lobes of a scene are not supported", kExitInput);
-        if (options.rotateYDegrees != 0.0)
-            throw Error("", "--rotate-y", "does not combine with glossy lobes (they are fitted to the map as it is)",
-                        kExitUsage);
         glossy = glossyModel(bundle, options.bundle);
     }
     RelightModel model = options.texels ? std::move(atlas.rows) : relightModel(std::move(bundle), options.bundle);
@@ -158,7 +155,8 @@ void runRender(const RenderOptions& options) {
         image = renderTexelRadiance(mesh, relit, camera, cornerUv.empty() ? nullptr : cornerUv.data(),
                                     surface ? &*surface : nullptr);
     } else {
-        image = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, environment, options.env, camera, false)
+        image = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, environment, options.env, camera, false, nullptr,
+                                              options.rotateYDegrees != 0.0 ? R : nullptr)
                        : renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
     }
     // The map behind the mesh, turned with the lighting, as the viewer's sky (its tone map is the surface's).

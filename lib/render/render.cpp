@@ -114,7 +114,8 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
                                    const EnvironmentMap& environment, const std::string& envSource,
-                                   const PinholeCamera& camera, bool glossyOnly, const GlossyConeLights* lights) {
+                                   const PinholeCamera& camera, bool glossyOnly, const GlossyConeLights* lights,
+                                   const double* rotation) {
     if (!glossyOnly && diffuse.size() != mesh.vertexCount() * 3)
         throw Error("", "render", std::to_string(diffuse.size() / 3) + " radiance rows for " +
                                       std::to_string(mesh.vertexCount()) + " vertices");
@@ -132,8 +133,9 @@ RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>
     };
     options.jobs = &jobs;
     if (lights) checkGlossyConeLights(glossy, *lights, "render");
-    const PrefilteredEnvironment env = prefilterEnvironment(environment.radiance.rgb.data(), environment.radiance.width,
-                                                            environment.radiance.height, options);
+    PrefilteredEnvironment env = prefilterEnvironment(environment.radiance.rgb.data(), environment.radiance.width,
+                                                      environment.radiance.height, options);
+    if (rotation) std::copy_n(rotation, 9, env.rotation);
     return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
         const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];
         const float w[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};

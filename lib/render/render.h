@@ -43,11 +43,12 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 // an equirectangular map (prefiltered here once); throws prt::Error(envSource, "--env", ...) for another layout.
 // With `lights` (docs/glossy.md "Lights through the glossy path"; `environment` is then the residual map) each
 // corner also adds its cone lights' glossy radiance toward the pixel's direction (glossyConeLightsToward, with that
-// corner's per-sample visibility), blended the same way.
+// corner's per-sample visibility), blended the same way. With `rotation` (row-major 3x3, as sh::rotationY; null for
+// none) the lobes see the map turned by it, L'(d) = L(R^T d): the lookup turns, the stack is the same.
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
                                    const EnvironmentMap& environment, const std::string& envSource,
                                    const PinholeCamera& camera, bool glossyOnly,
-                                   const GlossyConeLights* lights = nullptr);
+                                   const GlossyConeLights* lights = nullptr, const double* rotation = nullptr);
 
 // Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0, or
 // through `cornerUv` ([3 T][2], a scene bake's layer "lightmap_uv": corner k of triangle t at 3 t + k) when given.
