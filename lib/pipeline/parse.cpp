@@ -335,7 +335,12 @@ void parseStageWiring(const Context& context, const Pipeline& pipeline, const st
             count += int(wired.count(port));
             names += (names.empty() ? "" : " or ") + port;
         }
-        if (count != 1)
+        bool allowedPair = false;
+        for (const auto& [first, second] : spec.alsoTogether) {
+            allowedPair = allowedPair || (count == 2 && wired.count(first) && wired.count(second));
+            names += " (or " + first + " with " + second + ")";
+        }
+        if (count != 1 && !allowedPair)
             context.fail(inputsNode ? lineOf(*inputsNode) : stage.line, where + ".inputs",
                          "needs exactly one of " + names + ", got " + std::to_string(count));
     }

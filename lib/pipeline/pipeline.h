@@ -24,6 +24,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace prt {
@@ -60,6 +61,9 @@ struct StageSpec {
     std::vector<PortSpec> inputs = {}, outputs = {};
     std::vector<ParamSpec> params = {};
     std::vector<std::string> exactlyOneInput = {}; // input ports of which exactly one must be wired (relight env | sh)
+    // Pairs of exactlyOneInput's ports that may also be wired together (relight: env with lights, for a glossy
+    // bundle's lobes under the map minus the lights).
+    std::vector<std::pair<std::string, std::string>> alsoTogether = {};
     // Why these parameters do not go together, or "" when they do.
     std::string (*paramsRefusal)(const nlohmann::json& params) = nullptr;
     bool takesThreads = false;                // takes --threads; outputs do not depend on it, so keys ignore it

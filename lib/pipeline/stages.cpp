@@ -205,6 +205,7 @@ std::vector<StageSpec> makeCatalogue() {
                       {"sh", FileKind::Sh, "--sh", "", true},
                       {"lights", FileKind::Sh, "--lights", "", true}};
     relight.exactlyOneInput = {"env", "sh", "lights"};
+    relight.alsoTogether = {{"env", "lights"}}; // a glossy bundle's lights path (docs/glossy.md) needs the map too
     relight.outputs = {{"radiance", FileKind::Radiance, "-o", "npy"}};
     // eye (and glossy-only) add a glossy bundle's lobes toward that point.
     relight.params = {kRotateY, kWindow, {"light-samples", ParamType::Integer, 0.0, 65536.0},

@@ -72,6 +72,35 @@ TEST(Load, MissingInputFileNamesTheInputAndItsLine) {
     }
 }
 
+// A relight stage takes one lighting, or the map with its lights (a glossy bundle's lights path); env with sh is
+// refused by the malformed file exactly_one_input.toml.
+TEST(Parse, RelightTakesTheMapWithItsLightsForTheGlossyLightsPath) {
+    const char* text = R"(
+[inputs]
+shape = { mesh = "shape.obj" }
+sky = { env = "sky.exr" }
+[stages.glossy]
+run = "glossy"
+inputs = { mesh = "shape" }
+brdf = "phong:32,0.5"
+[stages.lights]
+run = "envlight"
+inputs = { env = "sky" }
+[stages.relight]
+run = "relight"
+inputs = { bundle = "glossy", env = "sky", lights = "lights" }
+eye = "0,5,25"
+[outputs]
+radiance = { from = "relight", path = "out/r.npy" }
+)";
+    Pipeline pipeline = parsePipeline(text, "glossy_lights.toml");
+    const PipelineStage* relight = nullptr;
+    for (const PipelineStage& stage : pipeline.stages)
+        if (stage.id == "relight") relight = &stage;
+    ASSERT_NE(relight, nullptr);
+    ASSERT_EQ(relight->inputs.size(), 3u); // bundle, env, lights
+}
+
 const char* kDiamond = R"(
 [pipeline]
 name = "diamond"
