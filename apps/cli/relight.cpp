@@ -278,6 +278,46 @@ void runGlossyHybridRelight(const RelightOptions& options, bool imageMode, const
     reportCost(cost);
 }
 
+// The SH lighting of a relight, in the order of operations of `prt envsh` (project, rotate, window), windowed over
+// the transfer's `order` bands: from `environment` when --env is given (read by the caller), else from --sh, whose
+// bands are fitted to the transfer's (a common lower order is said).
+std::vector<float> relightLighting(const RelightOptions& options, const EnvironmentMap& environment, int order,
+                                   const double* rotation, sh::Window window) {
+    if (!options.env.empty()) return environmentLighting(environment, order, rotation, window);
+    int lightingOrder = 0;
+    std::vector<float> read = readLightingJson(options.shJson, &lightingOrder);
+    if (lightingOrder != order)
+        logInfo("relight: lighting has order " + std::to_string(lightingOrder) + ", transfer order " +
+                std::to_string(order) + "; using their common " + std::to_string(std::min(lightingOrder, order)) +
+                " bands");
+    std::vector<float> lighting = fitLighting(read.data(), sh::coefficientCount(lightingOrder), sh::coefficientCount(order));
+    if (rotation) lighting = rotateLighting(lighting.data(), order, rotation);
+    sh::applyWindow(window, order, lighting.data(), 3);
+    return lighting;
+}
+
+// Adds the glossy lobes' radiance toward `eye` to `radiance` [V][3] (replaces it with glossyOnly): the stack over
+// the lobes' range, or exact sums for a pass below the break-even (choosePrefilterRange); the map turned by
+// `rotation` (null: none) through the lookup.
+void addGlossyTowardEye(const GlossyModel& glossy, const EnvironmentMap& environment, const double* rotation,
+                        const float eye[3], bool glossyOnly, std::vector<float>& radiance) {
+    double glossyStart = nowSeconds();
+    PrefilterOptions prefilterOptions;
+    choosePrefilterRange(glossy, size_t(3) * glossy.lobes * glossy.vertexCount, prefilterOptions);
+    const JobSystem jobs = cli::tbbJobs();
+    prefilterOptions.jobs = &jobs;
+    PrefilteredEnvironment prefiltered = prefilterEnvironment(
+        environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height, prefilterOptions);
+    if (rotation) std::copy_n(rotation, 9, prefiltered.rotation);
+    std::vector<float> glossyPart(radiance.size());
+    glossyRadiance(glossy, prefiltered, eye, glossyPart.data());
+    for (size_t i = 0; i < radiance.size(); ++i) radiance[i] = (glossyOnly ? 0.0f : radiance[i]) + glossyPart[i];
+    char line[160];
+    std::snprintf(line, sizeof line, "relight: glossy lobes (%d per view) toward the eye in %.3f ms", glossy.lobes,
+                  (nowSeconds() - glossyStart) * 1e3);
+    logInfo(line);
+}
+
 void runRelight(const RelightOptions& options) {
     if (!options.specular.brdf.empty())
         return runSpecularRelight(options.specular, options.bundle, options.env, options.eye, options.output,
@@ -368,28 +408,13 @@ void runRelight(const RelightOptions& options) {
         model = relightModel(std::move(bundle), options.bundle);
         if (options.irradiance) irradiance = irradianceDivisors(albedo, meshAlbedo, model, options.bundle);
     }
-    const int coefficients = sh::coefficientCount(model.order);
     double R[9];
     sh::rotationY(options.rotateYDegrees, R);
     const double* rotation = options.rotateYDegrees != 0.0 ? R : nullptr;
 
-    // Same order of operations as `prt envsh`: project, rotate, window; windowed over the transfer's bands.
-    std::vector<float> lighting;
     EnvironmentMap environment;
-    if (!options.env.empty()) {
-        environment = readEnvironmentMap(options.env);
-        lighting = environmentLighting(environment, model.order, rotation, window);
-    } else {
-        int lightingOrder = 0;
-        std::vector<float> read = readLightingJson(options.shJson, &lightingOrder);
-        if (lightingOrder != model.order)
-            logInfo("relight: lighting has order " + std::to_string(lightingOrder) + ", transfer order " +
-                    std::to_string(model.order) + "; using their common " +
-                    std::to_string(std::min(lightingOrder, model.order)) + " bands");
-        lighting = fitLighting(read.data(), sh::coefficientCount(lightingOrder), coefficients);
-        if (rotation) lighting = rotateLighting(lighting.data(), model.order, rotation);
-        sh::applyWindow(window, model.order, lighting.data(), 3);
-    }
+    if (!options.env.empty()) environment = readEnvironmentMap(options.env);
+    std::vector<float> lighting = relightLighting(options, environment, model.order, rotation, window);
 
     double relightStart = nowSeconds();
     std::vector<float> radiance(size_t(model.vertexCount) * 3);
@@ -404,23 +429,8 @@ void runRelight(const RelightOptions& options) {
 
     if (glossy && environment.layout != EnvLayout::Equirectangular)
         throw Error(options.env, "--env", "the glossy runtime needs an equirectangular (2:1) map");
-    if (glossy && !imageMode) { // a picture evaluates the lobes per pixel instead (below)
-        double glossyStart = nowSeconds();
-        PrefilterOptions prefilterOptions; // the lobes' own sharpness range, or exact sums for a small pass
-        choosePrefilterRange(*glossy, size_t(3) * glossy->lobes * glossy->vertexCount, prefilterOptions);
-        const JobSystem jobs = cli::tbbJobs();
-        prefilterOptions.jobs = &jobs;
-        PrefilteredEnvironment prefiltered = prefilterEnvironment(
-            environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height, prefilterOptions);
-        if (rotation) std::copy_n(rotation, 9, prefiltered.rotation); // the map turned: the lookup turns
-        std::vector<float> glossyPart(radiance.size());
-        glossyRadiance(*glossy, prefiltered, eye.data(), glossyPart.data());
-        for (size_t i = 0; i < radiance.size(); ++i) radiance[i] = (options.glossyOnly ? 0.0f : radiance[i]) + glossyPart[i];
-        char line[160];
-        std::snprintf(line, sizeof line, "relight: glossy lobes (%d per view) toward the eye in %.3f ms", glossy->lobes,
-                      (nowSeconds() - glossyStart) * 1e3);
-        logInfo(line);
-    }
+    if (glossy && !imageMode) // a picture evaluates the lobes per pixel instead (below)
+        addGlossyTowardEye(*glossy, environment, rotation, eye.data(), options.glossyOnly, radiance);
 
     for (size_t i = 0; i < irradiance.size(); ++i) radiance[i] /= irradiance[i];
     if (!options.positions.empty()) writeVertexRadiance(options.positions, mesh.positions);

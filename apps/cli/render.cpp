@@ -38,6 +38,20 @@ struct RenderOptions {
     std::string vertexRadiance; // a [V,3] .npy to draw instead of relighting (e.g. a per-vertex reference)
 };
 
+// Writes the picture (atomically, by extension), says so, and reports the stage's time, rays and peak memory.
+void finishPicture(const RenderOptions& options, const PinholeCamera& camera, const RenderedImage& image,
+                   const std::string& what, double start) {
+    writeRenderedPicture(options.output, image, options.exposure);
+    logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +
+            std::to_string(camera.height) + ", " + what + ")");
+    StageCost cost;
+    cost.stage = "render";
+    cost.seconds = nowSeconds() - start;
+    cost.rays = image.rays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
 // A glossy bundle under cone lights (docs/glossy.md, "Lights through the glossy path"): the diffuse hybrid per
 // vertex, the lights' exact lobe and the lobes against the residual map per pixel; what `prt relight --lights
 // --image` draws.
@@ -90,15 +104,7 @@ void runRender(const RenderOptions& options) {
         RenderedImage image = renderGlossyHybrid(options, camera);
         if (options.background)
             drawEnvironmentBackground(image, readEnvironmentMap(options.env), options.env, camera, 0.0);
-        writeRenderedPicture(options.output, image, options.exposure);
-        logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +
-                std::to_string(camera.height) + ", glossy lobes and cone lights per pixel)");
-        StageCost cost;
-        cost.stage = "render";
-        cost.seconds = nowSeconds() - start;
-        cost.rays = image.rays;
-        cost.peakMemoryBytes = peakMemoryBytes();
-        reportCost(cost);
+        finishPicture(options, camera, image, "glossy lobes and cone lights per pixel", start);
         return;
     }
     for (auto [given, flag] : {std::pair{options.residualNegatives != "keep", "--residual-negatives"},
@@ -161,16 +167,7 @@ void runRender(const RenderOptions& options) {
     }
     // The map behind the mesh, turned with the lighting, as the viewer's sky (its tone map is the surface's).
     if (options.background) drawEnvironmentBackground(image, environment, options.env, camera, options.rotateYDegrees);
-    writeRenderedPicture(options.output, image, options.exposure);
-    logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +
-            std::to_string(camera.height) + ", " + (options.texels ? "per texel" : "per vertex") + ")");
-
-    StageCost cost;
-    cost.stage = "render";
-    cost.seconds = nowSeconds() - start;
-    cost.rays = image.rays;
-    cost.peakMemoryBytes = peakMemoryBytes();
-    reportCost(cost);
+    finishPicture(options, camera, image, options.texels ? "per texel" : "per vertex", start);
 }
 
 } // namespace
