@@ -5,6 +5,8 @@
 #include "raycast.h"
 #include "runtime_jobs.h"
 
+#include <algorithm>
+
 namespace prt::cli {
 
 GlossyHybrid prepareGlossyHybrid(const GlossyHybridOptions& options) {
@@ -79,17 +81,23 @@ std::vector<float> glossyHybridDiffuse(const GlossyHybrid& hybrid) {
     return radiance;
 }
 
-std::vector<float> glossyHybridGlossy(const GlossyHybrid& hybrid, const float eye[3]) {
-    const size_t values = size_t(hybrid.glossy.vertexCount) * 3;
-    std::vector<float> lobes(values), lights(values);
-    PrefilterOptions prefilter; // as prt relight --eye: the lobes' range, or exact sums for a small pass; rows on TBB
-    choosePrefilterRange(hybrid.glossy, size_t(3) * hybrid.glossy.lobes * hybrid.glossy.vertexCount, prefilter);
+std::vector<float> glossyLobesTowardEye(const GlossyModel& glossy, const Image& map, const double* rotation,
+                                        const float eye[3]) {
+    PrefilterOptions prefilter;
+    choosePrefilterRange(glossy, size_t(3) * glossy.lobes * glossy.vertexCount, prefilter);
     const JobSystem jobs = tbbJobs();
     prefilter.jobs = &jobs;
-    const PrefilteredEnvironment residual =
-        prefilterEnvironment(hybrid.residual.radiance.rgb.data(), hybrid.residual.radiance.width,
-                             hybrid.residual.radiance.height, prefilter);
-    glossyRadiance(hybrid.glossy, residual, eye, lobes.data());
+    PrefilteredEnvironment prefiltered = prefilterEnvironment(map.rgb.data(), map.width, map.height, prefilter);
+    if (rotation) std::copy_n(rotation, 9, prefiltered.rotation);
+    std::vector<float> lobes(size_t(glossy.vertexCount) * 3);
+    glossyRadiance(glossy, prefiltered, eye, lobes.data());
+    return lobes;
+}
+
+std::vector<float> glossyHybridGlossy(const GlossyHybrid& hybrid, const float eye[3]) {
+    const size_t values = size_t(hybrid.glossy.vertexCount) * 3;
+    std::vector<float> lobes = glossyLobesTowardEye(hybrid.glossy, hybrid.residual.radiance, nullptr, eye);
+    std::vector<float> lights(values);
     glossyConeLightRadiance(hybrid.glossy, hybrid.cones, eye, lights.data());
     for (size_t i = 0; i < values; ++i) lobes[i] += lights[i];
     return lobes;

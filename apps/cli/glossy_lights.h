@@ -43,6 +43,13 @@ GlossyHybrid prepareGlossyHybrid(const GlossyHybridOptions& options);
 // form with their cone visibility).
 std::vector<float> glossyHybridDiffuse(const GlossyHybrid& hybrid);
 
+// The lobes of `glossy` per vertex toward `eye` ([V][3]) under the equirectangular `map`, turned by `rotation`
+// (row-major, as sh::rotationY; null: none) through the lookup: the stack over the lobes' range, or exact sums for
+// a pass below the break-even (choosePrefilterRange), its rows on TBB. What `prt relight --eye` adds, with or
+// without lights.
+std::vector<float> glossyLobesTowardEye(const GlossyModel& glossy, const Image& map, const double* rotation,
+                                        const float eye[3]);
+
 // The glossy part per vertex toward `eye` ([V][3]): the lobes against the residual map plus the lights' exact lobe.
 std::vector<float> glossyHybridGlossy(const GlossyHybrid& hybrid, const float eye[3]);
 

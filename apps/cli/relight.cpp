@@ -296,21 +296,12 @@ std::vector<float> relightLighting(const RelightOptions& options, const Environm
     return lighting;
 }
 
-// Adds the glossy lobes' radiance toward `eye` to `radiance` [V][3] (replaces it with glossyOnly): the stack over
-// the lobes' range, or exact sums for a pass below the break-even (choosePrefilterRange); the map turned by
-// `rotation` (null: none) through the lookup.
+// Adds the glossy lobes' radiance toward `eye` to `radiance` [V][3] (replaces it with glossyOnly), as
+// glossyLobesTowardEye evaluates it, and says how long it took.
 void addGlossyTowardEye(const GlossyModel& glossy, const EnvironmentMap& environment, const double* rotation,
                         const float eye[3], bool glossyOnly, std::vector<float>& radiance) {
     double glossyStart = nowSeconds();
-    PrefilterOptions prefilterOptions;
-    choosePrefilterRange(glossy, size_t(3) * glossy.lobes * glossy.vertexCount, prefilterOptions);
-    const JobSystem jobs = cli::tbbJobs();
-    prefilterOptions.jobs = &jobs;
-    PrefilteredEnvironment prefiltered = prefilterEnvironment(
-        environment.radiance.rgb.data(), environment.radiance.width, environment.radiance.height, prefilterOptions);
-    if (rotation) std::copy_n(rotation, 9, prefiltered.rotation);
-    std::vector<float> glossyPart(radiance.size());
-    glossyRadiance(glossy, prefiltered, eye, glossyPart.data());
+    const std::vector<float> glossyPart = glossyLobesTowardEye(glossy, environment.radiance, rotation, eye);
     for (size_t i = 0; i < radiance.size(); ++i) radiance[i] = (glossyOnly ? 0.0f : radiance[i]) + glossyPart[i];
     char line[160];
     std::snprintf(line, sizeof line, "relight: glossy lobes (%d per view) toward the eye in %.3f ms", glossy.lobes,

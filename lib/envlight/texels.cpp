@@ -5,7 +5,7 @@
 
 namespace prt::envlight {
 
-double coneSolidAngle(double angularRadius) { return 2.0 * M_PI * (1.0 - std::cos(angularRadius)); }
+double coneSolidAngle(double angularRadius) { return sh::capSolidAngle(std::cos(angularRadius)); }
 
 Texels environmentTexels(const EnvironmentMap& env, const double* rotation) {
     const Image& image = env.radiance;

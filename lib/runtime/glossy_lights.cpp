@@ -1,6 +1,8 @@
 // Cone lights through the glossy path: the exact Phong lobe over each cone's sample directions, with the caller's
 // per-sample visibility (docs/glossy.md, "Lights through the glossy path"). Needs only the standard library.
 #include "runtime.h"
+#include "runtime_internal.h"
+#include "sh.h"
 
 #include <cmath>
 #include <numbers>
@@ -52,7 +54,7 @@ void glossyConeLightsToward(const GlossyModel& model, const GlossyConeLights& li
             lit += phongLobeValue(mirror, w, model.exponent, model.ks) * cosine;
         }
         const HybridConeLight& light = lights.lights[k];
-        const double solidAngle = 2.0 * std::numbers::pi * (1.0 - std::cos(double(light.angularRadius)));
+        const double solidAngle = sh::capSolidAngle(std::cos(double(light.angularRadius)));
         for (int c = 0; c < 3; ++c) sum[c] += light.radiance[c] * solidAngle / double(samples) * lit;
     }
     for (int c = 0; c < 3; ++c) radiance[c] = float(sum[c]);
@@ -63,12 +65,8 @@ void glossyConeLightRadiance(const GlossyModel& model, const GlossyConeLights& l
     for (uint32_t v = 0; v < model.vertexCount; ++v) {
         float* out = radiance + size_t(v) * 3;
         out[0] = out[1] = out[2] = 0.0f;
-        const float* p = &model.positions[size_t(v) * 3];
-        float d[3] = {eye[0] - p[0], eye[1] - p[1], eye[2] - p[2]};
-        const float length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        if (!(length > 0.0f)) continue;
-        for (float& c : d) c /= length;
-        glossyConeLightsToward(model, lights, v, d, out);
+        float d[3];
+        if (directionToEye(model, v, eye, d)) glossyConeLightsToward(model, lights, v, d, out);
     }
 }
 

@@ -1,6 +1,7 @@
 // The glossy runtime: the 3 views around the eye direction, each view's lobes turned onto the eye's mirror
 // direction and looked up in the prefiltered environment (glossy_prefilter.cpp), their radiances blended. Needs only the bundle reader and the standard library.
 #include "runtime.h"
+#include "runtime_internal.h"
 
 #include <algorithm>
 #include <cmath>
@@ -287,17 +288,22 @@ void glossyRadianceToward(const GlossyModel& model, const PrefilteredEnvironment
     }
 }
 
+bool directionToEye(const GlossyModel& model, uint32_t vertex, const float eye[3], float d[3]) {
+    const float* p = &model.positions[size_t(vertex) * 3];
+    float toward[3] = {eye[0] - p[0], eye[1] - p[1], eye[2] - p[2]};
+    float length = std::sqrt(dot3(toward, toward));
+    if (!(length > 0.0f)) return false;
+    for (int i = 0; i < 3; ++i) d[i] = toward[i] / length;
+    return true;
+}
+
 void glossyRadiance(const GlossyModel& model, const PrefilteredEnvironment& env, const float eye[3],
                     float* radiance, LobeEvaluation evaluation) {
     for (uint32_t v = 0; v < model.vertexCount; ++v) {
         float* out = radiance + size_t(v) * 3;
         out[0] = out[1] = out[2] = 0.0f;
-        const float* p = &model.positions[size_t(v) * 3];
-        float d[3] = {eye[0] - p[0], eye[1] - p[1], eye[2] - p[2]};
-        float length = std::sqrt(dot3(d, d));
-        if (!(length > 0.0f)) continue;
-        for (float& c : d) c /= length;
-        glossyRadianceToward(model, env, v, d, out, evaluation);
+        float d[3];
+        if (directionToEye(model, v, eye, d)) glossyRadianceToward(model, env, v, d, out, evaluation);
     }
 }
 

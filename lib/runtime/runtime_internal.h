@@ -20,6 +20,10 @@
 
 namespace prt {
 
+// The unit direction d from vertex `vertex` of `model` toward the point `eye`; false (d untouched) at the eye
+// itself. What glossyRadiance and glossyConeLightRadiance shade each vertex toward.
+bool directionToEye(const GlossyModel& model, uint32_t vertex, const float eye[3], float d[3]);
+
 // The layer called `name` of `bundle`, of semantic "sh_transfer_rgb" in `domain`. `stage` names the prt stage that
 // makes such a layer, for the message when there is none. Throws prt::Error(source, ...) otherwise.
 Layer& transferLayer(Bundle& bundle, const std::string& name, const std::string& domain, const std::string& source,

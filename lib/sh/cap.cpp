@@ -29,6 +29,8 @@ void addCapRadiance(int order, const double d[3], double cosRadius, const double
         for (int c = 0; c < 3; ++c) out[j * 3 + c] += radiance[c] * cap[j];
 }
 
+double capSolidAngle(double cosRadius) { return 2.0 * std::numbers::pi * (1.0 - cosRadius); }
+
 double capCosineIntegral(double cosTheta, double sinSigmaSquared) {
     cosTheta = std::clamp(cosTheta, -1.0, 1.0);
     sinSigmaSquared = std::clamp(sinSigmaSquared, 0.0, 1.0);

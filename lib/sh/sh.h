@@ -48,6 +48,8 @@ void capProjection(int order, const double d[3], double cosRadius, double* out);
 // out[j][c] += radiance[c] * capProjection(order, d, cosRadius)[j] for j < order^2: a uniform cone light added to
 // RGB coefficients [order^2][3]. Same needs as capProjection.
 void addCapRadiance(int order, const double d[3], double cosRadius, const double radiance[3], double* out);
+// The solid angle 2 pi (1 - cosRadius) of the cap {w : w . d >= cosRadius}.
+double capSolidAngle(double cosRadius);
 // Snyder's (1996) horizon-clipped cap: the integral of max(0, n . w) over the cap of half-angle sigma about a unit
 // axis at cosine cosTheta from the unit normal n, given sinSigmaSquared = sin^2 sigma (both clamped to their
 // ranges): pi sin^2(sigma) cosTheta when the cap lies wholly above the horizon, 0 wholly below, the exact clipped
