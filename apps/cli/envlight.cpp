@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <memory>
+#include <vector>
 
 namespace prt::cli {
 
@@ -30,6 +31,7 @@ struct EnvlightArgs {
     double fixedRadiusDegrees = 3.0;
     bool chooseLights = false;
     int plainOrder = 8;
+    std::vector<int> residualOrders;
 };
 
 void runEnvlight(const EnvlightArgs& args) {
@@ -65,6 +67,13 @@ void runEnvlight(const EnvlightArgs& args) {
     envlight::LightChoice choice;
     envlight::ChoiceOptions choiceOptions;
     choiceOptions.plainOrder = args.plainOrder;
+    choiceOptions.residualOrders = args.residualOrders;
+    if (!args.residualOrders.empty() && !args.chooseLights)
+        throw Error("", "--residual-orders", "needs --choose-lights", kExitUsage);
+    for (int order : args.residualOrders)
+        if (order < 1 || order >= choiceOptions.errorOrder)
+            throw Error("", "--residual-orders", std::to_string(order) + " outside 1.." +
+                                                     std::to_string(choiceOptions.errorOrder - 1), kExitUsage);
     try {
         decomposition = args.chooseLights ? envlight::decomposeChoosingLights(env, options, choiceOptions, &choice)
                                           : envlight::decompose(env, options);
@@ -76,9 +85,12 @@ void runEnvlight(const EnvlightArgs& args) {
     document["rotate_y_degrees"] = args.rotateYDegrees;
     if (args.chooseLights) {
         document["choice"] = {{"lights", choice.lights},
+                              {"residual_order", choice.order},
                               {"plain_sh", choice.plainSh},
                               {"plain_order", args.plainOrder},
                               {"errors", choice.errors},
+                              {"orders_tried", choice.orders},
+                              {"errors_by_order", choice.errorsByOrder},
                               {"plain_error", choice.plainError},
                               {"band_width", choiceOptions.bandWidth},
                               {"bands", choice.bands},
@@ -128,8 +140,13 @@ void addEnvlightCommand(CLI::App& app) {
     command->add_option("--fixed-radius", args->fixedRadiusDegrees, "Cone half-angle of --thesis-lights, degrees (default 3)");
     command->add_flag("--choose-lights", args->chooseLights,
                       "Choose K per map (at most --max-lights; up to 16 is sensible) from the decomposition's own "
-                      "band-weighted error; 0 lights and a 'plain SH' verdict when no K beats plain SH at --plain-order");
+                      "band-weighted error, and the residual order among --residual-orders; 0 lights and a 'plain "
+                      "SH' verdict (residual at --plain-order) when no configuration beats plain SH at --plain-order");
     command->add_option("--plain-order", args->plainOrder, "The plain SH order --choose-lights compares with (default 8)");
+    command->add_option("--residual-orders", args->residualOrders,
+                        "Residual orders --choose-lights tries with the lights (default: --order and --plain-order); "
+                        "it keeps the (order, K) of least predicted error")
+        ->delimiter(',');
     command->callback([args] { runEnvlight(*args); });
 }
 

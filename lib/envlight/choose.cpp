@@ -32,18 +32,26 @@ double weightedError(const std::vector<double>& bands, double width, double ener
 
 } // namespace
 
+std::vector<int> residualOrdersTried(const Options& options, const ChoiceOptions& choice) {
+    std::vector<int> orders = choice.residualOrders;
+    if (orders.empty()) orders = {options.order, choice.plainOrder};
+    std::sort(orders.begin(), orders.end());
+    orders.erase(std::unique(orders.begin(), orders.end()), orders.end());
+    return orders;
+}
+
 Decomposition decomposeChoosingLights(const EnvironmentMap& env, const Options& options, const ChoiceOptions& choice,
                                       LightChoice* report) {
-    if (choice.plainOrder < 1 || choice.plainOrder > sh::kMaxOrder || choice.errorOrder <= choice.plainOrder ||
-        choice.errorOrder <= options.order || choice.errorOrder > sh::kMaxOrder)
-        throw Error("", "light choice", "need plain order and residual order below the error order <= " +
+    const std::vector<int> orders = residualOrdersTried(options, choice);
+    const int M = choice.errorOrder;
+    if (choice.plainOrder < 1 || choice.plainOrder > sh::kMaxOrder || M <= choice.plainOrder || M > sh::kMaxOrder ||
+        orders.front() < 1 || orders.back() >= M)
+        throw Error("", "light choice", "need plain order and residual orders >= 1 and below the error order <= " +
                                             std::to_string(sh::kMaxOrder), kExitUsage);
     if (!(choice.margin > 0.0 && choice.margin <= 1.0)) throw Error("", "light choice", "margin outside (0, 1]", kExitUsage);
-    Decomposition full = decompose(env, options); // up to options.maxLights lights, as the elbow keeps them
     LightChoice result;
 
     // The map's luminance: per texel, its energy, and its projection onto errorOrder bands.
-    const int M = choice.errorOrder;
     Texels texels = environmentTexels(env, options.rotation);
     std::vector<double> rgbProjection = projectTexels(texels, M), projection(size_t(M) * M);
     for (size_t j = 0; j < projection.size(); ++j) projection[j] = luminanceOf(&rgbProjection[j * 3]);
@@ -55,45 +63,66 @@ Decomposition decomposeChoosingLights(const EnvironmentMap& env, const Options& 
     // Plain SH at plainOrder leaves the bands from plainOrder up.
     result.plainBands = bandEnergies(projection, choice.plainOrder, M);
     result.plainError = weightedError(result.plainBands, choice.bandWidth, energy);
-    // Hybrid with the first k lights (by power): e = P(E) - P(lights), its bands from the residual's order up.
-    std::vector<double> e = projection, cap(size_t(M) * M);
-    for (size_t k = 0; k <= full.lights.size(); ++k) {
-        if (k > 0) {
-            const ConeLight& light = full.lights[k - 1];
-            sh::capProjection(M, light.direction.data(), std::cos(light.angularRadius), cap.data());
-            double lum = luminanceOf(light.radiance.data());
-            for (size_t j = 0; j < e.size(); ++j) e[j] -= lum * cap[j];
+
+    // Per residual order L: decompose at L (the fit depends on the residual it shares the map with), then score the
+    // hybrid with the first k lights (by power): e = P(E) - P(lights), its bands from L up.
+    std::vector<Decomposition> full(orders.size());
+    std::vector<std::vector<std::vector<double>>> bandsByOrder(orders.size());
+    size_t bestOrder = 0, bestK = 0;
+    double bestError = 0.0;
+    std::vector<double> cap(size_t(M) * M);
+    for (size_t o = 0; o < orders.size(); ++o) {
+        Options at = options;
+        at.order = orders[o];
+        full[o] = decompose(env, at); // up to options.maxLights lights, as the elbow keeps them
+        std::vector<double> e = projection, errors;
+        for (size_t k = 0; k <= full[o].lights.size(); ++k) {
+            if (k > 0) {
+                const ConeLight& light = full[o].lights[k - 1];
+                sh::capProjection(M, light.direction.data(), std::cos(light.angularRadius), cap.data());
+                double lum = luminanceOf(light.radiance.data());
+                for (size_t j = 0; j < e.size(); ++j) e[j] -= lum * cap[j];
+            }
+            bandsByOrder[o].push_back(bandEnergies(e, orders[o], M));
+            errors.push_back(weightedError(bandsByOrder[o].back(), choice.bandWidth, energy));
+            // The least error with at least one light; ties keep the lower order and the fewer lights.
+            if (k > 0 && (bestK == 0 || errors.back() < bestError)) bestOrder = o, bestK = k, bestError = errors.back();
         }
-        result.bands.push_back(bandEnergies(e, options.order, M));
-        result.errors.push_back(weightedError(result.bands.back(), choice.bandWidth, energy));
+        result.orders.push_back(orders[o]);
+        result.errorsByOrder.push_back(std::move(errors));
     }
-    size_t best = 0;
-    for (size_t k = 1; k < result.errors.size(); ++k)
-        if (result.errors[k] < result.errors[best]) best = k;
-    result.lights = int(best);
-    result.plainSh = best == 0 || !(result.errors[best] < choice.margin * result.plainError);
+    result.plainSh = bestK == 0 || !(bestError < choice.margin * result.plainError);
+    result.order = result.plainSh ? choice.plainOrder : orders[bestOrder];
+    result.lights = result.plainSh ? 0 : int(bestK);
+    // The k = 0 .. found errors and bands of the order the choice rests on (the best hybrid's, also when declined).
+    result.errors = result.errorsByOrder[bestOrder];
+    result.bands = bandsByOrder[bestOrder];
     char line[300];
     if (result.plainSh) {
-        result.lights = 0;
-        std::snprintf(line, sizeof line,
-                      "lights do not pay: the best hybrid (order %d, %zu lights) leaves %.4g of the map's weighted "
-                      "error against %.4g for plain order-%d SH; use plain SH",
-                      options.order, best, result.errors[best], result.plainError, choice.plainOrder);
+        if (bestK == 0)
+            std::snprintf(line, sizeof line, "lights do not pay: no light found at residual orders %d..%d; use plain "
+                          "order-%d SH", orders.front(), orders.back(), choice.plainOrder);
+        else
+            std::snprintf(line, sizeof line,
+                          "lights do not pay: the best hybrid (order %d, %zu lights) leaves %.4g of the map's weighted "
+                          "error against %.4g for plain order-%d SH; use plain SH",
+                          orders[bestOrder], bestK, bestError, result.plainError, choice.plainOrder);
     } else {
         std::snprintf(line, sizeof line,
                       "%zu lights: the hybrid (order %d) leaves %.4g of the map's weighted error against %.4g for "
                       "plain order-%d SH",
-                      best, options.order, result.errors[best], result.plainError, choice.plainOrder);
+                      bestK, orders[bestOrder], bestError, result.plainError, choice.plainOrder);
     }
     result.reason = line;
 
-    // The decomposition with the chosen lights, refitted together (the fit of k lights depends on which others
-    // are present), or none: then the residual is the plain projection at options.order.
+    // The decomposition with the chosen lights at the chosen order, refitted together (the fit of k lights depends
+    // on which others are present), or none: then the residual is the plain projection at plainOrder.
     Decomposition chosen;
-    if (result.lights == int(full.lights.size())) {
-        chosen = std::move(full);
+    if (!result.plainSh && result.lights == int(full[bestOrder].lights.size())) {
+        chosen = std::move(full[bestOrder]);
     } else {
         Options again = options;
+        again.order = result.order;
         again.maxLights = result.lights;
         again.minLights = std::min(again.minLights, result.lights);
         chosen = decompose(env, again);

@@ -211,24 +211,34 @@ struct ChoiceOptions {
     int errorOrder = 32;           // the error is measured band by band below this order
     double bandWidth = 5.0;        // band l weighs exp(-(l / bandWidth)^2): the transfer's falling spectrum
     double margin = 0.95;          // lights pay when the hybrid's error is below margin * plain SH's
+    std::vector<int> residualOrders; // the hybrid's residual orders to try; empty: options.order and plainOrder
 };
 struct LightChoice {
     int lights = 0;                // K chosen (0 with plainSh)
+    int order = 0;                 // the residual order chosen (plainOrder with plainSh)
     bool plainSh = false;          // lights do not pay: relight with plain SH at plainOrder instead
-    std::vector<double> errors;    // the hybrid's error with the first k lights, k = 0 .. lights found
+    std::vector<double> errors;    // at the best hybrid's residual order: the error with the first k lights, k = 0 ..
+                                   // lights found
     double plainError = 0.0;       // plain SH's error at plainOrder
-    std::vector<std::vector<double>> bands; // per k: the hybrid's unweighted error energy per band
+    std::vector<std::vector<double>> bands; // per k, at that order: the hybrid's unweighted error energy per band
     std::vector<double> plainBands;         // plain SH's
+    std::vector<int> orders;                // the residual orders tried, ascending
+    std::vector<std::vector<double>> errorsByOrder; // per order tried: the error with the first k lights
     std::string reason;            // one line for the log and the document
 };
-// K per map, from the decomposition's own error. Decomposes with up to options.maxLights lights (the elbow's
-// count); for each prefix of k lights (by power), the lighting error e = E - lights - residual is measured by its
-// SH band energies |e_l|^2 (exact: the map's projection minus the cones' cap projections, bands from options.order
-// up, below errorOrder) as sqrt(sum_l exp(-(l / bandWidth)^2) |e_l|^2 / |E|^2), and plain SH's the same way over
-// bands from plainOrder; bands from errorOrder up are left out (weight below exp(-16) at the defaults). Picks the
-// k of least error; when that is 0, or not below margin * plain's, lights do not pay: 0 lights, plainSh. Returns
-// the decomposition with the chosen K (refitted when it differs from the count found) and the choice in *report.
-// Needs what decompose() needs, and errorOrder above both orders and <= sh::kMaxOrder.
+// The residual orders decomposeChoosingLights tries: choice.residualOrders, or {options.order, choice.plainOrder}
+// when empty; sorted, without repeats.
+std::vector<int> residualOrdersTried(const Options& options, const ChoiceOptions& choice);
+// K and the residual order per map, from the decomposition's own error. For each residual order L tried, decomposes
+// at L with up to options.maxLights lights (the elbow's count); for each prefix of k lights (by power), the lighting
+// error e = E - lights - residual is measured by its SH band energies |e_l|^2 (exact: the map's projection minus the
+// cones' cap projections, bands from L up, below errorOrder) as sqrt(sum_l exp(-(l / bandWidth)^2) |e_l|^2 / |E|^2),
+// and plain SH's the same way over bands from plainOrder; bands from errorOrder up are left out (weight below
+// exp(-16) at the defaults). Picks the (L, k >= 1) of least error (ties: the lower L, the fewer k); when no light
+// is found, or the least error is not below margin * plain's, lights do not pay: 0 lights, plainSh, and the
+// residual is plain SH at plainOrder. Returns the decomposition with the chosen K at the chosen L (refitted when K
+// differs from the count found) and the choice in *report. The caller writes the document at report->order. Needs
+// what decompose() needs, and every order tried and plainOrder in 1 .. errorOrder - 1, errorOrder <= sh::kMaxOrder.
 Decomposition decomposeChoosingLights(const EnvironmentMap& env, const Options& options, const ChoiceOptions& choice,
                                       LightChoice* report);
 

@@ -255,3 +255,34 @@ lights = { from = "lights", path = "out/lights.json" }
     ASSERT_EQ(third.exitCode, 0) << third.stderrText;
     EXPECT_EQ(prt::hashFile((dir / "out" / "radiance.npy").string()), radiance);
 }
+
+TEST_F(EnvlightCli, ChooseLightsWritesTheChosenResidualOrder) {
+    // A unit background and a 1.5-degree disc holding about half the power: lights pay, and at the order-8
+    // residual (the default tries --order and --plain-order).
+    std::string map = writeMap("sun.exr", discMap(256, 1.0, {{unit(0.3, 0.7, -0.5), 1.5, {5800.0, 5800.0, 5800.0}}}));
+    std::string out = (dir / "lights.json").string();
+    CliRun r = run("envlight " + map + " -o " + out + " --order 5 --max-lights 16 --icosphere-level 5 --choose-lights");
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    nlohmann::json doc = nlohmann::json::parse(std::ifstream(out));
+    EXPECT_EQ(doc["order"], 8);
+    EXPECT_EQ(doc["residual"].size(), 64u);
+    EXPECT_EQ(doc["choice"]["residual_order"], 8);
+    EXPECT_EQ(doc["choice"]["orders_tried"], nlohmann::json::array({5, 8}));
+    EXPECT_FALSE(doc["choice"]["plain_sh"].get<bool>());
+    EXPECT_EQ(doc["lights"].size(), doc["choice"]["lights"].get<size_t>());
+    // Told to keep order 5.
+    r = run("envlight " + map + " -o " + out + " --order 5 --max-lights 16 --icosphere-level 5 --choose-lights "
+            "--residual-orders 5");
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    doc = nlohmann::json::parse(std::ifstream(out));
+    EXPECT_EQ(doc["order"], 5);
+    EXPECT_EQ(doc["residual"].size(), 25u);
+    // Orders outside 1..31, or without --choose-lights: usage errors, no output.
+    fs::remove(out);
+    r = run("envlight " + map + " -o " + out + " --choose-lights --residual-orders 5,40");
+    EXPECT_EQ(r.exitCode, 2) << r.stderrText;
+    EXPECT_NE(r.stderrText.find("--residual-orders"), std::string::npos) << r.stderrText;
+    r = run("envlight " + map + " -o " + out + " --residual-orders 8");
+    EXPECT_EQ(r.exitCode, 2) << r.stderrText;
+    EXPECT_FALSE(fs::exists(out));
+}
