@@ -1,6 +1,6 @@
 // The FIV figures of docs/results.md, measured in one run and printed as JSON (not a test: it takes minutes).
 //   fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--quick] [--grids 32x17x15,...] [--scenes "one bunny,self-shadow"]
-//               [--maps sunrise,courtyard] [--sources]
+//               [--maps sunrise,courtyard] [--sources] [--self-vertices]
 // Scenes (receiver 8x8 plane of 65x65 vertices unless said): the bunny scaled to 2 units hovering 0.5 above the
 // plane; two bunnies with overlapping shadows; three; one straddling the plane; one 0.05 above it (close); one
 // low beside the plane (grazing); the bunny as its own receiver. Maps: courtyard, sunrise (sharp sun), constant.
@@ -77,6 +77,8 @@ std::vector<float> shadeFiv(const TriMesh& receiver, const FivLighting& lighting
     std::vector<FivInstance> instances;
     for (const auto& p : placements) instances.push_back({occluder, {p[0], p[1], p[2]}});
     FivInstance selfInstance{occluder, {0, 0, 0}};
+    // The exact per-vertex self-shadowing (--self-vertices) when the grid's bundle carries it.
+    if (self && !occluder->selfIrradiance.empty()) selfInstance.selfIrradiance = occluder->selfIrradiance.data();
     std::vector<float> out(receiver.positions.size());
     fivIrradiance(lighting, instances.data(), instances.size(), self ? &selfInstance : nullptr, receiver.positions.data(),
                   receiver.normals.data(), receiver.vertexCount(), options, out.data());
@@ -113,6 +115,7 @@ int main(int argc, char** argv) {
     std::string bunnyPath = argv[1], envDir = argv[2], outDir = argv[3];
     bool quick = false;
     bool sources = false; // --sources: the map's small sources shadowed from their own texels (extractSmallSources)
+    bool selfVertices = false; // --self-vertices: the bunny's own self-shadowing at its vertices (fiv::selfIrradiance)
     std::string gridList, sceneList, mapList;
     for (int a = 4; a < argc; ++a) {
         std::string flag = argv[a];
@@ -121,6 +124,7 @@ int main(int argc, char** argv) {
         else if (flag == "--scenes" && a + 1 < argc) sceneList = argv[++a];
         else if (flag == "--maps" && a + 1 < argc) mapList = argv[++a];
         else if (flag == "--sources") sources = true;
+        else if (flag == "--self-vertices") selfVertices = true;
         else {
             std::fprintf(stderr, "fiv_figures: unknown option %s\n", flag.c_str());
             return 2;
@@ -267,11 +271,14 @@ int main(int argc, char** argv) {
                 double r0 = nowSeconds();
                 fiv::CubeEnvironment cube = fiv::resampleToCube(envs[m], 32);
                 fiv::FivGrid grid;
-                json sourceReport;
+                json sourceReport, selfReport;
+                fiv::SmallSources found;
+                fiv::CubeEnvironment residualCube;
                 if (sources) {
                     EnvironmentMap residual = envs[m];
-                    fiv::SmallSources found = fiv::extractSmallSources(residual);
-                    grid = fiv::reduceVisibility(vis, fiv::resampleToCube(residual, 32));
+                    found = fiv::extractSmallSources(residual);
+                    residualCube = fiv::resampleToCube(residual, 32);
+                    grid = fiv::reduceVisibility(vis, residualCube);
                     uint64_t sourceRays = fiv::addSourceShadows(bunny, vis, found, grid, 2);
                     sourceReport = {{"texels", found.texelCount}, {"power_fraction", found.powerFraction},
                                     {"rays", sourceRays}};
@@ -280,13 +287,23 @@ int main(int argc, char** argv) {
                 } else {
                     grid = fiv::reduceVisibility(vis, cube);
                 }
+                std::vector<float> self;
+                if (selfVertices) {
+                    double s0 = nowSeconds();
+                    uint64_t selfRays = 0;
+                    self = fiv::selfIrradiance(bunny, sources ? residualCube : cube, found, 2, &selfRays);
+                    selfReport = {{"vertices", bunny.vertexCount()}, {"rays", selfRays}, {"seconds", nowSeconds() - s0},
+                                  {"bytes_float16", 6 * bunny.vertexCount()}};
+                    std::fprintf(stderr, "self %s: %llu rays, %.2f s\n", m.c_str(), (unsigned long long)selfRays, nowSeconds() - s0);
+                }
                 std::vector<float> difmap = fiv::difMap(cube, 32);
                 std::array<double, 9> fivEnv = fiv::environmentFiv(cube);
                 double reductionSeconds = nowSeconds() - r0;
-                reductions.push_back({{"map", m}, {"seconds", reductionSeconds}, {"sources", sourceReport}});
+                reductions.push_back({{"map", m}, {"seconds", reductionSeconds}, {"sources", sourceReport}, {"self_vertices", selfReport}});
                 for (bool half : {true, false}) {
                     fiv::FivBundleOptions bundleOptions;
                     bundleOptions.half = half;
+                    bundleOptions.selfIrradiance = self;
                     Bundle bundle = fiv::fivBundle(bunny, grid, difmap, fivEnv, bundleOptions, {});
                     if (half) // what a reader gets back from a float16 layer
                         for (Layer& layer : bundle.layers)
