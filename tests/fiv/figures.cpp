@@ -115,6 +115,7 @@ int main(int argc, char** argv) {
     std::string bunnyPath = argv[1], envDir = argv[2], outDir = argv[3];
     bool quick = false;
     bool sources = false; // --sources: the map's small sources shadowed from their own texels (extractSmallSources)
+    std::string sourceGrid; // --source-grid NTxNPxNR: with --sharpen, the sources' own grid at this resolution
     std::vector<double> sharpen; // --sharpen K,...: the source term's sharpened interpolant (an experiment)
     bool selfVertices = false; // --self-vertices: the bunny's own self-shadowing at its vertices (fiv::selfIrradiance)
     std::string gridList, sceneList, mapList;
@@ -126,6 +127,7 @@ int main(int argc, char** argv) {
         else if (flag == "--maps" && a + 1 < argc) mapList = argv[++a];
         else if (flag == "--sources") sources = true;
         else if (flag == "--self-vertices") selfVertices = true;
+        else if (flag == "--source-grid" && a + 1 < argc) sourceGrid = argv[++a];
         else if (flag == "--sharpen" && a + 1 < argc) {
             for (std::string item : std::vector<std::string>{argv[++a]}) {
                 for (size_t start = 0; start <= item.size();) {
@@ -315,9 +317,27 @@ int main(int argc, char** argv) {
                 // (K 0: a threshold at 0.5) and times max(0, N . FIV_sources); the rest of the map as before.
                 if (sources && !sharpen.empty() && !found.direction.empty()) {
                     fiv::FivGrid rest = fiv::reduceVisibility(vis, residualCube), src = rest;
+                    // --source-grid NTxNPxNR: the sources' own grid at another resolution; its samples' inside flags
+                    // from sampleVisibility on a 6x1^2 cube (6 mask rays per sample, the 26 inside votes).
+                    fiv::Visibility sourceVis;
+                    double sourceSeconds = nowSeconds();
+                    if (!sourceGrid.empty()) {
+                        fiv::VisibilityOptions so = options;
+                        std::sscanf(sourceGrid.c_str(), "%dx%dx%d", &so.grid.azimuth, &so.grid.polar, &so.grid.shells);
+                        so.cube = 1;
+                        sourceVis = fiv::sampleVisibility(bunny, so, "bunny");
+                        fiv::CubeEnvironment none;
+                        none.size = 1, none.radiance.assign(18, 0.0);
+                        src = fiv::reduceVisibility(sourceVis, none);
+                    }
+                    const fiv::Visibility& sv = sourceGrid.empty() ? vis : sourceVis;
                     std::fill(src.fiv.begin(), src.fiv.end(), 0.0f);
                     std::fill(src.power.begin(), src.power.end(), 0.0f);
-                    fiv::addSourceShadows(bunny, vis, found, src, 2);
+                    uint64_t srcRays = fiv::addSourceShadows(bunny, sv, found, src, 2);
+                    sourceSeconds = nowSeconds() - sourceSeconds;
+                    std::fprintf(stderr, "source grid %s: %zu samples, %.1f s, %llu source rays, %llu inside/mask rays\n",
+                                 sourceGrid.c_str(), src.valid.size(), sourceSeconds, (unsigned long long)srcRays,
+                                 (unsigned long long)sv.rays);
                     double sourcePower[3] = {0, 0, 0}, sourceFiv[9] = {0};
                     for (size_t t = 0; t < found.direction.size() / 3; ++t)
                         for (int c = 0; c < 3; ++c) {
@@ -354,8 +374,10 @@ int main(int argc, char** argv) {
                             Errors full = errors(free, shaded, refFree[key], refShadowed[key]);
                             results.push_back({{"grid", gridName}, {"samples", options.grid.sampleCount()}, {"map", m},
                                                {"scene", s.name}, {"mode", "sources sharpened " + std::to_string(k)},
+                                               {"source_grid", sourceGrid}, {"source_seconds", sourceSeconds},
                                                {"storage", "float32"}, {"nrmse", full.nrmse}, {"relative_rmse", full.relativeRmse}});
-                            std::fprintf(stderr, "sharpen %s %s K %g: NRMSE %.4f\n", s.name.c_str(), m.c_str(), k, full.nrmse);
+                            std::fprintf(stderr, "sharpen %s %s K %g source grid %s: NRMSE %.4f\n", s.name.c_str(), m.c_str(), k,
+                                         sourceGrid.c_str(), full.nrmse);
                         }
                     }
                 }
