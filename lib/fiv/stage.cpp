@@ -102,6 +102,9 @@ void runFiv(const FivStageOptions& options) {
         }
         std::vector<float> self;
         if (options.selfVertices) {
+            if (occluder.normals.size() != occluder.positions.size())
+                throw Error(options.inputs[0], "--self-vertices", "the occluder mesh has no vertex normals (prt meshprep adds them)",
+                            kExitInput);
             double s0 = nowSeconds();
             self = selfIrradiance(occluder, options.sources ? residualCube : cube, sources, options.visibility.threads, &selfRays);
             char line[160];
