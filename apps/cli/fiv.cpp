@@ -91,6 +91,10 @@ static void addFivOptions(CLI::App* command, const std::shared_ptr<FivArgs>& arg
         command->add_flag("--sources", args->stage.sources,
                           "Shadow the map's dominant small sources (a sun) by rays toward their own texels, not "
                           "through the cube (docs/fiv.md, decision 13)");
+    if (!visibilityStage)
+        command->add_flag("--self-vertices", args->stage.selfVertices,
+                          "Store the mesh's own self-shadowed irradiance at its vertices (layer fiv_self), which "
+                          "fivshade --self uses when the receiver is this mesh (docs/fiv.md, decision 14)");
     command->add_option("--threads", args->stage.visibility.threads, "Worker threads (default: all)");
     command->callback([args, visibilityStage] {
         if (visibilityStage) args->stage.visibilityOnly = true;

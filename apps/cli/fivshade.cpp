@@ -106,7 +106,19 @@ void runFivshade(const FivshadeArgs& args) {
         instances.push_back(instance);
     }
     FivInstance self;
-    if (!args.self.empty()) self.occluder = load(args.self);
+    if (!args.self.empty()) {
+        self.occluder = load(args.self);
+        // The exact per-vertex self-shadowing (layer fiv_self) holds for the mesh it was computed on: use it when
+        // the receiver is that mesh, vertex for vertex; otherwise the grid's FIV_self, as before.
+        if (!self.occluder->selfIrradiance.empty()) {
+            const TriMesh& own = readBundle(args.self).mesh;
+            if (own.positions == receiver.positions && own.normals == receiver.normals)
+                self.selfIrradiance = self.occluder->selfIrradiance.data();
+            else
+                logInfo("fivshade: " + args.self + " has fiv_self for another mesh than " + args.receiver +
+                        "; using its grid");
+        }
+    }
     FivScene scene;
     bool selfShadowing = !args.self.empty();
     if (fromScene) {

@@ -216,6 +216,19 @@ Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector
     for (int e = 0; e < 9; ++e) env.data[size_t(e)] = float(fivEnv[size_t(e)]);
     env.params = {{"env", options.envHash}, {"resolution", {1}}, {"axes", {"single"}}, {"layout", "[1][channel][x,y,z]"}};
     bundle.layers.push_back(std::move(env));
+
+    if (!options.selfIrradiance.empty()) { // optional: readers without it ignore the layer
+        Layer self;
+        self.name = "fiv_self";
+        self.domain = "vertex";
+        self.semantic = "self_shadowed_irradiance_rgb";
+        self.shape = {options.selfIrradiance.size() / 3, 3};
+        self.componentType = options.half ? "float16" : "float32";
+        self.data = options.selfIrradiance;
+        self.params = {{"env", options.envHash},
+                       {"layout", "[vertex][channel]: irradiance with the mesh itself as the only occluder"}};
+        bundle.layers.push_back(std::move(self));
+    }
     return bundle;
 }
 

@@ -192,6 +192,18 @@ SmallSources extractSmallSources(EnvironmentMap& env, const SmallSourceOptions& 
 uint64_t addSourceShadows(const TriMesh& occluder, const Visibility& vis, const SmallSources& sources, FivGrid& grid,
                           int threads = 0);
 
+// ---- self-shadowing at the mesh's own vertices ---------------------------------------------------------------
+// The irradiance each vertex of `mesh` receives with the mesh itself as the only occluder:
+// E_v = sum_t L_t dw_t V(p_v, w_t) max(0, n_v . w_t) over the texels of `env` and the texels of `sources` (their
+// radiance x solid angle; pass the cube of the map without them, as extractSmallSources leaves it, or no sources),
+// one ray per direction above the vertex's tangent plane from the spawn rule of lib/raycast (spawnOrigin,
+// spawnNormals, rayOffset), texels of zero radiance skipped. [vertex][3]. Needs vertex normals (else
+// prt::Error(kExitInput)); a zero normal gives 0. Deterministic for any thread count (`threads` 0: all).
+// `raysCast` (or null) receives the rays cast. The runtime uses it instead of the grid's FIV_self when the
+// receiver is this mesh (layer fiv_self, docs/fiv.md decision 14).
+std::vector<float> selfIrradiance(const TriMesh& mesh, const CubeEnvironment& env, const SmallSources& sources,
+                                  int threads = 0, uint64_t* raysCast = nullptr);
+
 // ---- bundles -------------------------------------------------------------------------------------------------
 // The visibility bundle (object 0 the occluder mesh, layers fiv_mask_offsets, fiv_mask_bits, fiv_valid) and its
 // reader. readVisibility throws prt::Error(path, layer, problem) when a layer is missing, its size disagrees with
@@ -204,6 +216,7 @@ struct FivBundleOptions {
     bool half = true;
     int difmapSize = 32;
     std::string envHash;
+    std::vector<float> selfIrradiance; // [vertex][3] (selfIrradiance) or empty: then no fiv_self layer
 };
 Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector<float>& difmap,
                  const std::array<double, 9>& fivEnv, const FivBundleOptions& options, const nlohmann::json& inputs);
@@ -245,6 +258,7 @@ struct FivStageOptions {
     int difmapSize = 32;
     bool half = true;                // FIV layers as float16 (else float32)
     bool sources = false;            // the map's dominant small sources shadowed from their own texels
+    bool selfVertices = false;       // the mesh's own self-shadowed irradiance at its vertices (layer fiv_self)
 };
 // `prt fiv`: (a) from a mesh input, unless the input is a visibility bundle already; then (b) unless
 // visibilityOnly. With visibilityOnly and `merge`, joins those visibility shards into one visibility bundle. Writes one bundle atomically, logs rays against the naive count, reports its cost.

@@ -83,11 +83,14 @@ void runFiv(const FivStageOptions& options) {
         std::string envHash = hashFile(options.env);
         CubeEnvironment cube = resampleToCube(env, vis.cube);
         FivGrid grid;
-        uint64_t sourceRays = 0;
+        uint64_t sourceRays = 0, selfRays = 0;
+        SmallSources sources;
+        CubeEnvironment residualCube; // the cube of the map without its small sources (with options.sources)
         if (options.sources) { // the masks see the map without its small sources; those get rays of their own
             EnvironmentMap residual = env;
-            SmallSources sources = extractSmallSources(residual);
-            grid = reduceVisibility(vis, resampleToCube(residual, vis.cube), options.inputs[0]);
+            sources = extractSmallSources(residual);
+            residualCube = resampleToCube(residual, vis.cube);
+            grid = reduceVisibility(vis, residualCube, options.inputs[0]);
             sourceRays = addSourceShadows(occluder, vis, sources, grid, options.visibility.threads);
             std::string shares;
             for (double f : sources.powerFraction) shares += (shares.empty() ? "" : ", ") + std::to_string(f);
@@ -97,6 +100,18 @@ void runFiv(const FivStageOptions& options) {
         } else {
             grid = reduceVisibility(vis, cube, options.inputs[0]);
         }
+        std::vector<float> self;
+        if (options.selfVertices) {
+            if (occluder.normals.size() != occluder.positions.size())
+                throw Error(options.inputs[0], "--self-vertices", "the occluder mesh has no vertex normals (prt meshprep adds them)",
+                            kExitInput);
+            double s0 = nowSeconds();
+            self = selfIrradiance(occluder, options.sources ? residualCube : cube, sources, options.visibility.threads, &selfRays);
+            char line[160];
+            std::snprintf(line, sizeof line, "fiv: self-shadowing at %zu vertices, %llu rays in %.2f s", occluder.vertexCount(),
+                          (unsigned long long)selfRays, nowSeconds() - s0);
+            logInfo(line);
+        }
         std::vector<float> difmap = difMap(cube, options.difmapSize);
         std::array<double, 9> fivEnv = environmentFiv(cube);
         inputs["env"] = envHash;
@@ -104,11 +119,13 @@ void runFiv(const FivStageOptions& options) {
         bundleOptions.half = options.half;
         bundleOptions.difmapSize = options.difmapSize;
         bundleOptions.envHash = envHash;
+        bundleOptions.selfIrradiance = std::move(self);
         Bundle bundle = fivBundle(occluder, grid, difmap, fivEnv, bundleOptions, inputs);
         for (Layer& layer : bundle.layers)
             if (layer.name == "fiv") {
                 layer.params["rays"] = vis.rays, layer.params["naive_rays"] = vis.naiveRays;
                 if (sourceRays > 0) layer.params["source_rays"] = sourceRays; // a map without sources: same bytes
+                if (options.selfVertices) layer.params["self_rays"] = selfRays;
             }
         writeBundle(options.output, bundle);
         char line[160];

@@ -193,6 +193,13 @@ FivOccluder fivOccluder(const Bundle& bundle, const std::string& source, uint32_
     o.power = power.data;
     o.valid.assign(valid.integers.begin(), valid.integers.end());
     o.envHash = stringParam(fiv, "env");
+    if (object == 0 && findObjectLayer(bundle, "fiv_self", 0)) {
+        const Layer& self = fivLayer(bundle, "fiv_self", 0, "self_shadowed_irradiance_rgb", FivStorage::Float,
+                                     {uint64_t(bundle.mesh.vertexCount()), 3}, source);
+        for (float v : self.data)
+            if (v < 0.0f) throw Error(source, "fiv_self", "holds a negative irradiance");
+        o.selfIrradiance = self.data;
+    }
     return o;
 }
 
@@ -322,7 +329,9 @@ void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, si
         fivDifmap(lighting, n, total);
         std::copy(total, total + 3, unoccluded);
         float fiv[9], power[3], offset[3];
-        if (self) {
+        if (self && self->selfIrradiance) {
+            std::copy(&self->selfIrradiance[3 * point], &self->selfIrradiance[3 * point] + 3, unoccluded);
+        } else if (self) {
             const FivOccluder& o = *self->occluder;
             for (int c = 0; c < 3; ++c) offset[c] = o.centre[c] + self->translation[c] - p[c];
             if (fivLookup(o, offset, fiv, power))

@@ -410,3 +410,36 @@ TEST(FivCli, SourcesShadowASunByItsOwnRaysAndLeaveAMapWithoutOneAlone) {
     EXPECT_GT(b->params["source_rays"].get<uint64_t>(), 0u);
     EXPECT_NE(a->data, b->data);
 }
+
+TEST(FivCli, SelfVerticesStoreTheMeshsOwnShadowingAndFivshadeUsesItOnThatMeshOnly) {
+    const Files& f = files();
+    TempDir dir;
+    const std::string common = f / "sphere.glb --env " + f / "env.exr --grid 16,9,6 --cube 8 --threads 1 ";
+    ASSERT_EQ(run("fiv " + common + "--self-vertices -o " + dir / "self.fiv.glb"), 0);
+    Bundle plain = readBundle(f / "sphere.fiv.glb"), self = readBundle(dir / "self.fiv.glb");
+    EXPECT_EQ(findLayer(plain, "fiv_self"), nullptr); // off by default: the bundle as before
+    const Layer* layer = findLayer(self, "fiv_self");
+    ASSERT_NE(layer, nullptr);
+    EXPECT_EQ(layer->shape, (std::vector<uint64_t>{self.mesh.vertexCount(), 3}));
+    EXPECT_EQ(findLayer(self, "fiv")->data, findLayer(plain, "fiv")->data); // the grid itself is unchanged
+    // A convex sphere hides nothing above a vertex's tangent plane: E_self is the unshadowed irradiance, so the
+    // shading is the DifMap's (grid: N . FIV(Env) - N . FIV_self, which differs).
+    ASSERT_EQ(run("fivshade " + f / "sphere.glb --env " + f / "env.exr --self " + dir / "self.fiv.glb -o " + dir / "a.npy"), 0);
+    ASSERT_EQ(run("fivshade " + f / "sphere.glb --env " + f / "env.exr --self " + f / "sphere.fiv.glb -o " + dir / "b.npy"), 0);
+    std::vector<size_t> shape;
+    std::vector<float> a = readNpy(dir / "a.npy", &shape), b = readNpy(dir / "b.npy", &shape);
+    ASSERT_EQ(a.size(), 3 * self.mesh.vertexCount());
+    EXPECT_NE(a, b);
+    // Radiance albedo / pi E_self (albedo 1), E_self clamped to DifMap(N) only.
+    size_t equal = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        double e = layer->data[i] / 3.14159265358979;
+        EXPECT_LE(a[i], e * (1 + 1e-6) + 1e-7) << i;
+        equal += std::abs(a[i] - e) <= 1e-6 * e + 1e-7;
+    }
+    EXPECT_GT(equal, a.size() / 4); // the rest clamped to the bilinear DifMap, below the exact cube sum
+    // Another receiver: the layer does not apply, the grid does (same bytes as without the layer).
+    ASSERT_EQ(run("fivshade " + f / "plane.glb --env " + f / "env.exr --self " + dir / "self.fiv.glb -o " + dir / "c.npy"), 0);
+    ASSERT_EQ(run("fivshade " + f / "plane.glb --env " + f / "env.exr --self " + f / "sphere.fiv.glb -o " + dir / "d.npy"), 0);
+    EXPECT_EQ(readFileBytes(dir / "c.npy"), readFileBytes(dir / "d.npy"));
+}

@@ -1,6 +1,6 @@
 // The FIV figures of docs/results.md, measured in one run and printed as JSON (not a test: it takes minutes).
 //   fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--quick] [--grids 32x17x15,...] [--scenes "one bunny,self-shadow"]
-//               [--maps sunrise,courtyard] [--sources]
+//               [--maps sunrise,courtyard] [--sources] [--self-vertices] [--sharpen K,...]
 // Scenes (receiver 8x8 plane of 65x65 vertices unless said): the bunny scaled to 2 units hovering 0.5 above the
 // plane; two bunnies with overlapping shadows; three; one straddling the plane; one 0.05 above it (close); one
 // low beside the plane (grazing); the bunny as its own receiver. Maps: courtyard, sunrise (sharp sun), constant.
@@ -77,6 +77,8 @@ std::vector<float> shadeFiv(const TriMesh& receiver, const FivLighting& lighting
     std::vector<FivInstance> instances;
     for (const auto& p : placements) instances.push_back({occluder, {p[0], p[1], p[2]}});
     FivInstance selfInstance{occluder, {0, 0, 0}};
+    // The exact per-vertex self-shadowing (--self-vertices) when the grid's bundle carries it.
+    if (self && !occluder->selfIrradiance.empty()) selfInstance.selfIrradiance = occluder->selfIrradiance.data();
     std::vector<float> out(receiver.positions.size());
     fivIrradiance(lighting, instances.data(), instances.size(), self ? &selfInstance : nullptr, receiver.positions.data(),
                   receiver.normals.data(), receiver.vertexCount(), options, out.data());
@@ -113,6 +115,9 @@ int main(int argc, char** argv) {
     std::string bunnyPath = argv[1], envDir = argv[2], outDir = argv[3];
     bool quick = false;
     bool sources = false; // --sources: the map's small sources shadowed from their own texels (extractSmallSources)
+    std::string sourceGrid; // --source-grid NTxNPxNR: with --sharpen, the sources' own grid at this resolution
+    std::vector<double> sharpen; // --sharpen K,...: the source term's sharpened interpolant (an experiment)
+    bool selfVertices = false; // --self-vertices: the bunny's own self-shadowing at its vertices (fiv::selfIrradiance)
     std::string gridList, sceneList, mapList;
     for (int a = 4; a < argc; ++a) {
         std::string flag = argv[a];
@@ -121,6 +126,17 @@ int main(int argc, char** argv) {
         else if (flag == "--scenes" && a + 1 < argc) sceneList = argv[++a];
         else if (flag == "--maps" && a + 1 < argc) mapList = argv[++a];
         else if (flag == "--sources") sources = true;
+        else if (flag == "--self-vertices") selfVertices = true;
+        else if (flag == "--source-grid" && a + 1 < argc) sourceGrid = argv[++a];
+        else if (flag == "--sharpen" && a + 1 < argc) {
+            for (std::string item : std::vector<std::string>{argv[++a]}) {
+                for (size_t start = 0; start <= item.size();) {
+                    size_t end = std::min(item.find(',', start), item.size());
+                    if (end > start) sharpen.push_back(std::stod(item.substr(start, end - start)));
+                    start = end + 1;
+                }
+            }
+        }
         else {
             std::fprintf(stderr, "fiv_figures: unknown option %s\n", flag.c_str());
             return 2;
@@ -267,11 +283,14 @@ int main(int argc, char** argv) {
                 double r0 = nowSeconds();
                 fiv::CubeEnvironment cube = fiv::resampleToCube(envs[m], 32);
                 fiv::FivGrid grid;
-                json sourceReport;
+                json sourceReport, selfReport;
+                fiv::SmallSources found;
+                fiv::CubeEnvironment residualCube;
                 if (sources) {
                     EnvironmentMap residual = envs[m];
-                    fiv::SmallSources found = fiv::extractSmallSources(residual);
-                    grid = fiv::reduceVisibility(vis, fiv::resampleToCube(residual, 32));
+                    found = fiv::extractSmallSources(residual);
+                    residualCube = fiv::resampleToCube(residual, 32);
+                    grid = fiv::reduceVisibility(vis, residualCube);
                     uint64_t sourceRays = fiv::addSourceShadows(bunny, vis, found, grid, 2);
                     sourceReport = {{"texels", found.texelCount}, {"power_fraction", found.powerFraction},
                                     {"rays", sourceRays}};
@@ -280,13 +299,92 @@ int main(int argc, char** argv) {
                 } else {
                     grid = fiv::reduceVisibility(vis, cube);
                 }
+                std::vector<float> self;
+                if (selfVertices) {
+                    double s0 = nowSeconds();
+                    uint64_t selfRays = 0;
+                    self = fiv::selfIrradiance(bunny, sources ? residualCube : cube, found, 2, &selfRays);
+                    selfReport = {{"vertices", bunny.vertexCount()}, {"rays", selfRays}, {"seconds", nowSeconds() - s0},
+                                  {"bytes_float16", 6 * bunny.vertexCount()}};
+                    std::fprintf(stderr, "self %s: %llu rays, %.2f s\n", m.c_str(), (unsigned long long)selfRays, nowSeconds() - s0);
+                }
                 std::vector<float> difmap = fiv::difMap(cube, 32);
                 std::array<double, 9> fivEnv = fiv::environmentFiv(cube);
                 double reductionSeconds = nowSeconds() - r0;
-                reductions.push_back({{"map", m}, {"seconds", reductionSeconds}, {"sources", sourceReport}});
+                reductions.push_back({{"map", m}, {"seconds", reductionSeconds}, {"sources", sourceReport}, {"self_vertices", selfReport}});
+                // --sharpen K,...: an experiment on the source term's interpolant (issue 20): the sources' hidden
+                // fraction f per grid sample is interpolated on its own, sharpened to clamp(0.5 + K (f - 0.5), 0, 1)
+                // (K 0: a threshold at 0.5) and times max(0, N . FIV_sources); the rest of the map as before.
+                if (sources && !sharpen.empty() && !found.direction.empty()) {
+                    fiv::FivGrid rest = fiv::reduceVisibility(vis, residualCube), src = rest;
+                    // --source-grid NTxNPxNR: the sources' own grid at another resolution; its samples' inside flags
+                    // from sampleVisibility on a 6x1^2 cube (6 mask rays per sample, the 26 inside votes).
+                    fiv::Visibility sourceVis;
+                    double sourceSeconds = nowSeconds();
+                    if (!sourceGrid.empty()) {
+                        fiv::VisibilityOptions so = options;
+                        std::sscanf(sourceGrid.c_str(), "%dx%dx%d", &so.grid.azimuth, &so.grid.polar, &so.grid.shells);
+                        so.cube = 1;
+                        sourceVis = fiv::sampleVisibility(bunny, so, "bunny");
+                        fiv::CubeEnvironment none;
+                        none.size = 1, none.radiance.assign(18, 0.0);
+                        src = fiv::reduceVisibility(sourceVis, none);
+                    }
+                    const fiv::Visibility& sv = sourceGrid.empty() ? vis : sourceVis;
+                    std::fill(src.fiv.begin(), src.fiv.end(), 0.0f);
+                    std::fill(src.power.begin(), src.power.end(), 0.0f);
+                    uint64_t srcRays = fiv::addSourceShadows(bunny, sv, found, src, 2);
+                    sourceSeconds = nowSeconds() - sourceSeconds;
+                    std::fprintf(stderr, "source grid %s: %zu samples, %.1f s, %llu source rays, %llu inside/mask rays\n",
+                                 sourceGrid.c_str(), src.valid.size(), sourceSeconds, (unsigned long long)srcRays,
+                                 (unsigned long long)sv.rays);
+                    double sourcePower[3] = {0, 0, 0}, sourceFiv[9] = {0};
+                    for (size_t t = 0; t < found.direction.size() / 3; ++t)
+                        for (int c = 0; c < 3; ++c) {
+                            sourcePower[c] += found.power[3 * t + c];
+                            for (int a = 0; a < 3; ++a) sourceFiv[3 * c + a] += found.power[3 * t + c] * found.direction[3 * t + a];
+                        }
+                    fiv::FivBundleOptions plain;
+                    plain.half = false;
+                    Bundle restBundle = fiv::fivBundle(bunny, rest, difmap, fivEnv, plain, {});
+                    Bundle srcBundle = fiv::fivBundle(bunny, src, difmap, fivEnv, plain, {});
+                    FivOccluder restOccluder = fivOccluder(restBundle, "rest"), srcOccluder = fivOccluder(srcBundle, "src");
+                    FivLighting lighting = fivLighting(restBundle, "rest");
+                    for (const SceneSpec& s : scenes) {
+                        if (s.self || s.placements.size() != 1) continue;
+                        std::string key = s.name + "|" + m;
+                        std::vector<float> free = shadeFiv(plane, lighting, &restOccluder, {}, false, {});
+                        std::vector<float> restShaded = shadeFiv(plane, lighting, &restOccluder, s.placements, false, {});
+                        for (double k : sharpen) {
+                            std::vector<float> shaded = restShaded;
+                            for (size_t v = 0; v < plane.vertexCount(); ++v) {
+                                const float* p = &plane.positions[3 * v];
+                                const float* n = &plane.normals[3 * v];
+                                float offset[3], fiv[9], power[3];
+                                for (int c = 0; c < 3; ++c) offset[c] = srcOccluder.centre[c] + s.placements[0][size_t(c)] - p[c];
+                                if (n[0] * offset[0] + n[1] * offset[1] + n[2] * offset[2] <= -srcOccluder.radius) continue;
+                                if (!fivLookup(srcOccluder, offset, fiv, power)) continue;
+                                double f = std::clamp(double(power[1]) / sourcePower[1], 0.0, 1.0);
+                                double g = k > 0 ? std::clamp(0.5 + k * (f - 0.5), 0.0, 1.0) : (f >= 0.5 ? 1.0 : 0.0);
+                                for (int c = 0; c < 3; ++c) {
+                                    double cosine = n[0] * sourceFiv[3 * c] + n[1] * sourceFiv[3 * c + 1] + n[2] * sourceFiv[3 * c + 2];
+                                    shaded[3 * v + c] = float(std::max(0.0, shaded[3 * v + c] - g * std::max(0.0, cosine) / std::numbers::pi));
+                                }
+                            }
+                            Errors full = errors(free, shaded, refFree[key], refShadowed[key]);
+                            results.push_back({{"grid", gridName}, {"samples", options.grid.sampleCount()}, {"map", m},
+                                               {"scene", s.name}, {"mode", "sources sharpened " + std::to_string(k)},
+                                               {"source_grid", sourceGrid}, {"source_seconds", sourceSeconds},
+                                               {"storage", "float32"}, {"nrmse", full.nrmse}, {"relative_rmse", full.relativeRmse}});
+                            std::fprintf(stderr, "sharpen %s %s K %g source grid %s: NRMSE %.4f\n", s.name.c_str(), m.c_str(), k,
+                                         sourceGrid.c_str(), full.nrmse);
+                        }
+                    }
+                }
                 for (bool half : {true, false}) {
                     fiv::FivBundleOptions bundleOptions;
                     bundleOptions.half = half;
+                    bundleOptions.selfIrradiance = self;
                     Bundle bundle = fiv::fivBundle(bunny, grid, difmap, fivEnv, bundleOptions, {});
                     if (half) // what a reader gets back from a float16 layer
                         for (Layer& layer : bundle.layers)
@@ -340,6 +438,7 @@ int main(int argc, char** argv) {
                 fiv::Visibility vis2 = fiv::sampleVisibility(bunny, ss, "bunny");
                 double ssSeconds = nowSeconds() - s0;
                 for (const std::string& m : {std::string("sunrise"), std::string("courtyard")}) {
+                    if (envs.count(m) == 0 || envs[m].radiance.rgb.empty()) continue; // not among --maps
                     fiv::CubeEnvironment cube = fiv::resampleToCube(envs[m], ss.cube);
                     Bundle bundle = fiv::fivBundle(bunny, fiv::reduceVisibility(vis2, cube), fiv::difMap(cube, 32),
                                                    fiv::environmentFiv(cube), {}, {});

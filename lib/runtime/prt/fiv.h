@@ -16,7 +16,8 @@ namespace prt {
 // 0 <= I <= DifMap(N). I_occ,j = N . FIV_j(c_j - p) from occluder j's grid (trilinear over azimuth, polar angle and
 // shell, periodic in azimuth, samples inside the occluder skipped and the weights renormalised), by the seed's
 // cases: A (bounding sphere wholly above the tangent plane) exact, B (straddling) corrected, C (below) ignored.
-// A receiver that is its own occluder (`self`) uses I = N . FIV(Env) - N . FIV_self - sum_j I_occ,j.
+// A receiver that is its own occluder (`self`) uses I = N . FIV(Env) - N . FIV_self - sum_j I_occ,j, or, when the
+// self instance carries per-point self-shadowed irradiance E_self (layer fiv_self), I = E_self - sum_j I_occ,j.
 // Everything here is std only and single-threaded; outgoing radiance is albedo / pi times I.
 
 // One occluder type's grid (layers fiv, fiv_power, fiv_valid of a FIV bundle).
@@ -29,6 +30,9 @@ struct FivOccluder {
     std::vector<float> power;      // [row][channel]: occluded radiance times solid angle
     std::vector<uint8_t> valid;    // [row]: 0 where the receiver would sit inside the occluder
     std::string envHash;           // the environment the grid was reduced with
+    // Optional layer fiv_self (`prt fiv --self-vertices`, object 0 only): [vertex][3] the irradiance each vertex of
+    // the bundle's own mesh receives with the mesh itself as the only occluder; empty when the bundle has none.
+    std::vector<float> selfIrradiance;
 };
 
 // The unoccluded environment as the shading needs it (layers difmap and fiv_env).
@@ -87,6 +91,10 @@ struct FivShadeOptions {
 struct FivInstance {
     const FivOccluder* occluder = nullptr;
     float translation[3] = {0, 0, 0};
+    // For the `self` instance only, or null: [count][3] the points' own self-shadowed irradiance (the occluder's
+    // selfIrradiance for the points passed), used instead of N . FIV(Env) - N . FIV_self. Set it only when the
+    // receiver points are the vertices of the mesh the layer was computed for, unmoved relative to each other.
+    const float* selfIrradiance = nullptr;
 };
 
 // Irradiance [count][3] at `count` points (positions and unit normals [count][3], world). `self` (or null) is the
