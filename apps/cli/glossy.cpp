@@ -161,8 +161,11 @@ void runGlossy(const GlossyArgs& args) {
                                  {"ceres_cost", c.ceresCost}, {"share_within_1pct", c.shareWithinOnePercent},
                                  {"share_agreeing_1pct", c.shareAgreeing},
                                  {"pocl_mean_iterations", c.openClMeanIterations},
-                                 {"ceres_mean_iterations", c.ceresMeanIterations}};
-        logEvent("glossy_solver_comparison", record.dump());
+                                 {"ceres_mean_iterations", c.ceresMeanIterations},
+                                 {"pocl_costs", c.openClCosts}, {"ceres_costs", c.ceresCosts}};
+        nlohmann::json summary = record;
+        summary.erase("pocl_costs"), summary.erase("ceres_costs");
+        logEvent("glossy_solver_comparison", summary.dump());
         if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
         return;
     }
