@@ -31,8 +31,8 @@ inline void addRow(real r, const real* j, Normal* n) {
 // holds only the problem's parameters (rows: amplitude (1, 0), mean a (0, I - m m^T) with a = amplitude lam / len,
 // log sharpness b (-1, m) with b = amplitude lam). So J^T J's lobe block (k, l) is L_k S_kl L_l^T with
 // S_kl = sum_i solidAngle_i e_ki e_li w^ w^T: 10 moments per lobe pair against the grid's moments `moments`
-// (host-precomputed, shared by every problem; 10 rows of `count` doubles: solidAngle times 1, x, y, z, xx, xy,
-// xz, yy, yz, zz), 30 products per 8 directions at 2 lobes instead of 55 plus the Jacobian. J^T r stays a sum of
+// (host-precomputed, shared by every problem; solidAngle times 1, x, y, z, xx, xy, xz, yy, yz, zz, for every 8
+// directions i the 10 moments' 8 values at moments + 10 i), 30 products per 8 directions at 2 lobes instead of 55 plus the Jacobian. J^T r stays a sum of
 // per-direction tangential terms, (a, b) x sum_i solidAngle_i e_ki d_i (1, w - c m, c - 1) with d = model -
 // kernel: through the moments its mean part is a difference of nearly equal terms for sharp lobes, which moved
 // the end points (measured: one fit of 2000 into a 3.4x worse minimum). Count is a multiple of 8 (the host pads
@@ -78,7 +78,7 @@ void evaluate(const real* x, int count, int p, __global const float* table,
                 model += x[k * 5] * e[k];
             }
             real8 d = model - LOADF(row + i);
-            real8 solidAngle = vload8(0, moments + i);
+            real8 solidAngle = vload8(0, moments + (size_t)i * 10);
             costv = fma(solidAngle * d, d, costv);
             #pragma unroll
             for (int k = 0; k < NL; ++k) {
@@ -100,7 +100,7 @@ void evaluate(const real* x, int count, int p, __global const float* table,
                     const int i = i0 + 8 * c;
                     real8 s = eb[k][c] * eb[l][c];
                     #pragma unroll
-                    for (int m = 0; m < 10; ++m) acc[m] = fma(s, vload8(0, moments + m * count + i), acc[m]);
+                    for (int m = 0; m < 10; ++m) acc[m] = fma(s, vload8(m, moments + (size_t)i * 10), acc[m]);
                 }
                 #pragma unroll
                 for (int m = 0; m < 10; ++m) sv[pair][m] = acc[m];

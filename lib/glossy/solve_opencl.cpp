@@ -130,15 +130,16 @@ void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, cons
     const size_t stride = (count + 7) / 8 * 8; // the kernel reads 8 directions at a time
     // The grid in columns, padded with zero-weight directions; the weights in double, as objective.cpp has them.
     std::vector<float> dirX(stride, 0.0f), dirY(stride, 0.0f), dirZ(stride, 1.0f);
-    // The data term's moments (lm_kernel.cl, evaluate): solid angle times 1, x, y, z, xx, xy, xz, yy, yz, zz, one
-    // row of `stride` per moment, zero on the padding.
+    // The data term's moments (lm_kernel.cl, evaluate): solid angle times 1, x, y, z, xx, xy, xz, yy, yz, zz, for
+    // every 8 directions the 10 moments' 8 values one after the other (one base address per 8 directions), zero
+    // on the padding.
     std::vector<double> moments(10 * stride, 0.0);
     for (size_t i = 0; i < count; ++i) {
         dirX[i] = grid.directions[i * 3], dirY[i] = grid.directions[i * 3 + 1], dirZ[i] = grid.directions[i * 3 + 2];
         const double w[4] = {1.0, dirX[i], dirY[i], dirZ[i]}, solidAngle = grid.solidAngle[i];
         int m = 0;
         for (int a = 0; a < 4; ++a)
-            for (int b = a; b < 4; ++b) moments[size_t(m++) * stride + i] = solidAngle * w[a] * w[b];
+            for (int b = a; b < 4; ++b) moments[(i / 8 * 10 + size_t(m++)) * 8 + i % 8] = solidAngle * w[a] * w[b];
     }
     std::vector<float> kernelValues(stride * padded, 0.0f), amplitudeMax(padded, 0.0f);
     std::vector<double> energies(padded, 0.0);
