@@ -157,6 +157,8 @@ void runGlossy(const GlossyArgs& args) {
                                  {"pocl_ms_per_fit", 1e3 * c.openClSeconds / double(c.problems)},
                                  {"ceres_ms_per_fit", 1e3 * c.ceresSeconds / double(c.problems)},
                                  {"speed_ratio", c.ceresSeconds / c.openClSeconds},
+                                 {"pocl_cpu_seconds", c.openClCpuSeconds}, {"ceres_cpu_seconds", c.ceresCpuSeconds},
+                                 {"cpu_time_ratio", c.ceresCpuSeconds / c.openClCpuSeconds},
                                  {"initial_cost", c.initialCost}, {"pocl_cost", c.openClCost},
                                  {"ceres_cost", c.ceresCost}, {"share_within_1pct", c.shareWithinOnePercent},
                                  {"share_agreeing_1pct", c.shareAgreeing},
