@@ -157,12 +157,17 @@ void runGlossy(const GlossyArgs& args) {
                                  {"pocl_ms_per_fit", 1e3 * c.openClSeconds / double(c.problems)},
                                  {"ceres_ms_per_fit", 1e3 * c.ceresSeconds / double(c.problems)},
                                  {"speed_ratio", c.ceresSeconds / c.openClSeconds},
+                                 {"pocl_cpu_seconds", c.openClCpuSeconds}, {"ceres_cpu_seconds", c.ceresCpuSeconds},
+                                 {"cpu_time_ratio", c.ceresCpuSeconds / c.openClCpuSeconds},
                                  {"initial_cost", c.initialCost}, {"pocl_cost", c.openClCost},
                                  {"ceres_cost", c.ceresCost}, {"share_within_1pct", c.shareWithinOnePercent},
                                  {"share_agreeing_1pct", c.shareAgreeing},
                                  {"pocl_mean_iterations", c.openClMeanIterations},
-                                 {"ceres_mean_iterations", c.ceresMeanIterations}};
-        logEvent("glossy_solver_comparison", record.dump());
+                                 {"ceres_mean_iterations", c.ceresMeanIterations},
+                                 {"pocl_costs", c.openClCosts}, {"ceres_costs", c.ceresCosts}};
+        nlohmann::json summary = record;
+        summary.erase("pocl_costs"), summary.erase("ceres_costs");
+        logEvent("glossy_solver_comparison", summary.dump());
         if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
         return;
     }

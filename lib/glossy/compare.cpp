@@ -8,9 +8,24 @@
 #include <algorithm>
 #include <cmath>
 
+#include <sys/resource.h>
+
 namespace prt::glossy {
 
 FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t problems);
+
+namespace {
+
+// User plus system CPU time of the whole process (every thread, PoCL's device threads included), in seconds.
+// On a shared machine it moves less with the load than the wall clock.
+double processCpuSeconds() {
+    struct rusage usage;
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+           1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+} // namespace
 
 SolverComparison compareSolvers(const TriMesh& mesh, const GlossyOptions& options, size_t problems) {
     const DirectionGrid grid = cubeGrid(options.gridResolution);
@@ -23,13 +38,15 @@ SolverComparison compareSolvers(const TriMesh& mesh, const GlossyOptions& option
     warm.problems = std::min<size_t>(warm.problems, 16);
     solveOpenCl(grid, warm, FitWeights{}, options.bounds, options.solverOptions);
     FitBatch opencl = start, ceres = start;
-    double t0 = nowSeconds();
+    double t0 = nowSeconds(), c0 = processCpuSeconds();
     solveOpenCl(grid, opencl, FitWeights{}, options.bounds, options.solverOptions);
-    double t1 = nowSeconds();
+    double t1 = nowSeconds(), c1 = processCpuSeconds();
     solveCeres(grid, ceres, FitWeights{}, options.bounds, options.solverOptions);
-    double t2 = nowSeconds();
+    double t2 = nowSeconds(), c2 = processCpuSeconds();
     result.openClSeconds = t1 - t0;
     result.ceresSeconds = t2 - t1;
+    result.openClCpuSeconds = c1 - c0;
+    result.ceresCpuSeconds = c2 - c1;
     size_t within = 0, agreeing = 0;
     double openClIterations = 0, ceresIterations = 0;
     for (size_t p = 0; p < start.problems; ++p) {

@@ -227,6 +227,7 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
 struct SolverComparison {
     size_t problems = 0;
     double openClSeconds = 0.0, ceresSeconds = 0.0; // wall clock for all problems, after a warm-up launch
+    double openClCpuSeconds = 0.0, ceresCpuSeconds = 0.0; // process CPU time (user + system, all threads) of each
     double initialCost = 0.0, openClCost = 0.0, ceresCost = 0.0; // summed final objectives
     double shareWithinOnePercent = 0.0; // OpenCL cost <= 1.01 x Ceres cost (or at the float floor, 1e-7 E)
     double shareAgreeing = 0.0;         // |OpenCL cost - Ceres cost| <= 1% of Ceres's (or both at that floor)

@@ -130,10 +130,16 @@ void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, cons
     const size_t stride = (count + 7) / 8 * 8; // the kernel reads 8 directions at a time
     // The grid in columns, padded with zero-weight directions; the weights in double, as objective.cpp has them.
     std::vector<float> dirX(stride, 0.0f), dirY(stride, 0.0f), dirZ(stride, 1.0f);
-    std::vector<double> rootSolidAngle(stride, 0.0);
+    // The data term's moments (lm_kernel.cl, evaluate): solid angle times 1, x, y, z, xx, xy, xz, yy, yz, zz, for
+    // every 8 directions the 10 moments' 8 values one after the other (one base address per 8 directions), zero
+    // on the padding.
+    std::vector<double> moments(10 * stride, 0.0);
     for (size_t i = 0; i < count; ++i) {
         dirX[i] = grid.directions[i * 3], dirY[i] = grid.directions[i * 3 + 1], dirZ[i] = grid.directions[i * 3 + 2];
-        rootSolidAngle[i] = std::sqrt(double(grid.solidAngle[i]));
+        const double w[4] = {1.0, dirX[i], dirY[i], dirZ[i]}, solidAngle = grid.solidAngle[i];
+        int m = 0;
+        for (int a = 0; a < 4; ++a)
+            for (int b = a; b < 4; ++b) moments[(i / 8 * 10 + size_t(m++)) * 8 + i % 8] = solidAngle * w[a] * w[b];
     }
     std::vector<float> kernelValues(stride * padded, 0.0f), amplitudeMax(padded, 0.0f);
     std::vector<double> energies(padded, 0.0);
@@ -156,7 +162,7 @@ void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, cons
     Buffer dirXBuffer(dev.context, in, stride * 4, dirX.data());
     Buffer dirYBuffer(dev.context, in, stride * 4, dirY.data());
     Buffer dirZBuffer(dev.context, in, stride * 4, dirZ.data());
-    Buffer rootBuffer(dev.context, in, stride * 8, rootSolidAngle.data());
+    Buffer momentBuffer(dev.context, in, moments.size() * 8, moments.data());
     Buffer energyBuffer(dev.context, in, padded * 8, energies.data());
     Buffer amplitudeBuffer(dev.context, in, padded * 4, amplitudeMax.data());
     Buffer priorBuffer(dev.context, in, priors.size() * 4, priors.data());
@@ -175,7 +181,7 @@ void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, cons
     auto set = [&](size_t size, const void* value) { check(clSetKernelArg(kernel, arg++, size, value), "clSetKernelArg"); };
     set(sizeof(cl_int), &problemCount);
     set(sizeof(cl_int), &gridCount);
-    for (Buffer* b : {&kernelBuffer, &dirXBuffer, &dirYBuffer, &dirZBuffer, &rootBuffer, &energyBuffer, &amplitudeBuffer,
+    for (Buffer* b : {&kernelBuffer, &dirXBuffer, &dirYBuffer, &dirZBuffer, &momentBuffer, &energyBuffer, &amplitudeBuffer,
                       &priorBuffer, &priorWeightBuffer})
         set(sizeof(cl_mem), &b->mem);
     for (const double* value : {&beta, &gamma, &delta, &logMin, &logMax}) set(sizeof(double), value);
