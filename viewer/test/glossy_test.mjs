@@ -82,8 +82,7 @@ try {
     window.prt.set({ glossy: true });
     let glossyLevels = 0;
     points.forEach((_, k) => { for (let ch = 0; ch < 3; ++ch) glossyLevels += viewer[k][ch] - diffuse[k][ch]; });
-    return { points: points.length, max, mean: sum / (3 * points.length), glossyMean: glossyLevels / (3 * points.length),
-             pixels: viewer };
+    return { points: points.length, max, mean: sum / (3 * points.length), glossyMean: glossyLevels / (3 * points.length) };
   }, { png: fs.readFileSync(file(png)).toString('base64'), size });
 
   for (const lobes of [1, 2]) {
@@ -105,7 +104,47 @@ try {
     // Orbiting: the same page orbited 40 degrees must land on camera 1's picture (the highlight moved with it).
     await page.goto(`${base}/?bundle=data/glossy${lobes}.glb&maps=data/studio.sh.json&glossy=data/studio${lobes}.stack` +
                     `&camera=${cameras[0]}&size=${size.join(',')}&showSky=0`);
-    await page.evaluate(async () => { await window.prtReady; window.prt.orbit(-40, 0); });
+    // Before orbiting: the canvas at every 4th pixel lit in both CLI pictures, to see the picture change as the CLI's.
+    const pngs = [0, 1].map((c) => fs.readFileSync(file(`render${lobes}_${c}.png`)).toString('base64'));
+    const before = await page.evaluate(async ({ pngs, size }) => {
+      await window.prtReady;
+      const decoded = [];
+      for (const png of pngs) {
+        const bitmap = await createImageBitmap(await (await fetch(`data:image/png;base64,${png}`)).blob(),
+                                               { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+        const context = new OffscreenCanvas(size[0], size[1]).getContext('2d');
+        context.drawImage(bitmap, 0, 0);
+        decoded.push(context.getImageData(0, 0, size[0], size[1]).data);
+      }
+      const points = [];
+      for (let y = 1; y < size[1] - 1; y += 4)
+        for (let x = 1; x < size[0] - 1; x += 4) {
+          const at = (image, dx, dy) => image[((y + dy) * size[0] + x + dx) * 4] + image[((y + dy) * size[0] + x + dx) * 4 + 1];
+          let inside = true;
+          for (let dy = -1; dy <= 1; ++dy) for (let dx = -1; dx <= 1; ++dx) inside &&= at(decoded[0], dx, dy) > 0 && at(decoded[1], dx, dy) > 0;
+          if (inside) points.push([x, y]);
+        }
+      const cli = decoded.map((image) => points.map(([x, y]) => [0, 1, 2].map((ch) => image[(y * size[0] + x) * 4 + ch])));
+      return { points, cli, viewer: window.prt.read(points) };
+    }, { pngs, size });
+    await page.evaluate(() => window.prt.orbit(-40, 0));
+    const after = await page.evaluate((points) => window.prt.read(points), before.points);
+    let cliChange = 0, viewerChange = 0, worst = 0;
+    before.points.forEach((_, k) => {
+      for (let ch = 0; ch < 3; ++ch) {
+        const cli = before.cli[1][k][ch] - before.cli[0][k][ch], viewer = after[k][ch] - before.viewer[k][ch];
+        cliChange += Math.abs(cli);
+        viewerChange += Math.abs(viewer);
+        worst = Math.max(worst, Math.abs(viewer - cli));
+      }
+    });
+    cliChange /= 3 * before.points.length;
+    viewerChange /= 3 * before.points.length;
+    check(before.points.length >= 150 && cliChange > 5 && worst <= 2 * kMaxLevels,
+          `glossy, ${lobes} lobe(s), orbiting 40 degrees changes ${before.points.length} pixels by ${viewerChange.toFixed(2)} levels ` +
+          `on average, prt render's two pictures by ${cliChange.toFixed(2)} (> 5); the changes differ by at most ${worst} levels ` +
+          `(tolerance ${2 * kMaxLevels})`);
+    results[`lobes${lobes}_change`] = { points: before.points.length, cliChange, viewerChange, worst };
     const orbited = await against(`render${lobes}_1.png`);
     check(orbited.max <= kMaxLevels + 1 && orbited.mean <= kMeanLevels,
           `glossy, ${lobes} lobe(s), orbited 40 degrees in the page: max ${orbited.max} mean ${orbited.mean.toFixed(3)} ` +
