@@ -15,6 +15,7 @@ import { relightRowGlsl, toneMapGlsl } from './glsl.js';
 
 export const kMaxStackLevels = 32;
 const kTextureWidth = 4096; // every data texture: item i at (i % width, i / width)
+const kMaxViewUniforms = 600; // views + view triangles held as fragment uniforms (WebGL2 guarantees 224 vectors; ANGLE has 1024+)
 
 // Parses a prt-sg-stack file (writeSharpnessStack). Returns {levelsPerOctave, first, levels: [{width, height,
 // sharpness, rgb}]}. Throws Error naming `url` and the problem.
@@ -110,6 +111,8 @@ function stackAtlas(stack) {
 // then takes lobe row v % lobes.vertexCount, and `normals` its own), `stack` as parseStack.
 export function glossySetup(mesh, lobes, stack, normals = lobes.normals) {
   const V = mesh.positions.length / 3, T = mesh.indices.length / 3, views = lobes.viewCount, N = lobes.lobes;
+  if (views + lobes.triangles.length / 3 > kMaxViewUniforms)
+    throw new Error(`glossy: ${views} views and ${lobes.triangles.length / 3} view triangles exceed the viewer's ${kMaxViewUniforms} uniforms`);
   const lobeItems = lobes.vertexCount * views * N;
   const shape = dataTexture(lobeItems, 4, (data) => {
     for (let i = 0; i < lobeItems; ++i) data.set(lobes.values.subarray(i * 5 + 1, i * 5 + 5), i * 4);
@@ -135,8 +138,8 @@ export function glossySetup(mesh, lobes, stack, normals = lobes.normals) {
     lobeCount: { value: N },
     viewCount: { value: views },
     viewTriangleCount: { value: lobes.triangles.length / 3 },
-    viewDirections: { value: vec4s(views, lobes.views) },
-    viewTriangles: { value: vec4s(lobes.triangles.length / 3, Float32Array.from(lobes.triangles)) },
+    viewDirections: { value: Array.from({ length: views }, (_, i) => new THREE.Vector3().fromArray(lobes.views, i * 3)) },
+    viewTriangles: { value: Array.from({ length: lobes.triangles.length / 3 }, (_, t) => new THREE.Vector3().fromArray(lobes.triangles, t * 3)) },
     viewIndex: { value: dataTexture(viewIndex.length, 1, (data) => data.set(viewIndex)) },
     stackAtlas: { value: atlas.texture },
     stackCount: { value: stack.levels.length },
@@ -149,7 +152,7 @@ export function glossySetup(mesh, lobes, stack, normals = lobes.normals) {
   const geometry = new THREE.BufferGeometry();
   // Only a count for the draw (3 T corners); the shader reads positions by vertex id from glossyPositions.
   geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * T), 1));
-  return { uniforms, geometry };
+  return { uniforms, geometry, fragmentShader: glossyFragmentShader(views, lobes.triangles.length / 3) };
 }
 
 // R^T of sh::rotationY(degrees) (90 degrees takes +Z to +X): the lobe mean in the stored map's frame.
@@ -191,7 +194,9 @@ void main() {
   gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
 }`;
 
-export const glossyFragmentShader = /* glsl */ `
+// The fragment shader for a view set of `views` directions and `triangles` view triangles (uniform arrays: cheaper
+// than texture fetches for the per-pixel search of the view triangle).
+export const glossyFragmentShader = (views, triangles) => /* glsl */ `
 precision highp float;
 precision highp int;
 uniform float exposure;
@@ -204,8 +209,8 @@ uniform int lobeRows;
 uniform int lobeCount;
 uniform int viewCount;
 uniform int viewTriangleCount;
-uniform highp sampler2D viewDirections;
-uniform highp sampler2D viewTriangles;
+uniform vec3 viewDirections[${views}];
+uniform vec3 viewTriangles[${triangles}]; // view indices (exact in float)
 uniform highp sampler2D viewIndex;     // per view the first of its triangles (viewCount + 1), then the lists
 uniform highp sampler2D stackAtlas;
 uniform int stackCount;
@@ -221,11 +226,11 @@ out vec4 colour;
 ${toneMapGlsl}
 ${dataGlsl}
 const float pi = 3.14159265358979;
-vec3 viewAt(int i) { return texelFetch(viewDirections, itemAt(i), 0).xyz; }
+vec3 viewAt(int i) { return viewDirections[i]; }
 
 // triangleWeights: d's weights in view triangle t and their least over their sum (-1e30 on the far side).
 float triangleWeights(int t, vec3 d, out ivec3 ids, out vec3 w) {
-  ids = ivec3(texelFetch(viewTriangles, itemAt(t), 0).xyz);
+  ids = ivec3(viewTriangles[t]);
   vec3 a = viewAt(ids.x), b = viewAt(ids.y), c = viewAt(ids.z);
   float det = dot(a, cross(b, c));
   w = vec3(dot(d, cross(b, c)), dot(a, cross(d, c)), dot(a, cross(b, d))) / det;

@@ -13,7 +13,7 @@ import { linearReadback, referencePanels } from './compare.js';
 import { orbitCamera, parseNumbers } from './camera.js';
 import { isFivSceneJson } from './fiv.js';
 import { startFivViewer } from './fiv_view.js';
-import { glossyFragmentShader, glossySetup, glossyVertexShader, parseStack, readGlossyLobes, setMapTurn } from './glossy.js';
+import { glossySetup, glossyVertexShader, parseStack, readGlossyLobes, setMapTurn } from './glossy.js';
 
 const kMaxCoefficients = 64; // order 8
 
@@ -276,7 +276,7 @@ export async function startViewer(canvas, panel, params) {
                        lighting: uniforms.lighting, exposure: uniforms.exposure, linearOutput: uniforms.linearOutput };
       Object.assign(glossy.uniforms, shared, { glossyOn: { value: true } });
       const glossyMaterial = new THREE.RawShaderMaterial({
-        vertexShader: glossyVertexShader(kMaxCoefficients), fragmentShader: glossyFragmentShader,
+        vertexShader: glossyVertexShader(kMaxCoefficients), fragmentShader: glossy.fragmentShader,
         uniforms: glossy.uniforms, glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
       });
       const glossyMesh = new THREE.Mesh(glossy.geometry, glossyMaterial);
