@@ -101,6 +101,9 @@ try {
       cases.push({ mode: `glossy ${lobes} lobe${lobes > 1 ? 's' : ''} per pixel`, mesh: 'bunny 1k triangles', order: 3,
                    maps: 'studio.sh.json', screenshot: lobes === 1 ? 'glossy_bunny.png' : null,
                    query: `bundle=data/glossy${lobes}.glb&glossy=data/studio${lobes}.stack&camera=${bunnyCamera}` });
+      if (lobes === 1) // the same draw with the lobes off: the diffuse part's share of the frame
+        cases.push({ mode: 'glossy bundle, lobes off (glossyOn=0)', mesh: 'bunny 1k triangles', order: 3, maps: 'studio.sh.json',
+                     query: `bundle=data/glossy1.glb&glossy=data/studio1.stack&glossyOn=0&camera=${bunnyCamera}` });
       cases.push({ mode: `glossy ${lobes} lobe${lobes > 1 ? 's' : ''} per pixel`, mesh: 'sphere 1M vertices', order: 3, maps: 'studio.sh.json',
                    query: `synthetic=1000000,3&glossy=data/studio${lobes}.stack&glossyLobes=data/glossy${lobes}.glb&camera=0,0,2,0,0,0,0,1,0,40` });
     }
