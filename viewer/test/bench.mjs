@@ -4,8 +4,8 @@
 // night's lights from prt envlight; the bunny with its bounce layer and prt relight's visibility, the sphere with
 // stand-ins of the same cost), FIV with 3 moving sphere occluders (mode fiv, shaded on the GPU and on the CPU: a still frame, and a frame in
 // which the occluders move, so the shading, and on the CPU the upload, are in it), glossy lobes per pixel with 1 and 2
-// lobes (mode glossy, glossy.js: the bunny decimated to 1,000 triangles fitted by prt glossy, order 3, studio's stack
-// from prt render --glossy-stack; the 1M-vertex sphere takes that bundle's lobes, vertex v the row v % 502, so the
+// lobes (mode glossy, glossy.js: the bunny above fitted by prt glossy --iterations 20, order 3, studio's stack from
+// prt render --glossy-stack; the 1M-vertex sphere takes that bundle's lobes, vertex v the row v % 1,839, so the
 // per-pixel work is the same and only the lobe texture is smaller than a real 1M-vertex fit's). The glossy bunny's
 // 640x480 picture is saved as WORK_DIR/glossy_bunny.png.
 // usage: node viewer/test/bench.mjs PRT BUNNY.ply WORK_DIR [OUT.json] [MODES, e.g. sh,hybrid,fiv,glossy]
@@ -59,13 +59,11 @@ if (modes.includes('fiv')) {
   run('fivscene', file('big.glb'), ...place(['0,2.5,0', '2.2,1.2,0', '-1.5,1.5,1.5']), '-o', file('big.fiv.glb'));
 }
 
-// Glossy: the decimated bunny with 1 and 2 lobes (the fit's cost grows with vertices x views x lobes; the frame's
-// with covered pixels x lobes, so the decimated bunny costs per pixel what the full one does).
+// Glossy: the bunny with 1 and 2 lobes (20 LM iterations: the frame's cost does not depend on the fit's quality).
 if (modes.includes('glossy')) {
-  if (!fs.existsSync(file('bunny1k.glb'))) run('meshprep', bunny, '--decimate-to', '1000', '-o', file('bunny1k.glb'));
   for (const lobes of [1, 2])
     if (!fs.existsSync(file(`glossy${lobes}.glb`)))
-      run('glossy', file('bunny1k.glb'), '--brdf', 'phong:32,0.5', '--lobes', String(lobes), '--order', '3', '--samples', '64',
+      run('glossy', file('bunny.glb'), '--brdf', 'phong:32,0.5', '--lobes', String(lobes), '--order', '3', '--samples', '64',
           '--iterations', '20', '--threads', '2', '-o', file(`glossy${lobes}.glb`));
   if (!fs.existsSync(file('studio.sh.json'))) run('envsh', path.join(envDir, 'studio.exr'), '--order', '8', '-o', file('studio.sh.json'));
   for (const lobes of [1, 2])
@@ -98,11 +96,11 @@ try {
   }
   if (modes.includes('glossy')) {
     for (const lobes of [1, 2]) {
-      cases.push({ mode: `glossy ${lobes} lobe${lobes > 1 ? 's' : ''} per pixel`, mesh: 'bunny 1k triangles', order: 3,
+      cases.push({ mode: `glossy ${lobes} lobe${lobes > 1 ? 's' : ''} per pixel`, mesh: 'bunny', order: 3,
                    maps: 'studio.sh.json', screenshot: lobes === 1 ? 'glossy_bunny.png' : null,
                    query: `bundle=data/glossy${lobes}.glb&glossy=data/studio${lobes}.stack&camera=${bunnyCamera}` });
       if (lobes === 1) // the same draw with the lobes off: the diffuse part's share of the frame
-        cases.push({ mode: 'glossy bundle, lobes off (glossyOn=0)', mesh: 'bunny 1k triangles', order: 3, maps: 'studio.sh.json',
+        cases.push({ mode: 'glossy bundle, lobes off (glossyOn=0)', mesh: 'bunny', order: 3, maps: 'studio.sh.json',
                      query: `bundle=data/glossy1.glb&glossy=data/studio1.stack&glossyOn=0&camera=${bunnyCamera}` });
       cases.push({ mode: `glossy ${lobes} lobe${lobes > 1 ? 's' : ''} per pixel`, mesh: 'sphere 1M vertices', order: 3, maps: 'studio.sh.json',
                    query: `synthetic=1000000,3&glossy=data/studio${lobes}.stack&glossyLobes=data/glossy${lobes}.glb&camera=0,0,2,0,0,0,0,1,0,40` });
