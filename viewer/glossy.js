@@ -81,8 +81,9 @@ function dataTexture(items, channels, fill) {
   return texture;
 }
 
-// The stack's levels packed left to right on shelves of a kTextureWidth-wide RGB32F atlas (levels ascend in size).
-function stackAtlas(stack) {
+// The stack's levels packed left to right on shelves of a kTextureWidth-wide RGB32F atlas (levels ascend in size):
+// {texture, rects [[x, y, width, height]] per level, count, first, levelsPerOctave}, for setStack.
+export function stackAtlas(stack) {
   const rects = [];
   let x = 0, y = 0, shelf = 0;
   for (const level of stack.levels) {
@@ -103,13 +104,22 @@ function stackAtlas(stack) {
   texture.minFilter = texture.magFilter = THREE.NearestFilter;
   texture.generateMipmaps = false;
   texture.needsUpdate = true;
-  return { texture, rects };
+  return { texture, rects, count: stack.levels.length, first: stack.first, levelsPerOctave: stack.levelsPerOctave };
+}
+
+// Points the shader at `atlas` (stackAtlas's result): the stack of the map now shown.
+export function setStack(uniforms, atlas) {
+  uniforms.stackAtlas.value = atlas.texture;
+  uniforms.stackCount.value = atlas.count;
+  uniforms.stackFirst.value = atlas.first;
+  uniforms.stackPerOctave.value = atlas.levelsPerOctave;
+  for (let l = 0; l < kMaxStackLevels; ++l) uniforms.stackRect.value[l].set(...(atlas.rects[l] || [0, 0, 1, 1]));
 }
 
 // Uniforms and the non-indexed geometry of a glossy mesh. `mesh` {positions, indices} (the bundle's), `lobes` as
 // readGlossyLobes (lobes.vertexCount may be smaller than the mesh's for the synthetic frame-time stand-in: vertex v
-// then takes lobe row v % lobes.vertexCount, and `normals` its own), `stack` as parseStack.
-export function glossySetup(mesh, lobes, stack, normals = lobes.normals) {
+// then takes lobe row v % lobes.vertexCount, and `normals` its own), `atlas` as stackAtlas (setStack changes it).
+export function glossySetup(mesh, lobes, atlas, normals = lobes.normals) {
   const V = mesh.positions.length / 3, T = mesh.indices.length / 3, views = lobes.viewCount, N = lobes.lobes;
   if (views + lobes.triangles.length / 3 > kMaxViewUniforms)
     throw new Error(`glossy: ${views} views and ${lobes.triangles.length / 3} view triangles exceed the viewer's ${kMaxViewUniforms} uniforms`);
@@ -127,7 +137,6 @@ export function glossySetup(mesh, lobes, stack, normals = lobes.normals) {
   const index = [0];
   for (const list of around) index.push(index[index.length - 1] + list.length);
   const viewIndex = Float32Array.from([...index, ...around.flat()]);
-  const atlas = stackAtlas(stack);
   const uniforms = {
     glossyCorners: { value: vec4s(T, Float32Array.from(mesh.indices)) },
     glossyPositions: { value: vec4s(V, mesh.positions) },
@@ -141,14 +150,15 @@ export function glossySetup(mesh, lobes, stack, normals = lobes.normals) {
     viewDirections: { value: Array.from({ length: views }, (_, i) => new THREE.Vector3().fromArray(lobes.views, i * 3)) },
     viewTriangles: { value: Array.from({ length: lobes.triangles.length / 3 }, (_, t) => new THREE.Vector3().fromArray(lobes.triangles, t * 3)) },
     viewIndex: { value: dataTexture(viewIndex.length, 1, (data) => data.set(viewIndex)) },
-    stackAtlas: { value: atlas.texture },
-    stackCount: { value: stack.levels.length },
-    stackFirst: { value: stack.first },
-    stackPerOctave: { value: stack.levelsPerOctave },
-    stackRect: { value: Array.from({ length: kMaxStackLevels }, (_, l) => new THREE.Vector4(...(atlas.rects[l] || [0, 0, 1, 1]))) },
+    stackAtlas: { value: null },
+    stackCount: { value: 0 },
+    stackFirst: { value: 0 },
+    stackPerOctave: { value: 1 },
+    stackRect: { value: Array.from({ length: kMaxStackLevels }, () => new THREE.Vector4()) },
     mapTurn: { value: new THREE.Matrix3() },
     eye: { value: new THREE.Vector3() },
   };
+  setStack(uniforms, atlas);
   const geometry = new THREE.BufferGeometry();
   // Only a count for the draw (3 T corners); the shader reads positions by vertex id from glossyPositions.
   geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * T), 1));

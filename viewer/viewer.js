@@ -13,7 +13,7 @@ import { linearReadback, referencePanels } from './compare.js';
 import { orbitCamera, parseNumbers } from './camera.js';
 import { isFivSceneJson } from './fiv.js';
 import { startFivViewer } from './fiv_view.js';
-import { glossySetup, glossyVertexShader, parseStack, readGlossyLobes, setMapTurn } from './glossy.js';
+import { glossySetup, glossyVertexShader, parseStack, readGlossyLobes, setMapTurn, setStack, stackAtlas } from './glossy.js';
 
 const kMaxCoefficients = 64; // order 8
 
@@ -154,12 +154,13 @@ async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
   return { lights, layers, visibility };
 }
 
-// glossy=URL (`prt render --glossy-stack`, the prefiltered stack of the same map as maps=): a glossy bundle's lobes
-// per pixel (glossy.js), or null. The synthetic sphere (frame times) takes its lobes from the bundle glossyLobes=URL,
+// glossy=URL,URL (`prt render --glossy-stack`, the prefiltered stack of each entry of maps=; empty: no lobes under
+// that map): a glossy bundle's lobes per pixel (glossy.js), or null. The synthetic sphere (frame times) takes its lobes from the bundle glossyLobes=URL,
 // vertex v from that bundle's row v % its vertex count, and its normals from its positions.
-async function loadGlossy(params, { isScene, kind, synthetic, mesh, bytes }) {
-  const url = params.get('glossy');
-  if (!url) return null;
+async function loadGlossy(params, { isScene, kind, synthetic, mesh, bytes, mapCount }) {
+  const urls = (params.get('glossy') || '').split(',');
+  if (!urls.some(Boolean)) return null;
+  if (urls.length > mapCount) throw new Error(`glossy: ${urls.length} stacks for ${mapCount} maps (one per entry of maps=)`);
   if (isScene || kind === 'texel' || params.get('lights'))
     throw new Error('glossy: the lobes go with a plain glossy bundle per vertex (not scenes, texels or lights)');
   const fetchBytes = async (what) => {
@@ -167,16 +168,21 @@ async function loadGlossy(params, { isScene, kind, synthetic, mesh, bytes }) {
     if (!response.ok) throw new Error(`${what}: HTTP ${response.status}`);
     return response.arrayBuffer();
   };
-  const stack = parseStack(await fetchBytes(url), url);
+  const atlases = await Promise.all(Array.from({ length: mapCount }, async (_, i) =>
+    (urls[i] ? stackAtlas(parseStack(await fetchBytes(urls[i]), urls[i])) : null)));
+  const first = atlases.find(Boolean);
   const vertexCount = mesh.positions.length / 3;
+  let setup;
   if (synthetic) {
     if (!params.get('glossyLobes')) throw new Error('glossy: a synthetic mesh takes its lobes from glossyLobes=URL');
     const lobes = readGlossyLobes(await fetchBytes(params.get('glossyLobes')));
-    return glossySetup(mesh, lobes, stack, mesh.positions.map((x) => 2 * x));
+    setup = glossySetup(mesh, lobes, first, mesh.positions.map((x) => 2 * x));
+  } else {
+    const lobes = readGlossyLobes(bytes);
+    if (lobes.vertexCount !== vertexCount) throw new Error(`glossy: ${lobes.vertexCount} lobe rows for ${vertexCount} vertices`);
+    setup = glossySetup(mesh, lobes, first);
   }
-  const lobes = readGlossyLobes(bytes);
-  if (lobes.vertexCount !== vertexCount) throw new Error(`glossy: ${lobes.vertexCount} lobe rows for ${vertexCount} vertices`);
-  return glossySetup(mesh, lobes, stack);
+  return { ...setup, atlases };
 }
 
 export async function startViewer(canvas, panel, params) {
@@ -210,7 +216,7 @@ export async function startViewer(canvas, panel, params) {
   const skyUrls = (params.get('sky') || '').split(',');
   const skies = await Promise.all(maps.map((_, i) => (skyUrls[i] ? loadSky(skyUrls[i]) : null)));
   const hybrid = await loadHybrid(params, { isScene, kind, synthetic, mesh, bytes });
-  const glossy = await loadGlossy(params, { isScene, kind, synthetic, mesh, bytes });
+  const glossy = await loadGlossy(params, { isScene, kind, synthetic, mesh, bytes, mapCount: maps.length });
   const reference = !isScene && params.get('reference') ? parseNpy(await (await fetch(params.get('reference'))).arrayBuffer()) : null;
 
   const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true, alpha: false });
@@ -383,7 +389,9 @@ export async function startViewer(canvas, panel, params) {
     }
     uniforms.hybrid.value = hybridOn;
     if (glossy) {
-      glossy.uniforms.glossyOn.value = state.glossy;
+      const atlas = glossy.atlases[state.map];
+      glossy.uniforms.glossyOn.value = state.glossy && !!atlas; // no stack for this map: the diffuse part only
+      if (atlas) setStack(glossy.uniforms, atlas);
       setMapTurn(glossy.uniforms, state.rotate); // the lobes see the map turned as the SH lighting is
     }
     for (let j = 0; j < kMaxCoefficients; ++j)
@@ -403,6 +411,7 @@ export async function startViewer(canvas, panel, params) {
     if (panel) panel.update(state, metrics, { kind: isScene ? 'scene' : kind, vertexCount, receivers: receiverCount,
                                                renderer: api.renderer, frameMs, hasSky: !!skies[state.map],
                                                lights: hybrid ? hybrid.lights.lights.length : 0,
+                                               glossy: glossy ? (glossy.atlases[state.map] ? 'on' : 'no stack for this map') : null,
                                                turnLocked: lockedTurn !== null, referenceMetrics });
   }
 
@@ -430,6 +439,7 @@ export async function startViewer(canvas, panel, params) {
     receivers: receiverCount,
     lights: hybrid ? hybrid.lights.lights.length : 0,
     glossy: !!glossy,
+    glossyMaps: glossy ? glossy.atlases.map(Boolean) : [],
     turnLocked: lockedTurn !== null,
     hasReferenceImage: !!comparison,
     referenceMetrics: () => referenceMetrics,

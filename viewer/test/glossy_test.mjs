@@ -44,6 +44,9 @@ for (const lobes of [1, 2]) {
     run('render', file(`glossy${lobes}.glb`), '--env', map, '--size', size.join(','), '--camera', camera,
         '-o', file(`render${lobes}_${c}.png`), ...(c === 0 ? ['--glossy-stack', file(`studio${lobes}.stack`)] : []));
 }
+// The map turned 90 degrees about +Y: the lookup turns (R^T mu), the stack stays.
+run('render', file('glossy1.glb'), '--env', map, '--size', size.join(','), '--camera', cameras[0], '--rotate-y', '90',
+    '-o', file('render1_turned.png'));
 
 const server = await serve(work);
 const base = `http://127.0.0.1:${server.address().port}`;
@@ -151,6 +154,30 @@ try {
           'levels against prt render at the orbited camera');
     results[`lobes${lobes}_orbited`] = { max: orbited.max, mean: orbited.mean };
   }
+  // Turned: the canvas at rotate=90 against prt render --rotate-y 90.
+  await page.goto(`${base}/?bundle=data/glossy1.glb&maps=data/studio.sh.json&glossy=data/studio1.stack` +
+                  `&camera=${cameras[0]}&size=${size.join(',')}&showSky=0&rotate=90`);
+  await page.evaluate(async () => { await window.prtReady; });
+  const turned = await against('render1_turned.png');
+  check(turned.max <= kMaxLevels && turned.mean <= kMeanLevels,
+        `glossy, 1 lobe, map turned 90 degrees: ${turned.points} pixels, max ${turned.max} mean ${turned.mean.toFixed(3)} levels ` +
+        'against prt render --rotate-y 90');
+  results.lobes1_turned90 = { points: turned.points, max: turned.max, mean: turned.mean };
+  // Two maps, a stack for the first only: under the second the lobes are off (the diffuse part alone).
+  await page.goto(`${base}/?bundle=data/glossy1.glb&maps=data/studio.sh.json,data/studio.sh.json&glossy=data/studio1.stack,` +
+                  `&camera=${cameras[0]}&size=${size.join(',')}&showSky=0`);
+  const perMap = await page.evaluate(async () => {
+    const api = await window.prtReady, points = [[80, 60], [60, 50], [100, 70], [70, 40]];
+    api.set({ map: 0, glossy: true });
+    const lit = api.read(points);
+    api.set({ map: 1 });
+    const second = api.read(points);
+    api.set({ map: 1, glossy: false });
+    const off = api.read(points);
+    return { maps: api.glossyMaps, same: JSON.stringify(second) === JSON.stringify(off), differ: JSON.stringify(lit) !== JSON.stringify(off) };
+  });
+  check(JSON.stringify(perMap.maps) === '[true,false]' && perMap.same && perMap.differ,
+        `glossy=STACK, (a stack for the first map only): lobes under map 0, the diffuse part alone under map 1 (${JSON.stringify(perMap)})`);
   fs.writeFileSync(file('agreement.json'), JSON.stringify(results, null, 1));
 } finally {
   await browser.close();
