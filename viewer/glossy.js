@@ -15,6 +15,7 @@ import { relightRowGlsl, toneMapGlsl } from './glsl.js';
 
 export const kMaxStackLevels = 32;
 const kTextureWidth = 4096; // every data texture: item i at (i % width, i / width)
+const kMaxTextureRows = 8192; // what the viewer asks of a float texture's height (SwiftShader's limit; WebGL2 guarantees 2048)
 const kMaxViewUniforms = 600; // views + view triangles held as fragment uniforms (WebGL2 guarantees 224 vectors; ANGLE has 1024+)
 
 // Parses a prt-sg-stack file (writeSharpnessStack). Returns {levelsPerOctave, first, levels: [{width, height,
@@ -58,6 +59,8 @@ export function readGlossyLobes(bytes) {
   const primitive = json.meshes[0].primitives[0];
   if (primitive.attributes.NORMAL === undefined) throw new Error('glossy: the mesh has no normals');
   const a = json.accessors[primitive.attributes.NORMAL], bv = json.bufferViews[a.bufferView];
+  if (a.componentType !== 5126 || a.type !== 'VEC3' || a.count !== layer.shape[0] || (bv.byteStride && bv.byteStride !== 12))
+    throw new Error('glossy: the normals are not tightly packed float VEC3 per vertex of the lobes');
   const offset = (bv.byteOffset || 0) + (a.byteOffset || 0);
   return {
     vertexCount: layer.shape[0], viewCount: layer.shape[1], lobes: layer.shape[2],
@@ -69,6 +72,8 @@ export function readGlossyLobes(bytes) {
 // A float texture of `items` texels of `channels` floats (1 or 4), item i at (i % 4096, i / 4096).
 function dataTexture(items, channels, fill) {
   const rows = Math.max(1, Math.ceil(items / kTextureWidth)), width = Math.min(kTextureWidth, Math.max(1, items));
+  if (rows > kMaxTextureRows)
+    throw new Error(`glossy: ${items} texels exceed the viewer's ${kTextureWidth} x ${kMaxTextureRows} data textures`);
   const data = new Float32Array(width * rows * channels);
   fill(data);
   const texture = new THREE.DataTexture(data, width, rows);
@@ -92,6 +97,7 @@ export function stackAtlas(stack) {
     x += level.width;
   }
   const height = y + shelf, width = Math.max(...rects.map((r) => r[0] + r[2]));
+  if (height > kMaxTextureRows) throw new Error(`glossy: the stack's atlas would be ${height} texels high (at most ${kMaxTextureRows})`);
   const data = new Float32Array(width * height * 3);
   stack.levels.forEach((level, l) => {
     const [x0, y0, w, h] = rects[l];
