@@ -157,6 +157,14 @@ void runRender(const RenderOptions& options) {
     std::vector<float> radiance(size_t(model.vertexCount) * 3);
     relight(model, lighting.data(), 0, model.vertexCount, radiance.data(), cli::tbbJobs());
 
+    // The stack the lobes are looked up in, written for the viewer (unturned: the viewer turns the lookup as
+    // renderGlossyRadiance does) and reused by the picture.
+    std::optional<PrefilteredEnvironment> stack;
+    if (!options.glossyStack.empty()) {
+        stack = glossyRenderEnvironment(*glossy, environment, options.env);
+        writeSharpnessStack(options.glossyStack, *stack);
+        logInfo("render: wrote " + options.glossyStack + " (the glossy lobes' prefiltered stack)");
+    }
     RenderedImage image;
     if (options.texels) {
         Image relit;
@@ -167,13 +175,8 @@ void runRender(const RenderOptions& options) {
                                     surface ? &*surface : nullptr);
     } else {
         image = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, environment, options.env, camera, false, nullptr,
-                                              options.rotateYDegrees != 0.0 ? R : nullptr)
+                                              options.rotateYDegrees != 0.0 ? R : nullptr, stack ? &*stack : nullptr)
                        : renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
-    }
-    // The stack the lobes were looked up in (unturned: the viewer turns the lookup as renderGlossyRadiance does).
-    if (!options.glossyStack.empty()) {
-        writeSharpnessStack(options.glossyStack, glossyRenderEnvironment(*glossy, environment, options.env));
-        logInfo("render: wrote " + options.glossyStack + " (the glossy lobes' prefiltered stack)");
     }
     // The map behind the mesh, turned with the lighting, as the viewer's sky (its tone map is the surface's).
     if (options.background) drawEnvironmentBackground(image, environment, options.env, camera, options.rotateYDegrees);

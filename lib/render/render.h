@@ -45,11 +45,14 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 // With `lights` (docs/glossy.md "Lights through the glossy path"; `environment` is then the residual map) each
 // corner also adds its cone lights' glossy radiance toward the pixel's direction (glossyConeLightsToward, with that
 // corner's per-sample visibility), blended the same way. With `rotation` (row-major 3x3, as sh::rotationY; null for
-// none) the lobes see the map turned by it, L'(d) = L(R^T d): the lookup turns, the stack is the same.
+// none) the lobes see the map turned by it, L'(d) = L(R^T d): the lookup turns, the stack is the same. With
+// `prefiltered` (glossyRenderEnvironment of this model and map, e.g. one also written by writeSharpnessStack) that
+// stack is used instead of building it again.
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
                                    const EnvironmentMap& environment, const std::string& envSource,
                                    const PinholeCamera& camera, bool glossyOnly,
-                                   const GlossyConeLights* lights = nullptr, const double* rotation = nullptr);
+                                   const GlossyConeLights* lights = nullptr, const double* rotation = nullptr,
+                                   const PrefilteredEnvironment* prefiltered = nullptr);
 
 // The prefiltered environment renderGlossyRadiance evaluates `glossy`'s lobes against (lib/render/glossy_stack.cpp):
 // the stack over the lobes' own sharpness range (glossySharpnessRange), rows on TBB, rotation identity. Needs an
