@@ -4,7 +4,9 @@
 // from `prt render --glossy-stack` of studio; the canvas against prt render's PNG of the same bundle, map and camera
 // at every 4th pixel whose 3x3 neighbourhood is lit, at two cameras 40 degrees of orbit apart, and the highlight
 // must move: between the two cameras the glossy part (glossy on minus off) changes, and it changes as the CLI's
-// picture does (both cameras agree with the CLI). Screenshots and agreement.json land in WORK_DIR.
+// picture does (both cameras agree with the CLI); the map turned 90 degrees against prt render --rotate-y 90; with
+// a stack for the first of two maps only, the lobes are off under the second. Screenshots and agreement.json land in
+// WORK_DIR.
 // usage: node viewer/test/glossy_test.mjs PRT DATA_DIR WORK_DIR
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
