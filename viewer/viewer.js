@@ -13,6 +13,7 @@ import { linearReadback, referencePanels } from './compare.js';
 import { orbitCamera, parseNumbers } from './camera.js';
 import { isFivSceneJson } from './fiv.js';
 import { startFivViewer } from './fiv_view.js';
+import { glossySetup, glossyVertexShader, parseStack, readGlossyLobes, setMapTurn, setStack, stackAtlas } from './glossy.js';
 
 const kMaxCoefficients = 64; // order 8
 
@@ -153,6 +154,37 @@ async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
   return { lights, layers, visibility };
 }
 
+// glossy=URL,URL (`prt render --glossy-stack`, the prefiltered stack of each entry of maps=; empty: no lobes under
+// that map): a glossy bundle's lobes per pixel (glossy.js), or null. The synthetic sphere (frame times) takes its lobes from the bundle glossyLobes=URL,
+// vertex v from that bundle's row v % its vertex count, and its normals from its positions.
+async function loadGlossy(params, { isScene, kind, synthetic, mesh, bytes, mapCount }) {
+  const urls = (params.get('glossy') || '').split(',');
+  if (!urls.some(Boolean)) return null;
+  if (urls.length > mapCount) throw new Error(`glossy: ${urls.length} stacks for ${mapCount} maps (one per entry of maps=)`);
+  if (isScene || kind === 'texel' || params.get('lights'))
+    throw new Error('glossy: the lobes go with a plain glossy bundle per vertex (not scenes, texels or lights)');
+  const fetchBytes = async (what) => {
+    const response = await fetch(what);
+    if (!response.ok) throw new Error(`${what}: HTTP ${response.status}`);
+    return response.arrayBuffer();
+  };
+  const atlases = await Promise.all(Array.from({ length: mapCount }, async (_, i) =>
+    (urls[i] ? stackAtlas(parseStack(await fetchBytes(urls[i]), urls[i])) : null)));
+  const first = atlases.find(Boolean);
+  const vertexCount = mesh.positions.length / 3;
+  let setup;
+  if (synthetic) {
+    if (!params.get('glossyLobes')) throw new Error('glossy: a synthetic mesh takes its lobes from glossyLobes=URL');
+    const lobes = readGlossyLobes(await fetchBytes(params.get('glossyLobes')));
+    setup = glossySetup(mesh, lobes, first, mesh.positions.map((x) => 2 * x));
+  } else {
+    const lobes = readGlossyLobes(bytes);
+    if (lobes.vertexCount !== vertexCount) throw new Error(`glossy: ${lobes.vertexCount} lobe rows for ${vertexCount} vertices`);
+    setup = glossySetup(mesh, lobes, first);
+  }
+  return { ...setup, atlases };
+}
+
 export async function startViewer(canvas, panel, params) {
   const [width, height] = parseNumbers(params.get('size') || '640,480', 2, 'size');
   const kind = params.get('mode') === 'texel' ? 'texel' : 'vertex';
@@ -184,6 +216,7 @@ export async function startViewer(canvas, panel, params) {
   const skyUrls = (params.get('sky') || '').split(',');
   const skies = await Promise.all(maps.map((_, i) => (skyUrls[i] ? loadSky(skyUrls[i]) : null)));
   const hybrid = await loadHybrid(params, { isScene, kind, synthetic, mesh, bytes });
+  const glossy = await loadGlossy(params, { isScene, kind, synthetic, mesh, bytes, mapCount: maps.length });
   const reference = !isScene && params.get('reference') ? parseNpy(await (await fetch(params.get('reference'))).arrayBuffer()) : null;
 
   const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true, alpha: false });
@@ -243,7 +276,21 @@ export async function startViewer(canvas, panel, params) {
     const material = new THREE.RawShaderMaterial({
       vertexShader, fragmentShader, uniforms, glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
     });
-    scene.add(new THREE.Mesh(geometry, material));
+    if (glossy) {
+      // The lobes per pixel (glossy.js): the same transfer, lighting and tone map, drawn without an index buffer.
+      const shared = { transfer: uniforms.transfer, coefficients: uniforms.coefficients, rowsPerLine: uniforms.rowsPerLine,
+                       lighting: uniforms.lighting, exposure: uniforms.exposure, linearOutput: uniforms.linearOutput };
+      Object.assign(glossy.uniforms, shared, { glossyOn: { value: true } });
+      const glossyMaterial = new THREE.RawShaderMaterial({
+        vertexShader: glossyVertexShader(kMaxCoefficients), fragmentShader: glossy.fragmentShader,
+        uniforms: glossy.uniforms, glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
+      });
+      const glossyMesh = new THREE.Mesh(glossy.geometry, glossyMaterial);
+      glossyMesh.frustumCulled = false;
+      scene.add(glossyMesh);
+    } else {
+      scene.add(new THREE.Mesh(geometry, material));
+    }
   }
 
   const view = parseNumbers(params.get('camera') || '0,0.1,0.4,0,0.1,0,0,1,0,40', 10, 'camera');
@@ -264,6 +311,7 @@ export async function startViewer(canvas, panel, params) {
     order: Math.min(t.order, Number(params.get('order') || t.order)), rotate: Number(params.get('rotate') || 0),
     showError: false, showSky: params.get('showSky') !== '0', hybrid: !!hybrid && params.get('hybrid') !== '0',
     showReference: !!comparison && params.get('compare') === '1',
+    glossy: !!glossy && params.get('glossyOn') !== '0',
   };
   // With a visibility file the turn stays where the visibility was cast (hybrid.js): the URL's rotate.
   const lockedTurn = hybrid && hybrid.visibility ? state.rotate : null;
@@ -313,6 +361,7 @@ export async function startViewer(canvas, panel, params) {
   const pixel = new Uint8Array(4);
   function draw() {
     placeCamera();
+    if (glossy) glossy.uniforms.eye.value.copy(camera.position); // each pixel's direction to the eye
     sky.userData.set(state.showSky ? skies[state.map] : null, width, height, orbit.eye, orbit.target, orbit.up,
                      orbit.fovy, state.rotate);
     const start = performance.now();
@@ -339,6 +388,12 @@ export async function startViewer(canvas, panel, params) {
       lighting.set(turned.subarray(0, Math.min(turned.length, count * 3)));
     }
     uniforms.hybrid.value = hybridOn;
+    if (glossy) {
+      const atlas = glossy.atlases[state.map];
+      glossy.uniforms.glossyOn.value = state.glossy && !!atlas; // no stack for this map: the diffuse part only
+      if (atlas) setStack(glossy.uniforms, atlas);
+      setMapTurn(glossy.uniforms, state.rotate); // the lobes see the map turned as the SH lighting is
+    }
     for (let j = 0; j < kMaxCoefficients; ++j)
       uniforms.lighting.value[j].set(lighting[j * 3] || 0, lighting[j * 3 + 1] || 0, lighting[j * 3 + 2] || 0);
     uniforms.coefficients.value = count;
@@ -356,6 +411,7 @@ export async function startViewer(canvas, panel, params) {
     if (panel) panel.update(state, metrics, { kind: isScene ? 'scene' : kind, vertexCount, receivers: receiverCount,
                                                renderer: api.renderer, frameMs, hasSky: !!skies[state.map],
                                                lights: hybrid ? hybrid.lights.lights.length : 0,
+                                               glossy: glossy ? (glossy.atlases[state.map] ? 'on' : 'no stack for this map') : null,
                                                turnLocked: lockedTurn !== null, referenceMetrics });
   }
 
@@ -371,6 +427,7 @@ export async function startViewer(canvas, panel, params) {
     if (!state.showSky) q.set('showSky', '0'); else q.delete('showSky');
     if (hybrid && !state.hybrid) q.set('hybrid', '0'); else q.delete('hybrid');
     if (state.showReference) q.set('compare', '1'); else q.delete('compare');
+    if (glossy && !state.glossy) q.set('glossyOn', '0'); else q.delete('glossyOn');
     return q.toString().replace(/%2C/g, ',').replace(/%2F/g, '/');
   }
 
@@ -381,6 +438,8 @@ export async function startViewer(canvas, panel, params) {
     vertexCount,
     receivers: receiverCount,
     lights: hybrid ? hybrid.lights.lights.length : 0,
+    glossy: !!glossy,
+    glossyMaps: glossy ? glossy.atlases.map(Boolean) : [],
     turnLocked: lockedTurn !== null,
     hasReferenceImage: !!comparison,
     referenceMetrics: () => referenceMetrics,

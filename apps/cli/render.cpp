@@ -36,6 +36,7 @@ struct RenderOptions {
     std::string bounceWindow = "hann";
     std::string residualNegatives = "keep";
     std::string vertexRadiance; // a [V,3] .npy to draw instead of relighting (e.g. a per-vertex reference)
+    std::string glossyStack;    // also write the lobes' prefiltered stack here (prt-sg-stack, for the viewer)
 };
 
 // Writes the picture (atomically, by extension), says so, and reports the stage's time, rays and peak memory.
@@ -100,6 +101,8 @@ void runRender(const RenderOptions& options) {
         return;
     }
     if (options.env.empty()) throw Error("", "--env", "give --env (or --vertex-radiance)", kExitUsage);
+    if (!options.glossyStack.empty() && (!options.lights.empty() || options.texels))
+        throw Error("", "--glossy-stack", "goes with a glossy bundle's plain picture (no --lights or --texels)", kExitUsage);
     if (!options.lights.empty()) {
         RenderedImage image = renderGlossyHybrid(options, camera);
         if (options.background)
@@ -131,6 +134,8 @@ void runRender(const RenderOptions& options) {
         if (bundle.asset) throw Error(options.bundle, "layers", "glossy lobes of a scene are not supported", kExitInput);
         glossy = glossyModel(bundle, options.bundle);
     }
+    if (!options.glossyStack.empty() && !glossy)
+        throw Error(options.bundle, "--glossy-stack", "has no \"glossy_lobes\" layer (prt glossy writes one)", kExitInput);
     RelightModel model = options.texels ? std::move(atlas.rows) : relightModel(std::move(bundle), options.bundle);
     if (surface) {
         if (!model.albedoExcluded)
@@ -152,6 +157,14 @@ void runRender(const RenderOptions& options) {
     std::vector<float> radiance(size_t(model.vertexCount) * 3);
     relight(model, lighting.data(), 0, model.vertexCount, radiance.data(), cli::tbbJobs());
 
+    // The stack the lobes are looked up in, written for the viewer (unturned: the viewer turns the lookup as
+    // renderGlossyRadiance does) and reused by the picture.
+    std::optional<PrefilteredEnvironment> stack;
+    if (!options.glossyStack.empty()) {
+        stack = glossyRenderEnvironment(*glossy, environment, options.env);
+        writeSharpnessStack(options.glossyStack, *stack);
+        logInfo("render: wrote " + options.glossyStack + " (the glossy lobes' prefiltered stack)");
+    }
     RenderedImage image;
     if (options.texels) {
         Image relit;
@@ -162,7 +175,7 @@ void runRender(const RenderOptions& options) {
                                     surface ? &*surface : nullptr);
     } else {
         image = glossy ? renderGlossyRadiance(mesh, radiance, *glossy, environment, options.env, camera, false, nullptr,
-                                              options.rotateYDegrees != 0.0 ? R : nullptr)
+                                              options.rotateYDegrees != 0.0 ? R : nullptr, stack ? &*stack : nullptr)
                        : renderVertexRadiance(mesh, radiance, camera, surface ? &*surface : nullptr);
     }
     // The map behind the mesh, turned with the lighting, as the viewer's sky (its tone map is the surface's).
@@ -210,6 +223,9 @@ void addRenderCommand(CLI::App& app) {
                         "With --lights: window on the lights' SH where they meet the bounce layer (hann, none, lanczos, off)");
     command->add_option("--residual-negatives", options->residualNegatives,
                         "With --lights: keep (default) or clamp the residual map's negative texels");
+    command->add_option("--glossy-stack", options->glossyStack,
+                        "Glossy bundle: also write the prefiltered spherical-Gaussian stack its lobes are looked up in "
+                        "(prt-sg-stack, docs/glossy.md; the browser viewer's glossy= input)");
     command->callback([options] { runRender(*options); });
 }
 

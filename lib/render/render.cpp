@@ -115,26 +115,17 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
                                    const EnvironmentMap& environment, const std::string& envSource,
                                    const PinholeCamera& camera, bool glossyOnly, const GlossyConeLights* lights,
-                                   const double* rotation) {
+                                   const double* rotation, const PrefilteredEnvironment* prefiltered) {
     if (!glossyOnly && diffuse.size() != mesh.vertexCount() * 3)
         throw Error("", "render", std::to_string(diffuse.size() / 3) + " radiance rows for " +
                                       std::to_string(mesh.vertexCount()) + " vertices");
     if (glossy.vertexCount != mesh.vertexCount())
         throw Error("", "render", "the glossy lobes have " + std::to_string(glossy.vertexCount) + " vertices, the mesh " +
                                       std::to_string(mesh.vertexCount()));
+    if (lights) checkGlossyConeLights(glossy, *lights, "render");
     if (environment.layout != EnvLayout::Equirectangular)
         throw Error(envSource, "--env", "the glossy runtime needs an equirectangular (2:1) map");
-    // The stack over the lobes' own sharpness range only (the same texels as the whole stack there), rows on TBB.
-    PrefilterOptions options;
-    glossySharpnessRange(glossy, options.sharpnessMin, options.sharpnessMax);
-    JobSystem jobs;
-    jobs.parallelFor = [](void*, size_t count, TaskFunction task, void* data) {
-        tbb::parallel_for(size_t(0), count, [&](size_t i) { task(data, i); });
-    };
-    options.jobs = &jobs;
-    if (lights) checkGlossyConeLights(glossy, *lights, "render");
-    PrefilteredEnvironment env = prefilterEnvironment(environment.radiance.rgb.data(), environment.radiance.width,
-                                                      environment.radiance.height, options);
+    PrefilteredEnvironment env = prefiltered ? *prefiltered : glossyRenderEnvironment(glossy, environment, envSource);
     if (rotation) std::copy_n(rotation, 9, env.rotation);
     return castPrimaryRays(mesh, camera, [&](const PrimaryHit& hit, float* out) {
         const uint32_t* corner = &mesh.indices[size_t(hit.triangle) * 3];

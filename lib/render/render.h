@@ -18,6 +18,7 @@ namespace prt {
 
 struct GlossyModel;      // prt/glossy.h
 struct GlossyConeLights; // prt/glossy.h
+struct PrefilteredEnvironment; // prt/glossy.h
 
 struct RenderedImage {
     Image radiance;              // linear RGB, row 0 at the top
@@ -44,11 +45,27 @@ RenderedImage renderVertexRadiance(const TriMesh& mesh, const std::vector<float>
 // With `lights` (docs/glossy.md "Lights through the glossy path"; `environment` is then the residual map) each
 // corner also adds its cone lights' glossy radiance toward the pixel's direction (glossyConeLightsToward, with that
 // corner's per-sample visibility), blended the same way. With `rotation` (row-major 3x3, as sh::rotationY; null for
-// none) the lobes see the map turned by it, L'(d) = L(R^T d): the lookup turns, the stack is the same.
+// none) the lobes see the map turned by it, L'(d) = L(R^T d): the lookup turns, the stack is the same. With
+// `prefiltered` (glossyRenderEnvironment of this model and map, e.g. one also written by writeSharpnessStack) that
+// stack is used instead of building it again.
 RenderedImage renderGlossyRadiance(const TriMesh& mesh, const std::vector<float>& diffuse, const GlossyModel& glossy,
                                    const EnvironmentMap& environment, const std::string& envSource,
                                    const PinholeCamera& camera, bool glossyOnly,
-                                   const GlossyConeLights* lights = nullptr, const double* rotation = nullptr);
+                                   const GlossyConeLights* lights = nullptr, const double* rotation = nullptr,
+                                   const PrefilteredEnvironment* prefiltered = nullptr);
+
+// The prefiltered environment renderGlossyRadiance evaluates `glossy`'s lobes against (lib/render/glossy_stack.cpp):
+// the stack over the lobes' own sharpness range (glossySharpnessRange), rows on TBB, rotation identity. Needs an
+// equirectangular map; throws prt::Error(envSource, "--env", ...) for another layout.
+PrefilteredEnvironment glossyRenderEnvironment(const GlossyModel& glossy, const EnvironmentMap& environment,
+                                               const std::string& envSource);
+
+// `prt render --glossy-stack`: writes env's sharpness stack (env.sharpnessLevels, what lookupLobe reads) atomically
+// as a "prt-sg-stack" file for the browser viewer (docs/glossy.md "The stack file"), little-endian:
+//   "PRTSGSTK", uint32 version 1, levelsPerOctave, firstSharpnessIndex, levelCount,
+//   then per level uint32 width, height, float64 sharpness, float32 rgb [height][width][3].
+// Needs at least two levels (a stack lookupLobe uses); throws prt::Error(path, "--glossy-stack") otherwise.
+void writeSharpnessStack(const std::string& path, const PrefilteredEnvironment& env);
 
 // Renders a relit atlas (width x height texels, e.g. `prt relight --texels`) through the mesh's TEXCOORD_0, or
 // through `cornerUv` ([3 T][2], a scene bake's layer "lightmap_uv": corner k of triangle t at 3 t + k) when given.

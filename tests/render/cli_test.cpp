@@ -146,3 +146,17 @@ TEST_F(RenderCli, BadInputsFailWithNoOutput) {
     EXPECT_FALSE(fs::exists(path("bad.jpg")));
     EXPECT_FALSE(fs::exists(path("bad.png")));
 }
+
+// --glossy-stack needs a glossy bundle: a plain one is refused (kExitInput) and neither file is written; with
+// --lights or --texels it is a usage error.
+TEST_F(RenderCli, GlossyStackNeedsAGlossyBundleAndWritesNothingOtherwise) {
+    EXPECT_EQ(runPrt("render " + path("square.glb") + " --env " + path("sky.exr") + " " + camera + " -o " +
+                     path("p.png") + " --glossy-stack " + path("s.stack")),
+              prt::kExitInput);
+    EXPECT_FALSE(fs::exists(dir / "s.stack"));
+    EXPECT_FALSE(fs::exists(dir / "p.png"));
+    EXPECT_EQ(runPrt("render " + path("square.glb") + " --env " + path("sky.exr") + " " + camera + " -o " +
+                     path("p.png") + " --texels --glossy-stack " + path("s.stack")),
+              prt::kExitUsage);
+    EXPECT_FALSE(fs::exists(dir / "s.stack"));
+}

@@ -3,8 +3,12 @@
 // by a 1-pixel read: plain SH at orders 3, 5 and 8 (mode sh), hybrid with 4 cone lights at order 5 (mode hybrid:
 // night's lights from prt envlight; the bunny with its bounce layer and prt relight's visibility, the sphere with
 // stand-ins of the same cost), FIV with 3 moving sphere occluders (mode fiv, shaded on the GPU and on the CPU: a still frame, and a frame in
-// which the occluders move, so the shading, and on the CPU the upload, are in it).
-// usage: node viewer/test/bench.mjs PRT BUNNY.ply WORK_DIR [OUT.json] [MODES, e.g. sh,hybrid,fiv]
+// which the occluders move, so the shading, and on the CPU the upload, are in it), glossy lobes per pixel with 1 and 2
+// lobes (mode glossy, glossy.js: the bunny above fitted by prt glossy --iterations 20, order 3, studio's stack from
+// prt render --glossy-stack; the 1M-vertex sphere takes that bundle's lobes, vertex v the row v % 1,839, so the
+// per-pixel work is the same and only the lobe texture is smaller than a real 1M-vertex fit's). The glossy bunny's
+// 640x480 picture is saved as WORK_DIR/glossy_bunny.png.
+// usage: node viewer/test/bench.mjs PRT BUNNY.ply WORK_DIR [OUT.json] [MODES, e.g. sh,hybrid,fiv,glossy]
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -55,6 +59,19 @@ if (modes.includes('fiv')) {
   run('fivscene', file('big.glb'), ...place(['0,2.5,0', '2.2,1.2,0', '-1.5,1.5,1.5']), '-o', file('big.fiv.glb'));
 }
 
+// Glossy: the bunny with 1 and 2 lobes (20 LM iterations: the frame's cost does not depend on the fit's quality).
+if (modes.includes('glossy')) {
+  for (const lobes of [1, 2])
+    if (!fs.existsSync(file(`glossy${lobes}.glb`)))
+      run('glossy', file('bunny.glb'), '--brdf', 'phong:32,0.5', '--lobes', String(lobes), '--order', '3', '--samples', '64',
+          '--iterations', '20', '--threads', '2', '-o', file(`glossy${lobes}.glb`));
+  if (!fs.existsSync(file('studio.sh.json'))) run('envsh', path.join(envDir, 'studio.exr'), '--order', '8', '-o', file('studio.sh.json'));
+  for (const lobes of [1, 2])
+    if (!fs.existsSync(file(`studio${lobes}.stack`)))
+      run('render', file(`glossy${lobes}.glb`), '--env', path.join(envDir, 'studio.exr'), '--size', '64,48', '--camera', bunnyCamera,
+          '-o', file(`glossy${lobes}.render.png`), '--glossy-stack', file(`studio${lobes}.stack`));
+}
+
 const server = await serve(work);
 const base = `http://127.0.0.1:${server.address().port}`;
 const browser = await launchChromium();
@@ -77,10 +94,22 @@ try {
       cases.push({ mode: `fiv 3 occluders (${on})`, mesh: 'sphere 1M vertices', moving: true, query: `bundle=data/big.fiv.glb&albedo=0.8&camera=0,1.5,6,0,0.5,0,0,1,0,40&fivOn=${on}` });
     }
   }
+  if (modes.includes('glossy')) {
+    for (const lobes of [1, 2]) {
+      cases.push({ mode: `glossy ${lobes} lobe${lobes > 1 ? 's' : ''} per pixel`, mesh: 'bunny', order: 3,
+                   maps: 'studio.sh.json', screenshot: lobes === 1 ? 'glossy_bunny.png' : null,
+                   query: `bundle=data/glossy${lobes}.glb&glossy=data/studio${lobes}.stack&camera=${bunnyCamera}` });
+      if (lobes === 1) // the same draw with the lobes off: the diffuse part's share of the frame
+        cases.push({ mode: 'glossy bundle, lobes off (glossyOn=0)', mesh: 'bunny', order: 3, maps: 'studio.sh.json',
+                     query: `bundle=data/glossy1.glb&glossy=data/studio1.stack&glossyOn=0&camera=${bunnyCamera}` });
+      cases.push({ mode: `glossy ${lobes} lobe${lobes > 1 ? 's' : ''} per pixel`, mesh: 'sphere 1M vertices', order: 3, maps: 'studio.sh.json',
+                   query: `synthetic=1000000,3&glossy=data/studio${lobes}.stack&glossyLobes=data/glossy${lobes}.glb&camera=0,0,2,0,0,0,0,1,0,40` });
+    }
+  }
   for (const c of cases) {
     const page = await browser.newPage({ viewport: { width: 900, height: 520 }, deviceScaleFactor: 1 });
     try {
-      await page.goto(`${base}/?${c.query}&maps=data/flat.sh.json&size=640,480`, { timeout: 600000 });
+      await page.goto(`${base}/?${c.query}&maps=data/${c.maps || 'flat.sh.json'}&size=640,480`, { timeout: 600000 });
       const result = await page.evaluate(async (moving) => {
         const api = await window.prtReady;
         // Warm up, then time: frames until at least 2 s or 50 frames.
@@ -96,7 +125,8 @@ try {
         }
         return row;
       }, !!c.moving);
-      rows.push({ ...c, ...result, query: undefined });
+      if (c.screenshot) await page.locator('#view').screenshot({ path: file(c.screenshot) });
+      rows.push({ ...c, ...result, query: undefined, maps: undefined, screenshot: undefined });
       console.log(`${c.mode} ${c.mesh} (${result.vertices} vertices)${c.order ? ` order ${c.order}` : ''}: ` +
                   `${result.frameMs.toFixed(2)} ms/frame over ${result.frames} frames` +
                   (c.moving ? `; moving: ${result.movingFrameMs.toFixed(1)} ms/frame over ${result.movingFrames}` : '') +
