@@ -115,7 +115,7 @@ void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t fir
 // Every term is q' (exact) times a rounded product, so each channel is within gamma_{n+2} sum_j |x_j L_j| of the
 // exact sum_j x_j L_j (x_j = q'_j sigma_l, the value the code stands for), like the decode-then-relight path but
 // not bit for bit the same rounding. Each vertex's sum depends only on that vertex, so the result does not depend
-// on how the range is split. kN = n (1..8) known at compile time, so every band loop is unrolled.
+// on how the range is split. kN = n (4..8) known at compile time, so every band loop is unrolled.
 template <class Code, int kN>
 PRT_ALWAYS_INLINE inline void relightCodesBody(const RelightModel& model, const Code* __restrict codes, size_t first,
                                                size_t last, size_t band, const float* __restrict lighting,
@@ -163,15 +163,14 @@ __attribute__((target("avx2"))) void relightCodesAvx2(const RelightModel& model,
 #define PRT_CODES(N) relightCodesBase<Code, N>
 #endif
 
-// Relights vertices [first, last) of n bands each (n = 1..8) from their codes; `band` is `first`'s band-0 scale
-// index. False (nothing written) for other n, which take the decode tile.
+// Relights vertices [first, last) of n bands each (n = 4..8) from their codes; `band` is `first`'s band-0 scale
+// index. False (nothing written) for other n, which take the decode tile: at order 3 the per-vertex fold of the
+// scales into 27 lighting values (three short band loops) cost more than the tile's whole-tile conversion
+// (tests/runtime/bench_runtime: u8 0.75x float fused against 1.13x tiled; fused 1.16x at order 5, 1.31x at 8).
 template <class Code>
 bool relightCodes(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
                   const float* lighting, float* radiance) {
     switch (n) {
-    case 1: PRT_CODES(1)(model, codes, first, last, band, lighting, radiance); return true;
-    case 2: PRT_CODES(2)(model, codes, first, last, band, lighting, radiance); return true;
-    case 3: PRT_CODES(3)(model, codes, first, last, band, lighting, radiance); return true;
     case 4: PRT_CODES(4)(model, codes, first, last, band, lighting, radiance); return true;
     case 5: PRT_CODES(5)(model, codes, first, last, band, lighting, radiance); return true;
     case 6: PRT_CODES(6)(model, codes, first, last, band, lighting, radiance); return true;
