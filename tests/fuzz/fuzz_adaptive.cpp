@@ -2,8 +2,10 @@
 // per-cluster scales, clustered PCA) through their layer readers. The input is a whole GLB; when its JSON parses,
 // the harness recomputes the PRT_bundle checksum (fuzz_glb.h), reads the bundle and its adaptive layers
 // (relightModel, which calls adaptiveRelightModel), then runs what `prt relight` runs: relight() of every row under
-// a fixed lighting, relightBytes, and decodedTransfer. Oracle besides the sanitizers: for every storage but CPCA,
-// relight() must give the bits of the plain kernel on each row's decoded coefficients (prt/relight.h).
+// a fixed lighting, relightBytes, and decodedTransfer. Oracle besides the sanitizers: for float and half rows,
+// relight() must give the bits of the plain kernel on each row's decoded coefficients; for u8 / u16 codes (the
+// fused kernel) it must agree with it within (gamma_{n+2} + gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j|,
+// times the albedo and its rounding (prt/relight.h).
 // Seeds: tests/fuzz/corpus/adaptive/ (a small sphere adapted as float, half, u16, u8 per-vertex and per-cluster,
 // and CPCA).
 #include "bundle.h"
@@ -11,6 +13,7 @@
 #include "fuzz_util.h"
 #include "runtime.h"
 
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -36,9 +39,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             float expected[3];
             prt::relight(rows.data() + size_t(model.offsets[v]) * 3, 1, int(count), lighting.data(), expected);
             float got[3] = {radiance[v * 3], radiance[v * 3 + 1], radiance[v * 3 + 2]};
-            if (!model.albedo.empty())
-                for (int c = 0; c < 3; ++c) expected[c] *= model.albedo[size_t(v) * 3 + c];
-            if (std::memcmp(expected, got, sizeof got) != 0) std::abort();
+            const bool coded = model.storage == prt::TransferStorage::Uint8 || model.storage == prt::TransferStorage::Uint16;
+            const double u = std::ldexp(1.0, -24);
+            auto gamma = [&](double n) { return n * u / (1 - n * u); };
+            for (int c = 0; c < 3; ++c) {
+                const double a = model.albedo.empty() ? 1.0 : std::fabs(double(model.albedo[size_t(v) * 3 + c]));
+                double magnitude = 0;
+                for (uint32_t j = 0; j < count; ++j)
+                    magnitude += std::fabs(double(rows[(size_t(model.offsets[v]) + j) * 3 + c])) * std::fabs(lighting[j * 3 + c]);
+                const double bound = (gamma(count + 2.0) + gamma(count + 1.0)) * (1 + gamma(1)) * magnitude;
+                const double raw = expected[c];
+                if (!model.albedo.empty()) expected[c] *= model.albedo[size_t(v) * 3 + c];
+                if (!coded) {
+                    if (std::memcmp(&expected[c], &got[c], sizeof(float)) != 0) std::abort();
+                } else if (!(std::fabs(double(got[c]) - expected[c]) <= a * bound + u * a * (2 * std::fabs(raw) + bound))) {
+                    std::abort();
+                }
+            }
         }
     });
     return 0;

@@ -185,8 +185,8 @@ int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
     RatioReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
-    std::printf("\n%zu vertices, single thread\n%-6s %-8s %10s %14s %14s %12s %14s\n", gVertices, "order", "storage",
-                "B/vertex", "relight Mv/s", "stream Mv/s", "vs float32", "relight/stream");
+    std::printf("\n%zu vertices, single thread\n%-6s %-8s %10s %12s %14s %14s %12s %14s\n", gVertices, "order",
+                "storage", "B/vertex", "MB/relight", "relight Mv/s", "stream Mv/s", "vs float32", "relight/stream");
     for (int order : {3, 5, 8})
         for (const char* storage : kStorages) {
             const std::string name = std::string(storage) + "/" + std::to_string(order);
@@ -196,8 +196,9 @@ int main(int argc, char** argv) {
             };
             const double relightRate = get(reporter.rate, "relight/" + name), streamRate = get(reporter.rate, "stream/" + name),
                          floatRate = get(reporter.rate, "relight/float32/" + std::to_string(order));
-            std::printf("%-6d %-8s %10.1f %14.1f %14.1f %12.2f %14.2f\n", order, storage,
-                        get(reporter.bytesPerVertex, "relight/" + name), relightRate / 1e6, streamRate / 1e6,
+            const double bytesPerVertex = get(reporter.bytesPerVertex, "relight/" + name);
+            std::printf("%-6d %-8s %10.1f %12.1f %14.1f %14.1f %12.2f %14.2f\n", order, storage, bytesPerVertex,
+                        bytesPerVertex * double(gVertices) / 1e6, relightRate / 1e6, streamRate / 1e6,
                         floatRate > 0 ? relightRate / floatRate : 0.0, streamRate > 0 ? relightRate / streamRate : 0.0);
         }
     benchmark::Shutdown();
