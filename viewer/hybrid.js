@@ -4,9 +4,11 @@
 // T the transfer, B its bounce part (layer "transfer_bounce"; without it the lights light only directly), proj the
 // exact SH projection of a cone (sh::capProjection), C the horizon-clipped cone cosine integral
 // (sh::capCosineIntegral), V_vk the cone visibility that `prt relight --lights ... --visibility-out V.npy` wrote
-// ([rows][lights] float32). The visibility belongs to the lights as they were turned when it was cast, so with a
-// visibility file the turn is locked to the URL's `rotate` (the --rotate-y it was made with); without one the cones
-// are unshadowed (V = 1, as `--light-samples 0`) and the lights turn freely with the map.
+// ([rows][lights] float32), or with `--visibility-turns N` a table for N turns about +Y ([N][rows][lights] uint8,
+// round(255 V), turn t at t 360/N degrees). A single-turn file belongs to the lights as they were turned when it
+// was cast, so with one the turn is locked to the URL's `rotate` (the --rotate-y it was made with); with a table the
+// turn is free: at a turn theta the visibility is blended linearly between the two nearest table turns
+// (visibilityTurnBlend); without a file the cones are unshadowed (V = 1, as `--light-samples 0`).
 import * as THREE from 'three';
 import { layerData, parseGlb } from './bundle.js';
 import { relightRowGlsl } from './glsl.js';
@@ -124,33 +126,56 @@ export function readHybridLayers(bytes, vertexCount) {
   return { bounce, albedo, normals };
 }
 
-// A prt .npy of float32 [rows, lights] (prt relight --visibility-out) as {rows, lights, data}. Throws Error otherwise.
+// A prt .npy of float32 [rows, lights] (prt relight --visibility-out) as {turns: 1, rows, lights, data}, or of uint8
+// [turns, rows, lights] (with --visibility-turns) as {turns, rows, lights, bytes}. Throws Error otherwise.
 export function parseVisibilityNpy(arrayBuffer, url) {
   const bytes = new Uint8Array(arrayBuffer);
   if (bytes.length < 10 || bytes[0] !== 0x93 || new TextDecoder().decode(bytes.subarray(1, 6)) !== 'NUMPY')
     throw new Error(`${url}: not a .npy file`);
   const headerLength = bytes[8] | (bytes[9] << 8);
   const header = new TextDecoder().decode(bytes.subarray(10, 10 + headerLength));
+  const table = header.match(/'shape': \((\d+),\s*(\d+),\s*(\d+)\)/);
+  if (header.includes("'|u1'") && table && !header.includes("'fortran_order': True")) {
+    const [turns, rows, lights] = [Number(table[1]), Number(table[2]), Number(table[3])];
+    const data = new Uint8Array(arrayBuffer.slice(10 + headerLength));
+    if (turns < 1 || data.length !== turns * rows * lights)
+      throw new Error(`${url}: ${data.length} bytes for shape (${turns}, ${rows}, ${lights})`);
+    return { turns, rows, lights, bytes: data };
+  }
   const shape = header.match(/'shape': \((\d+),\s*(\d+)\)/);
   if (!header.includes("'<f4'") || header.includes("'fortran_order': True") || !shape)
     throw new Error(`${url}: need a float32 C-order .npy of shape (rows, lights)`);
   const rows = Number(shape[1]), lights = Number(shape[2]);
   const data = new Float32Array(arrayBuffer.slice(10 + headerLength));
   if (data.length !== rows * lights) throw new Error(`${url}: ${data.length} values for shape (${rows}, ${lights})`);
-  return { rows, lights, data };
+  return { turns: 1, rows, lights, data };
+}
+
+// Where a turn of `degrees` falls in a table of `turns` turns: {a, b, weight}, V = (1 - weight) V_a + weight V_b,
+// a and b the two nearest table turns (periodic over 360 degrees).
+export function visibilityTurnBlend(degrees, turns) {
+  const position = (((degrees % 360) + 360) % 360) * turns / 360;
+  const a = Math.floor(position) % turns;
+  return { a, b: (a + 1) % turns, weight: position - Math.floor(position) };
 }
 
 // The visibility [rows][lights] as `lights` layers of rowsPerLine x lines R32F texels (row r at (r % rowsPerLine,
 // r / rowsPerLine)), as viewer.js lays out the transfer.
+// A table (uint8, `turns` > 1 or bytes) goes as turns x lights R8 layers, layer t * lights + k (read back as byte/255).
 export function visibilityTexture(visibility, rowsPerLine, lines) {
-  const layer = rowsPerLine * lines, K = Math.max(1, visibility.lights);
-  const data = new Float32Array(layer * K).fill(1);
-  for (let r = 0; r < visibility.rows; ++r)
-    for (let k = 0; k < visibility.lights; ++k) data[k * layer + r] = visibility.data[r * visibility.lights + k];
-  const texture = new THREE.DataArrayTexture(data, rowsPerLine, lines, K);
+  const layer = rowsPerLine * lines, K = Math.max(1, visibility.lights), turns = visibility.turns || 1;
+  const bytes = !!visibility.bytes;
+  if (turns * K > 256) throw new Error(`visibility: ${turns} turns x ${K} lights = ${turns * K} texture layers, above WebGL2's 256`);
+  const data = bytes ? new Uint8Array(layer * K * turns).fill(255) : new Float32Array(layer * K).fill(1);
+  const source = bytes ? visibility.bytes : visibility.data;
+  for (let t = 0; t < turns; ++t)
+    for (let r = 0; r < visibility.rows; ++r)
+      for (let k = 0; k < visibility.lights; ++k)
+        data[(t * K + k) * layer + r] = source[(t * visibility.rows + r) * visibility.lights + k];
+  const texture = new THREE.DataArrayTexture(data, rowsPerLine, lines, K * turns);
   texture.format = THREE.RedFormat;
-  texture.type = THREE.FloatType;
-  texture.internalFormat = 'R32F';
+  texture.type = bytes ? THREE.UnsignedByteType : THREE.FloatType;
+  texture.internalFormat = bytes ? 'R8' : 'R32F';
   texture.minFilter = texture.magFilter = THREE.NearestFilter;
   texture.generateMipmaps = false;
   texture.needsUpdate = true;
@@ -170,6 +195,9 @@ export function hybridUniforms(maxCoefficients) {
     lightSinSquared: { value: new Array(kMaxLights).fill(0) },
     visibility: { value: null },
     hasVisibility: { value: false },
+    visibilityTurnA: { value: 0 },
+    visibilityTurnB: { value: 0 },
+    visibilityWeight: { value: 0 },
   };
 }
 
@@ -198,6 +226,8 @@ uniform vec3 lightRadiance[${kMaxLights}];
 uniform float lightSinSquared[${kMaxLights}];
 uniform sampler2DArray visibility;
 uniform bool hasVisibility;
+uniform int visibilityTurnA, visibilityTurnB; // table turns blended (visibilityTurnBlend); 0, 0 for one turn
+uniform float visibilityWeight;
 in vec3 normal;
 in vec3 albedo;
 ${relightRowGlsl(maxCoefficients, 'relightBounce', 'bounce', 'bounceLighting')}
@@ -222,7 +252,12 @@ vec3 hybridLights(int row) {
   vec3 n = normalize(normal);
   for (int k = 0; k < ${kMaxLights}; ++k) {
     if (k >= lightCount) break;
-    float visible = hasVisibility ? texelFetch(visibility, ivec3(at, k), 0).r : 1.0;
+    float visible = 1.0;
+    if (hasVisibility) {
+      float va = texelFetch(visibility, ivec3(at, visibilityTurnA * lightCount + k), 0).r;
+      float vb = texelFetch(visibility, ivec3(at, visibilityTurnB * lightCount + k), 0).r;
+      visible = mix(va, vb, visibilityWeight);
+    }
     if (!(visible > 0.0)) continue;
     float irradiance = capCosineIntegral(dot(n, lightDirection[k]), lightSinSquared[k]) * min(1.0, visible);
     sum += albedo / pi * lightRadiance[k] * irradiance;

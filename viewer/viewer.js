@@ -5,7 +5,7 @@ import * as THREE from 'three';
 import { isSceneBundle, loadBundle, parseGlb, readSceneTransfer, syntheticBundle } from './bundle.js';
 import { relightRowGlsl, toneMapGlsl } from './glsl.js';
 import { hybridGlsl, hybridUniforms, loadLights, parseVisibilityNpy, readHybridLayers, setHybridUniforms,
-         turnedHybridLighting, visibilityTexture } from './hybrid.js';
+         turnedHybridLighting, visibilityTexture, visibilityTurnBlend } from './hybrid.js';
 import { sceneMeshes } from './scene.js';
 import { fitLighting, rotateLightingY } from './sh.js';
 import { loadSky, skyMesh } from './sky.js';
@@ -314,7 +314,8 @@ export async function startViewer(canvas, panel, params) {
     glossy: !!glossy && params.get('glossyOn') !== '0',
   };
   // With a visibility file the turn stays where the visibility was cast (hybrid.js): the URL's rotate.
-  const lockedTurn = hybrid && hybrid.visibility ? state.rotate : null;
+  // A table of turns (--visibility-turns) leaves it free.
+  const lockedTurn = hybrid && hybrid.visibility && !(hybrid.visibility.turns > 1) ? state.rotate : null;
   let metrics = null;
   let lighting = null;
   let frameMs = null;
@@ -380,6 +381,8 @@ export async function startViewer(canvas, panel, params) {
       const turned = turnedHybridLighting(hybrid.lights, state.rotate, order);
       lighting = turned.residual;
       setHybridUniforms(uniforms, turned, kMaxCoefficients);
+      const blend = visibilityTurnBlend(state.rotate, (hybrid.visibility && hybrid.visibility.turns) || 1);
+      [uniforms.visibilityTurnA.value, uniforms.visibilityTurnB.value, uniforms.visibilityWeight.value] = [blend.a, blend.b, blend.weight];
     } else {
       // As prt relight: the lighting's bands shared with the transfer, turned about +Y; bands above `order` are off.
       const fitted = fitLighting(source.coefficients, Math.min(source.order, t.order) ** 2);

@@ -42,6 +42,7 @@ struct RelightOptions {
     std::string camera;    // "EYE,TARGET,UP,FOVY", as `prt render` and `prt reference --image`
     float exposure = 0.0f;
     bool irradiance = false; // rows of irradiance E instead of outgoing radiance
+    int visibilityTurns = -1; // --visibility-turns N: a table of N turns instead of one (-1: not given)
     std::string positions;   // also write each row's world-space position, [V,3] .npy
     std::string visibilityOut; // --lights: also write each row's cone visibility, [rows, lights] .npy
     SpecularRelightArgs specular; // --brdf: relight_specular.cpp
@@ -185,6 +186,16 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
                          {light.radiance[0], light.radiance[1], light.radiance[2]},
                          light.angularRadius});
     uint64_t rays = 0;
+    std::vector<uint8_t> turnTable; // --visibility-turns: [turns][rows][lights] bytes
+    if (options.visibilityTurns != -1) {
+        turnTable = envlight::coneVisibilityTurns(rows.mesh, rows.points.data(), rows.model.normals.data(),
+                                                  rows.spawn.data(), rows.model.total.vertexCount, cones,
+                                                  options.lightSamples, options.visibilityTurns, &rays);
+        char turnsLine[160];
+        std::snprintf(turnsLine, sizeof turnsLine, "relight: cone visibility for %d turns in %.1f ms (%zu bytes)",
+                      options.visibilityTurns, (nowSeconds() - visibilityStart) * 1e3, turnTable.size());
+        logInfo(turnsLine);
+    }
     std::vector<float> visibility = hybridVisibility(rows, cones, options.lightSamples, &rays);
     double visibilitySeconds = nowSeconds() - visibilityStart;
 
@@ -207,7 +218,11 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
                     : "relight: the bundle has no \"transfer_bounce\" layer, so the lights light only directly "
                       "(their interreflected light is lost); make it with `prt transfer --mode interreflected`");
     // The visibility first: a failure to write it leaves no radiance behind either.
-    if (!options.visibilityOut.empty()) {
+    if (options.visibilityTurns != -1) {
+        writeNpyU8(options.visibilityOut, turnTable,
+                   {size_t(options.visibilityTurns), size_t(model.total.vertexCount), cones.size()});
+        logInfo("relight: wrote " + options.visibilityOut + " (cone visibility per turn, row and light, bytes)");
+    } else if (!options.visibilityOut.empty()) {
         writeNpy(options.visibilityOut, visibility, {size_t(model.total.vertexCount), cones.size()});
         logInfo("relight: wrote " + options.visibilityOut + " (cone visibility per row and light)");
     }
@@ -343,6 +358,18 @@ void runRelight(const RelightOptions& options) {
         throw Error(options.positions, "--positions", "must end in .npy", kExitUsage);
     if (!options.visibilityOut.empty() && (options.lights.empty() || fileExtension(options.visibilityOut) != "npy"))
         throw Error(options.visibilityOut, "--visibility-out", "goes with --lights and must end in .npy", kExitUsage);
+    if (options.visibilityTurns != -1) {
+        if (options.visibilityOut.empty())
+            throw Error("", "--visibility-turns", "goes with --lights and --visibility-out", kExitUsage);
+        if (options.visibilityTurns < 1 || options.visibilityTurns > envlight::kMaxVisibilityTurns)
+            throw Error("", "--visibility-turns",
+                        std::to_string(options.visibilityTurns) + " is outside 1.." +
+                            std::to_string(envlight::kMaxVisibilityTurns), kExitUsage);
+        if (options.texels) throw Error("", "--visibility-turns", "is per vertex (not --texels)", kExitUsage);
+        if (options.rotateYDegrees != 0.0)
+            throw Error("", "--visibility-turns",
+                        "casts the turns 0, 360/N, ... itself: give --rotate-y to the runs that draw", kExitUsage);
+    }
     // A glossy bundle under lights goes through the glossy path (--eye, --glossy-only, or a picture of one).
     if (!options.lights.empty() &&
         (!options.eye.empty() || options.glossyOnly ||
@@ -507,6 +534,10 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--visibility-out", options->visibilityOut,
                         "With --lights: also write the cone visibility the relight used, float32 .npy [rows, lights] "
                         "(the lights as turned by --rotate-y), e.g. for the browser viewer's hybrid");
+    command->add_option("--visibility-turns", options->visibilityTurns,
+                        "With --lights and --visibility-out: cast the cone visibility for N turns about +Y evenly over "
+                        "360 degrees (turn t at t*360/N, as --rotate-y casts it) and write them as one uint8 .npy "
+                        "[N, rows, lights] (round(255 V)), so the viewer turns the lights freely with their shadows");
     addSpecularRelightOptions(command, options->specular);
     command->callback([options] { runRelight(*options); });
 }

@@ -135,5 +135,7 @@ uint64_t checkedProduct(const std::vector<uint64_t>& factors, const std::string&
 // float32, C order. Used for per-vertex radiance [V,3] and other per-element outputs.
 void writeNpy(const std::string& path, const std::vector<float>& data, const std::vector<size_t>& shape);
 std::vector<float> readNpy(const std::string& path, std::vector<size_t>* shape);
+// uint8 ('|u1'), C order, atomic: quantised tables (the hybrid's cone visibility per turn).
+void writeNpyU8(const std::string& path, const std::vector<uint8_t>& data, const std::vector<size_t>& shape);
 
 } // namespace prt

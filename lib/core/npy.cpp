@@ -6,14 +6,19 @@
 
 namespace prt {
 
-void writeNpy(const std::string& path, const std::vector<float>& data, const std::vector<size_t>& shape) {
+namespace {
+
+// A version 1.0 .npy of `dtype` ("<f4", "|u1") and `shape` holding `payloadBytes` bytes of row-major data, atomic.
+void writeNpyBytes(const std::string& path, const char* dtype, const void* payload, size_t payloadBytes,
+                   size_t elementBytes, const std::vector<size_t>& shape) {
     size_t count = 1;
     for (size_t n : shape) count *= n;
-    if (count != data.size()) throw Error(path, "", "internal: npy shape does not match data size", kExitFailure);
+    if (count * elementBytes != payloadBytes)
+        throw Error(path, "", "internal: npy shape does not match data size", kExitFailure);
     std::string shapeText = "(";
     for (size_t i = 0; i < shape.size(); ++i) shapeText += std::to_string(shape[i]) + (shape.size() == 1 || i + 1 < shape.size() ? "," : "");
     shapeText += ")";
-    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shapeText + ", }";
+    std::string header = std::string("{'descr': '") + dtype + "', 'fortran_order': False, 'shape': " + shapeText + ", }";
     // Version 1.0: magic(6) + version(2) + header length(2) + header padded with spaces to a multiple of 64, '\n'.
     size_t total = 10 + header.size() + 1;
     header.append((64 - total % 64) % 64, ' ');
@@ -22,8 +27,18 @@ void writeNpy(const std::string& path, const std::vector<float>& data, const std
     uint16_t headerLength = uint16_t(header.size());
     bytes.append(reinterpret_cast<const char*>(&headerLength), 2);
     bytes += header;
-    bytes.append(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(float));
+    bytes.append(reinterpret_cast<const char*>(payload), payloadBytes);
     writeBytesAtomic(path, bytes);
+}
+
+} // namespace
+
+void writeNpy(const std::string& path, const std::vector<float>& data, const std::vector<size_t>& shape) {
+    writeNpyBytes(path, "<f4", data.data(), data.size() * sizeof(float), sizeof(float), shape);
+}
+
+void writeNpyU8(const std::string& path, const std::vector<uint8_t>& data, const std::vector<size_t>& shape) {
+    writeNpyBytes(path, "|u1", data.data(), data.size(), 1, shape);
 }
 
 std::vector<float> readNpy(const std::string& path, std::vector<size_t>* shape) {

@@ -312,4 +312,22 @@ std::vector<uint8_t> coneSampleVisibility(const TriMesh& mesh, const float* poin
 std::vector<float> coneVisibilityFromSamples(const float* normals, size_t count, size_t lights, int samples,
                                              const float* directions, const uint8_t* visible);
 
+// ---- visibility turns ------------------------------------------------------------------------------------------
+// The cone visibility of `lights` turned about +Y, for `turns` turns evenly over 360 degrees (turn t at t * 360 /
+// turns degrees), quantised to bytes: table[(t * count + i) * lights + k] = quantizeVisibility(V_tik), where V_tik
+// is coneVisibility (same points, normals, spawn normals, samples) for the lights turned by turnConeLightsY(lights,
+// t * 360 / turns), exactly what `prt relight --lights --rotate-y DEG --visibility-out` casts at that angle. samples 0:
+// unshadowed (all 255). Grows as turns x count x lights bytes; refuses (Error, kExitUsage) turns outside
+// 1..kMaxVisibilityTurns and a table above kMaxVisibilityTableBytes, before allocating. *rays counts the rays.
+constexpr int kMaxVisibilityTurns = 720;
+constexpr uint64_t kMaxVisibilityTableBytes = uint64_t(1) << 30;
+std::vector<uint8_t> coneVisibilityTurns(const TriMesh& mesh, const float* points, const float* normals,
+                                         const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
+                                         int samples, int turns, uint64_t* rays = nullptr);
+// `lights` turned by `degrees` about +Y (sh::rotationY) as rotateHybridLighting turns a prt-lights JSON's cones:
+// each direction's float components rotated in double and rounded to float. 0 degrees: unchanged.
+std::vector<ConeLight> turnConeLightsY(const std::vector<ConeLight>& lights, double degrees);
+// round(255 v) for v clamped to [0, 1]: a visibility as a byte (the viewer reads it back as byte / 255).
+uint8_t quantizeVisibility(float visibility);
+
 } // namespace prt::envlight

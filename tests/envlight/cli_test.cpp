@@ -8,7 +8,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <iterator>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -204,6 +207,60 @@ TEST_F(EnvlightCli, VisibilityOutIsTheVisibilityTheHybridUsed) {
     EXPECT_EQ(run("relight " + bundle + " --lights " + lights + " --visibility-out " + (dir / "v.csv").string() +
                   " -o " + hybrid).exitCode, 2);
     EXPECT_FALSE(fs::exists(out));
+}
+
+// --visibility-turns N: entry t of the uint8 table [N, rows, lights] is exactly round(255 V) of the visibility
+// `--rotate-y t*360/N --visibility-out` casts; bad turn counts and combinations exit 2 with no output.
+TEST_F(EnvlightCli, VisibilityTurnsTableEqualsRotateYCasts) {
+    std::string scene = (dir / "two.glb").string(), bundle = (dir / "two_t.glb").string();
+    ASSERT_EQ(run("scene two-spheres -o " + scene).exitCode, 0);
+    ASSERT_EQ(run("transfer " + scene + " -o " + bundle + " --samples 16 --order 3 --albedo 0.8").exitCode, 0);
+    Disc sun{unit(0.7, 0.5, 0.0), 6.0, {200.0, 200.0, 200.0}};
+    std::string map = writeMap("sun.exr", discMap(128, 0.5, {sun}));
+    std::string lights = (dir / "lights.json").string(), out = (dir / "r.npy").string();
+    std::string table = (dir / "table.npy").string();
+    ASSERT_EQ(run("envlight " + map + " -o " + lights + " --order 3").exitCode, 0);
+    const int turns = 8;
+    CliRun r = run("relight " + bundle + " --lights " + lights + " --light-samples 16 --visibility-out " + table +
+                   " --visibility-turns " + std::to_string(turns) + " -o " + out);
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    std::ifstream file(table, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    ASSERT_GT(bytes.size(), 10u);
+    size_t headerLength = (unsigned char)bytes[8] | (unsigned char)bytes[9] << 8;
+    std::string header = bytes.substr(10, headerLength);
+    EXPECT_NE(header.find("'|u1'"), std::string::npos) << header;
+    const uint8_t* data = reinterpret_cast<const uint8_t*>(bytes.data() + 10 + headerLength);
+    size_t tableSize = bytes.size() - 10 - headerLength;
+    size_t differing = 0;
+    for (int t = 0; t < turns; ++t) {
+        std::string single = (dir / ("v" + std::to_string(t) + ".npy")).string();
+        r = run("relight " + bundle + " --lights " + lights + " --light-samples 16 --rotate-y " +
+                std::to_string(t * 360 / turns) + " --visibility-out " + single + " -o " + out);
+        ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+        std::vector<size_t> shape;
+        std::vector<float> visible = prt::readNpy(single, &shape);
+        ASSERT_EQ(header.find("(" + std::to_string(turns) + "," + std::to_string(shape[0]) + "," +
+                              std::to_string(shape[1]) + ")") != std::string::npos, true) << header;
+        ASSERT_EQ(tableSize, turns * visible.size());
+        for (size_t i = 0; i < visible.size(); ++i) {
+            uint8_t expected = uint8_t(std::lround(255.0f * std::clamp(visible[i], 0.0f, 1.0f)));
+            ASSERT_EQ(data[t * visible.size() + i], expected) << "turn " << t << " entry " << i;
+            differing += data[t * visible.size() + i] != data[i];
+        }
+    }
+    EXPECT_GT(differing, 0u); // the shadows move with the turn
+
+    std::string bad = (dir / "bad.npy").string();
+    for (const std::string& flags : {" --visibility-turns 0", " --visibility-turns 721", " --visibility-turns 4 --rotate-y 10"}) {
+        r = run("relight " + bundle + " --lights " + lights + " --visibility-out " + bad + flags + " -o " + out + ".x.npy");
+        EXPECT_EQ(r.exitCode, 2) << flags;
+        EXPECT_NE(r.stderrText.find("--visibility-turns"), std::string::npos) << r.stderrText;
+    }
+    r = run("relight " + bundle + " --lights " + lights + " --visibility-turns 4 -o " + bad);
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.stderrText.find("--visibility-out"), std::string::npos) << r.stderrText;
+    EXPECT_FALSE(fs::exists(bad));
 }
 
 // The pipeline stage: envlight's lights feed relight; a second run is served from the cache with the same bytes.
