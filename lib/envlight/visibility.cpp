@@ -7,6 +7,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 
@@ -45,99 +46,108 @@ std::vector<float> coneSampleDirections(const ConeLight& light, int samples) {
     return out;
 }
 
-std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
-                                  const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
-                                  int samples, uint64_t* rays) {
-    std::vector<float> visibility(count * lights.size(), 0.0f);
-    if (lights.empty() || count == 0) return visibility;
-    std::vector<std::vector<float>> directions;
-    for (const ConeLight& light : lights) directions.push_back(coneSampleDirections(light, samples));
+namespace {
+
+// Casts, for every point i < count, one occlusion ray toward each sample of each light that lies above the point's
+// horizon (n_i . w > 0), from the point's spawn origin (lib/raycast's rule: spawnNormals, or normals when null),
+// and hands the results to `store(i, hits)`, where hits is [lights][samples] with 1 visible, 0 occluded or below
+// the horizon. Needs: `directions` [lights][samples * 3] unit vectors. Guarantees: the same rays in the same order
+// per point whatever the thread count, so every caller's reduction is deterministic; returns the rays cast.
+template <class Store>
+uint64_t castConeSamples(const TriMesh& mesh, const float* points, const float* normals, const float* spawnNormals,
+                         size_t count, const std::vector<std::vector<float>>& directions, int samples, Store store) {
+    const size_t lights = directions.size(), perPoint = lights * size_t(samples);
     EmbreeScene scene(mesh);
     const float offset = rayOffset(mesh);
     std::atomic<uint64_t> cast{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 256), [&](const tbb::blocked_range<size_t>& range) {
         uint64_t local = 0;
+        std::vector<uint8_t> hits(perPoint);
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         for (size_t i = range.begin(); i != range.end(); ++i) {
             const float* n = normals + i * 3;
             float origin[3];
             spawnOrigin(points + i * 3, (spawnNormals ? spawnNormals : normals) + i * 3, offset, origin);
-            for (size_t k = 0; k < lights.size(); ++k) {
-                double visible = 0.0, total = 0.0;
+            for (size_t k = 0; k < lights; ++k)
                 for (int s = 0; s < samples; ++s) {
                     const float* w = &directions[k][s * 3];
-                    float cosine = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
-                    if (cosine <= 0.0f) continue;
-                    total += cosine;
+                    uint8_t& hit = hits[k * samples + s];
+                    hit = 0;
+                    if (n[0] * w[0] + n[1] * w[1] + n[2] * w[2] <= 0.0f) continue; // below the horizon: 0
                     RTCRay ray;
                     spawnRay(ray, origin, w[0], w[1], w[2]);
                     rtcOccluded1(scene.scene, &context, &ray);
                     ++local;
-                    if (ray.tfar >= 0.0f) visible += cosine; // occluded rays come back with tfar = -inf
+                    hit = ray.tfar >= 0.0f ? 1 : 0; // occluded rays come back with tfar = -inf
                 }
-                visibility[i * lights.size() + k] = total > 0.0 ? float(visible / total) : 0.0f;
-            }
+            store(i, hits.data());
         }
         cast += local;
     });
-    if (rays) *rays = cast.load();
+    return cast.load();
+}
+
+// The cosine-weighted visible fraction of one light at one point: sum over samples above the horizon of
+// (n . w) * hit, over the sum of (n . w); 0 when no sample is above it. `directions` [samples][3], `hits` [samples].
+float visibleFraction(const float* n, const float* directions, int samples, const uint8_t* hits) {
+    double seen = 0.0, total = 0.0;
+    for (int s = 0; s < samples; ++s) {
+        const float* w = directions + s * 3;
+        float cosine = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
+        if (cosine <= 0.0f) continue;
+        total += cosine;
+        if (hits[s]) seen += cosine;
+    }
+    return total > 0.0 ? float(seen / total) : 0.0f;
+}
+
+std::vector<std::vector<float>> sampleDirections(const std::vector<ConeLight>& lights, int samples) {
+    std::vector<std::vector<float>> directions;
+    for (const ConeLight& light : lights) directions.push_back(coneSampleDirections(light, samples));
+    return directions;
+}
+
+} // namespace
+
+std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
+                                  const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
+                                  int samples, uint64_t* rays) {
+    std::vector<float> visibility(count * lights.size(), 0.0f);
+    if (lights.empty() || count == 0) return visibility;
+    const std::vector<std::vector<float>> directions = sampleDirections(lights, samples);
+    const size_t lightCount = lights.size();
+    uint64_t cast = castConeSamples(mesh, points, normals, spawnNormals, count, directions, samples,
+                                    [&](size_t i, const uint8_t* hits) {
+                                        for (size_t k = 0; k < lightCount; ++k)
+                                            visibility[i * lightCount + k] = visibleFraction(
+                                                normals + i * 3, directions[k].data(), samples, hits + k * samples);
+                                    });
+    if (rays) *rays = cast;
     return visibility;
 }
 
 std::vector<uint8_t> coneSampleVisibility(const TriMesh& mesh, const float* points, const float* normals,
                                           const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
                                           int samples, uint64_t* rays) {
-    const size_t lightCount = lights.size(), perPoint = lightCount * size_t(samples);
+    const size_t perPoint = lights.size() * size_t(samples);
     std::vector<uint8_t> visible(count * perPoint, 0);
     if (lights.empty() || count == 0 || samples <= 0) return visible;
-    std::vector<std::vector<float>> directions;
-    for (const ConeLight& light : lights) directions.push_back(coneSampleDirections(light, samples));
-    EmbreeScene scene(mesh);
-    const float offset = rayOffset(mesh);
-    std::atomic<uint64_t> cast{0};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 256), [&](const tbb::blocked_range<size_t>& range) {
-        uint64_t local = 0;
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        for (size_t i = range.begin(); i != range.end(); ++i) {
-            const float* n = normals + i * 3;
-            float origin[3];
-            spawnOrigin(points + i * 3, (spawnNormals ? spawnNormals : normals) + i * 3, offset, origin);
-            for (size_t k = 0; k < lightCount; ++k)
-                for (int s = 0; s < samples; ++s) {
-                    const float* w = &directions[k][s * 3];
-                    if (n[0] * w[0] + n[1] * w[1] + n[2] * w[2] <= 0.0f) continue; // below the horizon: 0
-                    RTCRay ray;
-                    spawnRay(ray, origin, w[0], w[1], w[2]);
-                    rtcOccluded1(scene.scene, &context, &ray);
-                    ++local;
-                    visible[i * perPoint + k * samples + s] = ray.tfar >= 0.0f ? 1 : 0;
-                }
-        }
-        cast += local;
-    });
-    if (rays) *rays = cast.load();
+    uint64_t cast = castConeSamples(mesh, points, normals, spawnNormals, count, sampleDirections(lights, samples),
+                                    samples, [&](size_t i, const uint8_t* hits) {
+                                        std::copy(hits, hits + perPoint, visible.begin() + i * perPoint);
+                                    });
+    if (rays) *rays = cast;
     return visible;
 }
 
 std::vector<float> coneVisibilityFromSamples(const float* normals, size_t count, size_t lights, int samples,
                                              const float* directions, const uint8_t* visible) {
     std::vector<float> fraction(count * lights, 0.0f);
-    for (size_t i = 0; i < count; ++i) {
-        const float* n = normals + i * 3;
-        for (size_t k = 0; k < lights; ++k) {
-            double seen = 0.0, total = 0.0;
-            for (int s = 0; s < samples; ++s) {
-                const float* w = directions + (k * samples + s) * 3;
-                float cosine = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
-                if (cosine <= 0.0f) continue;
-                total += cosine;
-                if (visible[(i * lights + k) * samples + s]) seen += cosine;
-            }
-            fraction[i * lights + k] = total > 0.0 ? float(seen / total) : 0.0f;
-        }
-    }
+    for (size_t i = 0; i < count; ++i)
+        for (size_t k = 0; k < lights; ++k)
+            fraction[i * lights + k] = visibleFraction(normals + i * 3, directions + k * samples * 3, samples,
+                                                       visible + (i * lights + k) * samples);
     return fraction;
 }
 
