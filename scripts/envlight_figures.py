@@ -22,46 +22,21 @@ map hashes in a sidecar, as scripts/sweep.py does.
 import argparse
 import csv
 import glob
-import hashlib
 import json
 import math
 import os
 import re
-import subprocess
 import sys
-import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DATA = os.path.join(ROOT, ".cache", "data")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from prt_commands import DATA, ROOT, file_hash, run_logged, stage_seconds  # noqa: E402
+
 SHARP = ["city", "interior", "night", "studio", "sunrise"]  # a small bright source (docs/results.md)
 SMOOTH = ["courtyard", "forest", "sunset"]
 
 
 def run(args):
-    start = time.monotonic()
-    result = subprocess.run(args, check=False, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seconds = time.monotonic() - start
-    if result.returncode != 0:
-        sys.exit(f"envlight_figures: {' '.join(args)} failed ({result.returncode}):\n{result.stderr}")
-    events = []
-    for line in result.stderr.splitlines():
-        try:
-            events.append(json.loads(line))
-        except ValueError:
-            pass
-    return seconds, result.stdout, events
-
-
-def stage_seconds(events, fallback):
-    for event in events:
-        if event.get("event") == "cost":
-            return float(event["seconds"])
-    return fallback
-
-
-def file_hash(path):
-    with open(path, "rb") as f:
-        return hashlib.sha256(f.read()).hexdigest()
+    return run_logged(args, "envlight_figures")
 
 
 def metrics(result_path, ref):
