@@ -3,7 +3,7 @@
 
 #include "core.h"
 #include "raycast.h"
-#include "runtime_jobs.h"
+#include "tbb_jobs.h"
 
 #include <algorithm>
 

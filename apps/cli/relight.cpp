@@ -11,7 +11,7 @@
 #include "raycast.h"
 #include "render.h"
 #include "runtime.h"
-#include "runtime_jobs.h"
+#include "tbb_jobs.h"
 
 #include <nlohmann/json.hpp>
 
@@ -436,7 +436,7 @@ void runRelight(const RelightOptions& options) {
 
     double relightStart = nowSeconds();
     std::vector<float> radiance(size_t(model.vertexCount) * 3);
-    relight(model, lighting.data(), 0, model.vertexCount, radiance.data(), cli::tbbJobs());
+    relight(model, lighting.data(), 0, model.vertexCount, radiance.data(), tbbJobs());
     double relightSeconds = nowSeconds() - relightStart;
     char rate[160];
     const char* rows = options.texels ? "texels" : "vertices";

@@ -10,7 +10,7 @@
 #include "raycast.h"
 #include "render.h"
 #include "runtime.h"
-#include "runtime_jobs.h"
+#include "tbb_jobs.h"
 
 #include <memory>
 #include <optional>
@@ -155,7 +155,7 @@ void runRender(const RenderOptions& options) {
     if (options.order > 0)
         for (size_t i = size_t(options.order) * options.order * 3; i < lighting.size(); ++i) lighting[i] = 0.0f;
     std::vector<float> radiance(size_t(model.vertexCount) * 3);
-    relight(model, lighting.data(), 0, model.vertexCount, radiance.data(), cli::tbbJobs());
+    relight(model, lighting.data(), 0, model.vertexCount, radiance.data(), tbbJobs());
 
     // The stack the lobes are looked up in, written for the viewer (unturned: the viewer turns the lookup as
     // renderGlossyRadiance does) and reused by the picture.

@@ -4,8 +4,7 @@
 
 #include "core.h"
 #include "runtime.h"
-
-#include <tbb/parallel_for.h>
+#include "tbb_jobs.h"
 
 #include <cstring>
 #include <string>
@@ -18,10 +17,7 @@ PrefilteredEnvironment glossyRenderEnvironment(const GlossyModel& glossy, const 
         throw Error(envSource, "--env", "the glossy runtime needs an equirectangular (2:1) map");
     PrefilterOptions options;
     glossySharpnessRange(glossy, options.sharpnessMin, options.sharpnessMax);
-    JobSystem jobs;
-    jobs.parallelFor = [](void*, size_t count, TaskFunction task, void* data) {
-        tbb::parallel_for(size_t(0), count, [&](size_t i) { task(data, i); });
-    };
+    const JobSystem jobs = tbbJobs();
     options.jobs = &jobs;
     return prefilterEnvironment(environment.radiance.rgb.data(), environment.radiance.width,
                                 environment.radiance.height, options);
