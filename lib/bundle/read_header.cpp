@@ -105,38 +105,39 @@ BundleHeader readBundleHeader(const std::string& path) {
                      "streamed (rewrite it with a prt stage)");
     if (prefix == 0) refuse(path, "holds no mesh bytes before its layers");
 
+    // A .glb of the JSON (buffer 0 cut to the bytes before the layers) and those bytes, for tinygltf; the pass below
+    // reads the bytes straight into it, so the mesh bytes are held once before tinygltf copies them.
+    json cut = gltf;
+    cut["buffers"][0]["byteLength"] = prefix;
+    std::string cutText = cut.dump();
+    cut = json();
+    cutText.resize((cutText.size() + 3) / 4 * 4, ' ');
+    const uint64_t paddedPrefix = (prefix + 3) / 4 * 4;
+    const uint32_t glbHead[5] = {0x46546C67u, 2u, uint32_t(12 + 8 + cutText.size() + 8 + paddedPrefix), uint32_t(cutText.size()),
+                                 0x4E4F534Au};
+    const uint32_t glbBinary[2] = {uint32_t(paddedPrefix), 0x004E4942u};
+    std::string glb(reinterpret_cast<const char*>(glbHead), sizeof glbHead);
+    glb.append(cutText);
+    glb.append(reinterpret_cast<const char*>(glbBinary), sizeof glbBinary);
+    cutText = {};
+    const size_t prefixStart = glb.size();
+    glb.resize(prefixStart + paddedPrefix, '\0');
+
     // One pass over buffer 0: hashed whole (the checksum) and per layer view; the bytes before the layers kept.
     StreamHash whole;
     std::map<std::pair<uint64_t, uint64_t>, std::unique_ptr<StreamHash>> viewHashes;
     for (size_t v : layers) viewHashes.try_emplace({spans[v].begin, spans[v].end - spans[v].begin}, std::make_unique<StreamHash>());
-    std::string before(prefix, '\0');
     std::vector<char> piece(kPiece);
     for (uint64_t at = 0; at < bufferLength; at += kPiece) {
         size_t size = size_t(std::min<uint64_t>(kPiece, bufferLength - at));
         readAt(in, binaryStart + at, piece.data(), size, path);
         whole.add(piece.data(), size);
-        if (at < prefix) std::memcpy(before.data() + at, piece.data(), size_t(std::min<uint64_t>(size, prefix - at)));
+        if (at < prefix) std::memcpy(glb.data() + prefixStart + at, piece.data(), size_t(std::min<uint64_t>(size, prefix - at)));
         for (auto& [view, hash] : viewHashes) {
             uint64_t begin = std::max(view.first, at), end = std::min(view.first + view.second, at + size);
             if (begin < end) hash->add(piece.data() + (begin - at), end - begin);
         }
     }
-
-    // A .glb of the JSON (buffer 0 cut to the bytes before the layers) and those bytes, for tinygltf.
-    json cut = gltf;
-    cut["buffers"][0]["byteLength"] = prefix;
-    std::string cutText = cut.dump();
-    cutText.resize((cutText.size() + 3) / 4 * 4, ' ');
-    before.resize((before.size() + 3) / 4 * 4, '\0');
-    const uint32_t glbHead[5] = {0x46546C67u, 2u, uint32_t(12 + 8 + cutText.size() + 8 + before.size()), uint32_t(cutText.size()),
-                                 0x4E4F534Au};
-    const uint32_t glbBinary[2] = {uint32_t(before.size()), 0x004E4942u};
-    std::string glb(reinterpret_cast<const char*>(glbHead), sizeof glbHead);
-    glb.append(cutText);
-    glb.append(reinterpret_cast<const char*>(glbBinary), sizeof glbBinary);
-    glb.append(before);
-    before = {};
-    cutText = {};
     std::string ignored;
     tinygltf::Model model = detail::loadModelFromBytes(path, glb, ignored);
     glb = {};
