@@ -126,6 +126,21 @@ export function readHybridLayers(bytes, vertexCount) {
   return { bounce, albedo, normals };
 }
 
+// A scene bundle's bounce layer ("transfer_bounce", irradiance transfer of the transfer's shape, or null): what the
+// hybrid reads beyond the transfer for a scene. The albedo is the materials' per pixel (scene.js), the normals
+// each receiver's in world space (the node's normal matrix, scene.js). Throws Error for a malformed layer.
+export function readSceneBounce(json, bin) {
+  const layers = json.extensions.PRT_bundle.layers || [];
+  const transfer = layers.find((l) => l.name === 'transfer');
+  const bounceLayer = layers.find((l) => l.name === 'transfer_bounce');
+  if (!bounceLayer) return null;
+  if (bounceLayer.semantic !== 'sh_transfer_bounce_rgb' || !transfer || JSON.stringify(bounceLayer.shape) !== JSON.stringify(transfer.shape))
+    throw new Error('lights: layer "transfer_bounce" is not sh_transfer_bounce_rgb of the transfer\'s shape');
+  const data = layerData(json, bin, bounceLayer);
+  if (!data) throw new Error('lights: layer "transfer_bounce" has no data in the bundle');
+  return data;
+}
+
 // A prt .npy of float32 [rows, lights] (prt relight --visibility-out) as {turns: 1, rows, lights, data}, or of uint8
 // [turns, rows, lights] (with --visibility-turns) as {turns, rows, lights, bytes}. Throws Error otherwise.
 export function parseVisibilityNpy(arrayBuffer, url) {
@@ -213,9 +228,12 @@ export function setHybridUniforms(uniforms, turned, maxCoefficients) {
   });
 }
 
-// The vertex shader's part: hybridLights(row) is B . bounceLighting plus the cones' direct light at the vertex.
-// Needs relightRowGlsl's uniforms (transfer layout: rowsPerLine, coefficients) and the attributes normal, albedo.
-export const hybridGlsl = (maxCoefficients) => /* glsl */ `
+// The vertex shader's part: hybridLightsAt(row, n, albedo) is B . bounceLighting plus the cones' direct light at a
+// vertex of normal n (normalised here) and albedo; with `attributes` also hybridLights(row), which takes both from
+// the attributes normal and albedo (a plain bundle). A scene (scene.js) passes its world normal and albedo 1: its
+// transfer and bounce layer are irradiance transfer, and the materials multiply per pixel.
+// Needs relightRowGlsl's uniforms (transfer layout: rowsPerLine, coefficients).
+export const hybridGlsl = (maxCoefficients, attributes = true) => /* glsl */ `
 uniform bool hybrid;
 uniform sampler2DArray bounce;
 uniform bool hasBounce;
@@ -228,8 +246,6 @@ uniform sampler2DArray visibility;
 uniform bool hasVisibility;
 uniform int visibilityTurnA, visibilityTurnB; // table turns blended (visibilityTurnBlend); 0, 0 for one turn
 uniform float visibilityWeight;
-in vec3 normal;
-in vec3 albedo;
 ${relightRowGlsl(maxCoefficients, 'relightBounce', 'bounce', 'bounceLighting')}
 // sh::capCosineIntegral: the integral of max(0, n . w) over the cap of half-angle sigma about an axis at cosine
 // cosTheta from n (Snyder 1996, horizon-clipped form of Lagarde and de Rousiers 2014).
@@ -245,11 +261,11 @@ float capCosineIntegral(float cosTheta, float sinSigmaSquared) {
   float value = (cosTheta * acos(y) - x * sinThetaSqrtY) * sinSigmaSquared + (x > 0.0 ? atan(sinThetaSqrtY / x) : pi / 2.0);
   return max(0.0, value);
 }
-vec3 hybridLights(int row) {
+vec3 hybridLightsAt(int row, vec3 vertexNormal, vec3 albedo) {
   const float pi = 3.14159265358979;
   vec3 sum = hasBounce ? relightBounce(row) : vec3(0.0);
   ivec2 at = ivec2(row % rowsPerLine, row / rowsPerLine);
-  vec3 n = normalize(normal);
+  vec3 n = normalize(vertexNormal);
   for (int k = 0; k < ${kMaxLights}; ++k) {
     if (k >= lightCount) break;
     float visible = 1.0;
@@ -263,4 +279,7 @@ vec3 hybridLights(int row) {
     sum += albedo / pi * lightRadiance[k] * irradiance;
   }
   return sum;
-}`;
+}
+${attributes ? `in vec3 normal;
+in vec3 albedo;
+vec3 hybridLights(int row) { return hybridLightsAt(row, normal, albedo); }` : ''}`;

@@ -4,7 +4,7 @@
 import * as THREE from 'three';
 import { isSceneBundle, loadBundle, parseGlb, readSceneTransfer, syntheticBundle } from './bundle.js';
 import { relightRowGlsl, toneMapGlsl } from './glsl.js';
-import { hybridGlsl, hybridUniforms, loadLights, parseVisibilityNpy, readHybridLayers, setHybridUniforms,
+import { hybridGlsl, hybridUniforms, loadLights, parseVisibilityNpy, readHybridLayers, readSceneBounce, setHybridUniforms,
          turnedHybridLighting, visibilityTexture, visibilityTurnBlend } from './hybrid.js';
 import { sceneMeshes } from './scene.js';
 import { fitLighting, rotateLightingY } from './sh.js';
@@ -120,21 +120,26 @@ function transferTexture(transfer, rowsPerLine, lines) {
 // Loads what `params` (the page's query, README "Query parameters") names and draws it. Returns the api the page
 // and the tests drive: set(changes), read(points), bench(frames), metrics(), state(), query().
 // lights=URL (prt-lights JSON, `prt envlight`) and visibility=URL (its cone visibility per vertex, `prt relight
-// --lights ... --visibility-out`): the hybrid's inputs (hybrid.js), or null without lights. Plain bundles per vertex
-// only. The synthetic sphere (frame times) takes its normals from its positions, albedo 1, its transfer as a
+// --lights ... --visibility-out`): the hybrid's inputs (hybrid.js), or null without lights. Plain and scene bundles
+// per vertex only. The synthetic sphere (frame times) takes its normals from its positions, albedo 1, its transfer as a
 // stand-in bounce layer of the same cost, and a visibility of ones.
-async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
+// A scene bundle (sceneTransfer given): its rows (receivers in node order, then their vertices, as `prt relight`
+// writes the visibility), its bounce layer, and per receiver its world normals and materials (scene.js).
+async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes, sceneTransfer, sceneJson, sceneBin }) {
   const url = params.get('lights');
   if (!url) return null;
-  if (isScene || kind === 'texel') throw new Error('lights: the hybrid relights plain bundles per vertex (not scenes or texels)');
+  if (kind === 'texel') throw new Error('lights: the hybrid relights bundles per vertex (not texels)');
   const lights = await loadLights(url);
-  if (lights.order !== mesh.transfer.order)
-    throw new Error(`${url}: the lights' residual has order ${lights.order}, the bundle's transfer order ${mesh.transfer.order}: ` +
-                    `run prt envlight --order ${mesh.transfer.order}`);
-  const vertexCount = mesh.positions.length / 3;
+  const transfer = isScene ? sceneTransfer.transfer : mesh.transfer;
+  if (lights.order !== transfer.order)
+    throw new Error(`${url}: the lights' residual has order ${lights.order}, the bundle's transfer order ${transfer.order}: ` +
+                    `run prt envlight --order ${transfer.order}`);
+  const vertexCount = isScene ? transfer.rows : mesh.positions.length / 3;
   let layers;
   let visibility = null;
-  if (synthetic) {
+  if (isScene) {
+    layers = { bounce: readSceneBounce(sceneJson, sceneBin) }; // normals and albedo: scene.js, per receiver and pixel
+  } else if (synthetic) {
     layers = { bounce: mesh.transfer.data, albedo: new Float32Array(vertexCount * 3).fill(1),
                normals: mesh.positions.map((x) => 2 * x) };
     // A visibility of ones, so that its texture fetches are in the frame time.
@@ -149,7 +154,7 @@ async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
     visibility = parseVisibilityNpy(await response.arrayBuffer(), visibilityUrl);
     if (visibility.rows !== vertexCount || visibility.lights !== lights.lights.length)
       throw new Error(`${visibilityUrl}: visibility of ${visibility.rows} rows x ${visibility.lights} lights, the bundle has ` +
-                      `${vertexCount} vertices and ${url} ${lights.lights.length} lights`);
+                      `${vertexCount} ${isScene ? 'rows' : 'vertices'} and ${url} ${lights.lights.length} lights`);
   }
   return { lights, layers, visibility };
 }
@@ -215,7 +220,7 @@ export async function startViewer(canvas, panel, params) {
   // sky=URL,URL: the OpenEXR maps behind the lighting, one per entry of maps (empty: black for that one).
   const skyUrls = (params.get('sky') || '').split(',');
   const skies = await Promise.all(maps.map((_, i) => (skyUrls[i] ? loadSky(skyUrls[i]) : null)));
-  const hybrid = await loadHybrid(params, { isScene, kind, synthetic, mesh, bytes });
+  const hybrid = await loadHybrid(params, { isScene, kind, synthetic, mesh, bytes, sceneTransfer, sceneJson, sceneBin });
   const glossy = await loadGlossy(params, { isScene, kind, synthetic, mesh, bytes, mapCount: maps.length });
   const reference = !isScene && params.get('reference') ? parseNpy(await (await fetch(params.get('reference'))).arrayBuffer()) : null;
 
@@ -257,7 +262,9 @@ export async function startViewer(canvas, panel, params) {
   if (isScene) {
     const shared = { transfer: uniforms.transfer, coefficients: uniforms.coefficients, rowsPerLine: uniforms.rowsPerLine,
                      lighting: uniforms.lighting, exposure: uniforms.exposure, linearOutput: uniforms.linearOutput };
-    const built = await sceneMeshes(bytes, sceneJson, sceneTransfer.receivers, shared);
+    // The hybrid's uniforms too (hybrid.js), by reference: every receiver relights its rows with the same lights.
+    for (const name of Object.keys(hybridUniforms(kMaxCoefficients))) shared[name] = uniforms[name];
+    const built = await sceneMeshes(bytes, sceneJson, sceneTransfer.receivers, shared, !!hybrid);
     scene.add(built.group);
     vertexCount = t.rows;
     receiverCount = built.receivers;

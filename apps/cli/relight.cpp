@@ -93,14 +93,17 @@ struct HybridRows {
     std::vector<float> points, spawn; // [rows][3]; spawn empty: the normals (points inside triangles)
     int width = 0, height = 0;        // texels: the atlas
     std::vector<uint8_t> covered;     // texels: 1 where the bake sampled the surface
-    bool scene = false;               // a scene bundle (its materials are not drawn by a hybrid picture)
+    bool scene = false;               // a scene bundle
+    std::optional<Surface> surface;   // a picture of a scene: its materials (surface->mesh set by the caller)
 };
 
-HybridRows hybridRows(const RelightOptions& options) {
+// `picture`: a --image relight, for which a scene's materials are decoded too.
+HybridRows hybridRows(const RelightOptions& options, bool picture) {
     HybridRows rows;
     Bundle bundle = readBundle(options.bundle);
     if (!options.texels) {
         rows.scene = !!bundle.asset;
+        if (picture && rows.scene) rows.surface = decodeSurface(bundle, options.bundle);
         rows.mesh = bundle.mesh;
         rows.model = hybridModel(std::move(bundle), options.bundle);
         rows.points = rows.mesh.positions;
@@ -151,17 +154,22 @@ std::vector<float> hybridVisibility(const HybridRows& rows, const std::vector<en
 
 // The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
 // an engine's shadow maps.
-// With `camera` (--image), a picture of the per-vertex hybrid radiance as `prt render` draws per-vertex radiance.
+// With `camera` (--image), a picture of the per-vertex hybrid radiance as `prt render` draws per-vertex radiance;
+// of a scene, the hybrid at albedo 1 per vertex (its irradiance over pi) times the materials' base colour per pixel,
+// as `prt render` draws a scene's SH relight.
 void runHybridRelight(const RelightOptions& options, double start, const PinholeCamera* camera) {
     if (!options.shJson.empty()) throw Error("", "--lights", "give --lights or --sh, not both", kExitUsage);
     if (options.lightSamples < 0 || options.lightSamples > 65536)
         throw Error("", "--light-samples", "outside 0..65536", kExitUsage);
     sh::Window window = sh::parseWindow(options.window);
-    HybridRows rows = hybridRows(options);
-    if (camera && rows.scene)
-        throw Error(options.bundle, "--image", "a hybrid picture of a scene is not supported (its materials are drawn "
-                                               "per pixel by `prt render`)", kExitUsage);
+    HybridRows rows = hybridRows(options, camera != nullptr);
     HybridModel& model = rows.model;
+    if (rows.surface) {
+        // The picture multiplies by the materials per pixel: the rows are relit at albedo 1.
+        rows.surface->mesh = &rows.mesh;
+        model.total.albedo.clear();
+        std::fill(model.albedo.begin(), model.albedo.end(), 1.0f);
+    }
     HybridLighting lighting = readHybridLightingJson(options.lights);
     checkHybridOrder(model, lighting, options.lights);
     if (!options.env.empty()) {
@@ -227,7 +235,9 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
         logInfo("relight: wrote " + options.visibilityOut + " (cone visibility per row and light)");
     }
     if (camera)
-        writeRenderedPicture(options.output, renderVertexRadiance(rows.mesh, radiance, *camera), options.exposure);
+        writeRenderedPicture(options.output,
+                             renderVertexRadiance(rows.mesh, radiance, *camera, rows.surface ? &*rows.surface : nullptr),
+                             options.exposure);
     else
         writeRelit(options.output, options.texels, rows.width, rows.height, std::move(radiance));
     logInfo("relight: wrote " + options.output);
