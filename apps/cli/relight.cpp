@@ -95,6 +95,7 @@ struct HybridRows {
     std::vector<uint8_t> covered;     // texels: 1 where the bake sampled the surface
     bool scene = false;               // a scene bundle
     std::optional<Surface> surface;   // a picture of a scene: its materials (surface->mesh set by the caller)
+    std::vector<float> cornerUv;      // a picture of a scene bake: its atlas (layer "lightmap_uv")
 };
 
 // `picture`: a --image relight, for which a scene's materials are decoded too.
@@ -115,6 +116,11 @@ HybridRows hybridRows(const RelightOptions& options, bool picture) {
         throw Error(options.bundle, "layer \"texel_transfer\", params.high",
                     "the bake sampled a high-resolution mesh, whose shadows the texel hybrid's cone visibility would "
                     "need; only bakes of one mesh are supported");
+    if (picture && bundle.asset) {
+        rows.scene = true;
+        rows.surface = decodeSurface(bundle, options.bundle);
+        rows.cornerUv = lightmapCorners(bundle, options.bundle);
+    }
     rows.mesh = std::move(bundle.mesh); // the texel layers do not need it
     TexelHybridModel texels = texelHybridModel(std::move(bundle), options.bundle);
     rows.model = std::move(texels.rows);
@@ -164,8 +170,9 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
     sh::Window window = sh::parseWindow(options.window);
     HybridRows rows = hybridRows(options, camera != nullptr);
     HybridModel& model = rows.model;
-    if (rows.surface) {
-        // The picture multiplies by the materials per pixel: the rows are relit at albedo 1.
+    if (rows.surface && !options.texels) {
+        // The picture multiplies by the materials per pixel: the rows are relit at albedo 1 (texelHybridModel
+        // already relights a scene bake's texels so).
         rows.surface->mesh = &rows.mesh;
         model.total.albedo.clear();
         std::fill(model.albedo.begin(), model.albedo.end(), 1.0f);
@@ -234,9 +241,20 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
         writeNpy(options.visibilityOut, visibility, {size_t(model.total.vertexCount), cones.size()});
         logInfo("relight: wrote " + options.visibilityOut + " (cone visibility per row and light)");
     }
-    if (camera)
+    if (rows.surface) rows.surface->mesh = &rows.mesh;
+    const Surface* surface = rows.surface ? &*rows.surface : nullptr;
+    if (camera && options.texels) {
+        // The relit atlas looked up at the nearest texel of each hit, as `prt render --texels` draws a bake.
+        Image atlas;
+        atlas.width = rows.width;
+        atlas.height = rows.height;
+        atlas.rgb = std::move(radiance);
         writeRenderedPicture(options.output,
-                             renderVertexRadiance(rows.mesh, radiance, *camera, rows.surface ? &*rows.surface : nullptr),
+                             renderTexelRadiance(rows.mesh, atlas, *camera,
+                                                 rows.cornerUv.empty() ? nullptr : rows.cornerUv.data(), surface),
+                             options.exposure);
+    } else if (camera)
+        writeRenderedPicture(options.output, renderVertexRadiance(rows.mesh, radiance, *camera, surface),
                              options.exposure);
     else
         writeRelit(options.output, options.texels, rows.width, rows.height, std::move(radiance));
@@ -347,8 +365,8 @@ void runRelight(const RelightOptions& options) {
         throw Error("", "--image", "--image and --camera go together", kExitUsage);
     PinholeCamera camera;
     if (imageMode) {
-        if (options.texels)
-            throw Error("", "--image", "pictures are of per-vertex relights (use `prt render --texels` for a bake)",
+        if (options.texels && options.lights.empty())
+            throw Error("", "--image", "pictures of a bake's texels are `prt render --texels`'s (or give --lights)",
                         kExitUsage);
         if (!options.eye.empty())
             throw Error("", "--eye", "with --image the eye is the camera's (--camera)", kExitUsage);
@@ -528,7 +546,8 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--image", options->imageSize,
                         "A W,H picture through --camera instead of per-vertex radiance (-o .exr linear RGBA or .png "
                         "tone mapped); a glossy bundle's lobes are evaluated toward the camera's eye; with --lights the "
-                        "hybrid's per-vertex radiance as `prt render` draws it");
+                        "hybrid's per-vertex radiance as `prt render` draws it (a scene's times its materials per pixel), and "
+                        "with --lights --texels the hybrid's relit atlas as `prt render --texels` draws a bake");
     command->add_option("--camera", options->camera,
                         "With --image: EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY (degrees), the camera of "
                         "`prt render` and `prt reference --image`");

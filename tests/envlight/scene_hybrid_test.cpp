@@ -211,3 +211,82 @@ TEST_F(SceneHybrid, TurnTableIsTheVisibilityCastAtEachTurn) {
         EXPECT_GT(shadowed, 0) << "turn " << t; // the slabs cast shadows at every turn
     }
 }
+
+// A bake's texel hybrid drawn by `--texels --image`: `prt scene plane` (side 2 at y = 0) baked at albedo 0.8 under
+// the cone straight up, zero residual: every texel, and so every pixel on the plane, is 0.8 L sin^2 r; off it 0.
+TEST_F(SceneHybrid, BakePictureIsTheTexelHybridAsRenderTexelsDrawsIt) {
+    std::string lights = writeLights("up.lights.json", {0.0, 1.0, 0.0});
+    ASSERT_EQ(run("scene plane -o " + path("plane.glb")).exitCode, 0);
+    CliRun bake = run("bake " + path("plane.glb") + " -o " + path("plane.bake.glb") +
+                      " --resolution 32 --order 2 --samples 16 --albedo 0.8 --format bundle");
+    ASSERT_EQ(bake.exitCode, 0) << bake.stderrText;
+    const int size = 48;
+    CliRun r = run("relight " + path("plane.bake.glb") + " --texels --lights " + lights + " --image " +
+                   std::to_string(size) + "," + std::to_string(size) + " --camera 0,4,0,0,0,0,0,0,-1,40 -o " +
+                   path("bake.exr"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    prt::Image picture = prt::readImage(path("bake.exr"));
+    ASSERT_EQ(picture.width, size);
+    const float want = float(0.8 * kRadiance * std::sin(kRadius) * std::sin(kRadius));
+    const double halfHeight = std::tan(40.0 * M_PI / 360.0);
+    int on = 0, off = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const double px = (2.0 * (x + 0.5) / size - 1.0) * halfHeight * 4.0, pz = (2.0 * (y + 0.5) / size - 1.0) * halfHeight * 4.0;
+            const float* pixel = &picture.rgb[3 * (size_t(y) * size + x)];
+            const double edge = std::max(std::abs(px), std::abs(pz));
+            if (std::abs(edge - 1.0) < 0.05) continue; // the plane's border
+            const float expected = edge < 1.0 ? want : 0.0f;
+            (edge < 1.0 ? on : off) += 1;
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(pixel[c], expected, 1e-5f * want) << "pixel " << x << "," << y;
+        }
+    EXPECT_GE(on, 800);
+    EXPECT_GE(off, 400);
+    // Without --lights a picture of texels stays prt render's.
+    EXPECT_EQ(run("relight " + path("plane.bake.glb") + " --texels --sh " + lights + " --image 8,8 --camera "
+                  "0,4,0,0,0,0,0,0,-1,40 -o " + path("x.exr")).exitCode, 2);
+}
+
+// A scene bake (texel hybrid of irradiance transfer) drawn by `--texels --image`: the texels relit at albedo 1 times
+// the materials per pixel, as `prt render --texels` draws a scene bake: the floor's checker and the slabs' colour
+// times L sin^2 r where the cone is open.
+TEST_F(SceneHybrid, SceneBakePictureIsTheLightsTimesTheBaseColourPerPixel) {
+    std::string lights = writeLights("up.lights.json", {0.0, 1.0, 0.0});
+    CliRun bake = run("bake " + path("prepped.glb") + " -o " + path("scene.bake.glb") +
+                      " --resolution 128 --order 2 --samples 16 --format bundle");
+    ASSERT_EQ(bake.exitCode, 0) << bake.stderrText;
+    const int size = 64;
+    const double fovy = 40.0, height = 6.0;
+    CliRun r = run("relight " + path("scene.bake.glb") + " --texels --lights " + lights + " --image " +
+                   std::to_string(size) + "," + std::to_string(size) + " --camera 0,6,0,0,0,0,0,0,-1,40 -o " +
+                   path("scene_bake.exr"));
+    ASSERT_EQ(r.exitCode, 0) << r.stderrText;
+    prt::Image picture = prt::readImage(path("scene_bake.exr"));
+    ASSERT_EQ(picture.width, size);
+    const float open = float(kRadiance * std::sin(kRadius) * std::sin(kRadius));
+    const double halfHeight = std::tan(fovy * M_PI / 360.0);
+    int floorPixels = 0, slabPixels = 0;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const double sx = (2.0 * (x + 0.5) / size - 1.0) * halfHeight, sz = (2.0 * (y + 0.5) / size - 1.0) * halfHeight;
+            const float* pixel = &picture.rgb[3 * (size_t(y) * size + x)];
+            const float topX = float(sx * (height - kSlabHeight)), topZ = float(sz * (height - kSlabHeight));
+            const float floorX = float(sx * height), floorZ = float(sz * height);
+            std::array<float, 3> want;
+            if (slabDistance(topX, topZ) < -0.05f) {
+                want = {kSlabColour[0], kSlabColour[1], kSlabColour[2]};
+                ++slabPixels;
+            } else if (slabDistance(topX, topZ) > 0.05f && slabDistance(floorX, floorZ) > 0.2f &&
+                       std::abs(floorX) > 0.05f && std::abs(floorZ) > 0.05f && std::abs(floorX) < 1.95f &&
+                       std::abs(floorZ) < 1.95f) {
+                want = floorAlbedo(floorX, floorZ); // texels away from the shadows: all open
+                ++floorPixels;
+            } else {
+                continue;
+            }
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(pixel[c], want[c] * open, 1e-4f * open) << "pixel " << x << "," << y << " channel " << c;
+        }
+    EXPECT_GE(floorPixels, 1000);
+    EXPECT_GE(slabPixels, 80);
+}
