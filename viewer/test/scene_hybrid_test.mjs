@@ -9,6 +9,9 @@
 //   - with the single-turn visibility of `--visibility-out` (the turn locked to it), two cameras;
 //   - with a table of 12 turns (`--visibility-turns 12`), the turn free: at a table turn (90) and between (45);
 //   - toggled to plain SH from the page's checkbox: `prt render` of the same bundle.
+// Then a bake's texel hybrid: the bunny decimated to 2,000 triangles, `prt bake --bounces 1` (generated atlas,
+// OpenEXR texels, surface and bounce layers), per texel (mode=texel) against `prt relight --texels --lights --image`
+// with the texel visibility of `--visibility-out`, and toggled against `prt render --texels`.
 // Also a frame time of the hybrid and of plain SH (api.bench). Screenshots and agreement.json land in WORK_DIR.
 // usage: node viewer/test/scene_hybrid_test.mjs PRT DATA_DIR WORK_DIR
 import { spawnSync } from 'node:child_process';
@@ -28,13 +31,16 @@ const kMaxLevels = 3, kMeanLevels = 0.4;
 // half the light's direct term where prt's shadow at the turn itself shows none or all of it. The boxes' shadows on
 // the floor are sharper and their lights' terms larger than the bunny's (hybrid_turns_test.mjs: max 20), so single
 // pixels differ by up to half a light's term (measured at 45 degrees, midway between the table's 30 and 60: max 26,
-// mean 1.13 levels, 83% of channel values within 1 level); most of the picture must still agree to 1 level.
+// mean 0.85 levels, 91% of channel values within 1 level); most of the picture must still agree to 1 level.
 const kBetweenLevels = { max: 40, mean: 1.5, within1: 0.75 };
 // Interior: 3x3 neighbourhood all surface and within this of the centre in prt's picture (as scene_test.mjs, but
 // tighter: a hard texel edge of up to kEdgeLevels passes the filter, and where the GPU's sub-pixel position falls on
 // its other side the pixel differs by the step, so kEdgeLevels is at most kMaxLevels; measured: a checker edge of 7
-// levels seen from the side camera).
+// levels seen from the side camera at kEdgeLevels 8).
 const kEdgeLevels = 3;
+// A bake per texel (viewer_test.mjs's per-texel tolerance, plus the hybrid's float cone integral): the GPU's
+// interpolated uv may fall in the neighbouring texel at some pixels, which then differ by that texel's step.
+const kTexelLevels = { max: 2, mean: 0.3, outlierShare: 0.02, outlierMax: 12 };
 const turns = 12;
 
 const [prt, data, work] = process.argv.slice(2);
@@ -73,6 +79,16 @@ for (const angle of [45, 90])
       '-o', file(`hybrid_front${angle}.png`));
 run('render', file('scene.prt.glb'), '--env', map, '--camera', cameras.front, '--size', size.join(','),
     '-o', file('plain_front.png'));
+// A bake's texel hybrid: the bunny decimated to 2,000 triangles, baked (generated atlas, one bounce, OpenEXR
+// texels, surface and bounce layers) and relit per texel.
+const bunnyCamera = '3.46275,7.798,18.8643,-0.00481248,4.8258,0.040403,0,1,0,35';
+run('meshprep', path.join(data, 'bunny.ply'), '--decimate-to', '2000', '-o', file('bunny.glb'));
+run('bake', file('bunny.glb'), '-o', file('bunny.bake.glb'), '--resolution', '128', '--order', '3', '--samples', '64',
+    '--bounces', '1', '--albedo', '0.8');
+run('relight', file('bunny.bake.glb'), '--texels', ...lights, '--visibility-out', file('texel_visibility.npy'),
+    '--image', size.join(','), '--camera', bunnyCamera, '-o', file('bake_hybrid.png'));
+run('render', file('bunny.bake.glb'), '--texels', '--env', map, '--camera', bunnyCamera, '--size', size.join(','),
+    '-o', file('bake_plain.png'));
 
 const server = await serve(work);
 const base = `http://127.0.0.1:${server.address().port}`;
@@ -147,7 +163,32 @@ try {
     results.cases.push({ camera: 'front', visibility: 'table', rotate: angle, table, ...r, state: undefined });
   }
 
-  // 3. A larger view for the docs (docs/viewer/scene_hybrid.png) and its frame time.
+  // 3. A bake per texel: the hybrid against prt relight --texels --lights --image, the toggle against prt render --texels.
+  await page.goto(`${base}/?bundle=data/bunny.bake.glb&mode=texel&maps=data/studio.sh.json&camera=${bunnyCamera}` +
+                  `&size=${size.join(',')}&lights=data/studio.lights.json&visibility=data/texel_visibility.npy`);
+  const bake = await page.evaluate(async () => { const api = await window.prtReady; return { kind: api.kind, lights: api.lights, locked: api.turnLocked }; });
+  check(bake.kind === 'texel' && bake.lights === lightCount && bake.locked, `bake read per texel with ${bake.lights} lights, the turn locked`);
+  for (const [png, changes, what] of [['bake_hybrid.png', { hybrid: true }, 'hybrid against prt relight --texels --lights --image'],
+                                      ['bake_plain.png', { hybrid: false }, 'toggled to plain SH against prt render --texels']]) {
+    const r = await againstPng(page, fs.readFileSync(file(png)), size, changes, { step: 2 });
+    const off = Object.entries(r.histogram).filter(([d]) => Number(d) > kTexelLevels.max).reduce((n, [, k]) => n + k, 0);
+    check(r.points >= 400 && r.max <= kTexelLevels.outlierMax && off <= kTexelLevels.outlierShare * r.points && r.mean <= kTexelLevels.mean,
+          `bake per texel, ${what}: ${r.points} pixels, max ${r.max} mean ${r.mean.toFixed(3)} levels, ${off} pixels above ` +
+          `${kTexelLevels.max} (tolerance: max ${kTexelLevels.max} but ${100 * kTexelLevels.outlierShare}% up to ` +
+          `${kTexelLevels.outlierMax}, mean ${kTexelLevels.mean}; pixels by worst channel ${JSON.stringify(r.histogram)})`);
+    await page.locator('#view').screenshot({ path: file(`viewer_bake_${changes.hybrid ? 'hybrid' : 'plain'}.png`) });
+    results.bake = { ...(results.bake || {}), [changes.hybrid ? 'hybrid' : 'plain']: { ...r, state: undefined, above: off } };
+  }
+  const bakeHybridVsPlain = await againstPng(page, fs.readFileSync(file('bake_plain.png')), size, { hybrid: true }, { step: 2 });
+  check(bakeHybridVsPlain.mean > 1, `the bake's toggle changes the picture: hybrid against plain SH ${bakeHybridVsPlain.mean.toFixed(2)} levels on average (must exceed 1)`);
+  results.bake.hybridVsPlainMean = bakeHybridVsPlain.mean;
+  results.bake.frameMs = await page.evaluate(() => {
+    const hybrid = window.prt.bench(40);
+    window.prt.set({ hybrid: false });
+    return { hybrid, plain: window.prt.bench(40), size: '160,120' };
+  });
+
+  // 4. A larger view for the docs (docs/viewer/scene_hybrid.png) and its frame time.
   await open('front', '&visibility=data/table.npy&rotate=30', [480, 360]);
   await page.locator('#view').screenshot({ path: file('viewer_scene_hybrid_large.png') });
   results.frameMsLarge = await page.evaluate(() => {
@@ -165,5 +206,8 @@ if (results.frameMs)
   console.log(`frame time (SwiftShader): ${results.frameMs.hybrid.toFixed(2)} ms hybrid, ${results.frameMs.plain.toFixed(2)} ms ` +
               `plain SH at ${results.frameMs.size}; ${results.frameMsLarge.hybrid.toFixed(2)} / ` +
               `${results.frameMsLarge.plain.toFixed(2)} ms at 480x360`);
+if (results.bake && results.bake.frameMs)
+  console.log(`bake frame time (SwiftShader): ${results.bake.frameMs.hybrid.toFixed(2)} ms hybrid, ` +
+              `${results.bake.frameMs.plain.toFixed(2)} ms plain SH at 160x120`);
 console.log(`table: ${turns} turns, ${results.tableBytes} bytes, cast in ${castSeconds.toFixed(1)} s`);
 process.exit(failed ? 1 : 0);
