@@ -94,17 +94,21 @@ struct HybridRows {
     int width = 0, height = 0;        // texels: the atlas
     std::vector<uint8_t> covered;     // texels: 1 where the bake sampled the surface
     bool scene = false;               // a scene bundle
-    std::optional<Surface> surface;   // a picture of a scene: its materials (surface->mesh set by the caller)
+    std::optional<Surface> surface;   // a scene's materials, for a picture or cut-outs (surface->mesh: the caller's)
     std::vector<float> cornerUv;      // a picture of a scene bake: its atlas (layer "lightmap_uv")
 };
 
-// `picture`: a --image relight, for which a scene's materials are decoded too.
+// A scene's materials are decoded for a picture (`picture`: --image) and for cut-outs, which the cone visibility's
+// rays pass through as the transfer's do.
 HybridRows hybridRows(const RelightOptions& options, bool picture) {
     HybridRows rows;
     Bundle bundle = readBundle(options.bundle);
+    if (bundle.asset) {
+        Surface surface = decodeSurface(bundle, options.bundle);
+        if (picture || surface.cutouts) rows.surface = std::move(surface);
+    }
     if (!options.texels) {
         rows.scene = !!bundle.asset;
-        if (picture && rows.scene) rows.surface = decodeSurface(bundle, options.bundle);
         rows.mesh = bundle.mesh;
         rows.model = hybridModel(std::move(bundle), options.bundle);
         rows.points = rows.mesh.positions;
@@ -118,7 +122,6 @@ HybridRows hybridRows(const RelightOptions& options, bool picture) {
                     "need; only bakes of one mesh are supported");
     if (picture && bundle.asset) {
         rows.scene = true;
-        rows.surface = decodeSurface(bundle, options.bundle);
         rows.cornerUv = lightmapCorners(bundle, options.bundle);
     }
     rows.mesh = std::move(bundle.mesh); // the texel layers do not need it
@@ -136,11 +139,12 @@ HybridRows hybridRows(const RelightOptions& options, bool picture) {
 std::vector<float> hybridVisibility(const HybridRows& rows, const std::vector<envlight::ConeLight>& cones, int samples,
                                     uint64_t* rays) {
     const size_t count = rows.model.total.vertexCount;
+    const Surface* cutouts = rows.surface && rows.surface->cutouts ? &*rows.surface : nullptr;
     if (samples == 0 || cones.empty()) return std::vector<float>(count * cones.size(), 1.0f);
     const float* normals = rows.model.normals.data();
     if (rows.covered.empty())
         return envlight::coneVisibility(rows.mesh, rows.points.data(), normals, rows.spawn.data(), count, cones,
-                                        samples, rays);
+                                        samples, rays, cutouts);
     std::vector<size_t> texels;
     std::vector<float> points, coveredNormals;
     for (size_t t = 0; t < count; ++t)
@@ -150,7 +154,7 @@ std::vector<float> hybridVisibility(const HybridRows& rows, const std::vector<en
             coveredNormals.insert(coveredNormals.end(), normals + 3 * t, normals + 3 * t + 3);
         }
     std::vector<float> visible = envlight::coneVisibility(rows.mesh, points.data(), coveredNormals.data(), nullptr,
-                                                          texels.size(), cones, samples, rays);
+                                                          texels.size(), cones, samples, rays, cutouts);
     std::vector<float> visibility(count * cones.size(), 0.0f);
     for (size_t i = 0; i < texels.size(); ++i)
         std::copy(&visible[i * cones.size()], &visible[(i + 1) * cones.size()], &visibility[texels[i] * cones.size()]);
@@ -170,10 +174,10 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
     sh::Window window = sh::parseWindow(options.window);
     HybridRows rows = hybridRows(options, camera != nullptr);
     HybridModel& model = rows.model;
-    if (rows.surface && !options.texels) {
+    if (rows.surface) rows.surface->mesh = &rows.mesh;
+    if (camera && rows.surface && !options.texels) {
         // The picture multiplies by the materials per pixel: the rows are relit at albedo 1 (texelHybridModel
         // already relights a scene bake's texels so).
-        rows.surface->mesh = &rows.mesh;
         model.total.albedo.clear();
         std::fill(model.albedo.begin(), model.albedo.end(), 1.0f);
     }
@@ -205,7 +209,8 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
     if (options.visibilityTurns != -1) {
         turnTable = envlight::coneVisibilityTurns(rows.mesh, rows.points.data(), rows.model.normals.data(),
                                                   rows.spawn.data(), rows.model.total.vertexCount, cones,
-                                                  options.lightSamples, options.visibilityTurns, &rays);
+                                                  options.lightSamples, options.visibilityTurns, &rays,
+                                                  rows.surface && rows.surface->cutouts ? &*rows.surface : nullptr);
         char turnsLine[160];
         std::snprintf(turnsLine, sizeof turnsLine, "relight: cone visibility for %d turns in %.1f ms (%zu bytes)",
                       options.visibilityTurns, (nowSeconds() - visibilityStart) * 1e3, turnTable.size());
@@ -241,8 +246,7 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
         writeNpy(options.visibilityOut, visibility, {size_t(model.total.vertexCount), cones.size()});
         logInfo("relight: wrote " + options.visibilityOut + " (cone visibility per row and light)");
     }
-    if (rows.surface) rows.surface->mesh = &rows.mesh;
-    const Surface* surface = rows.surface ? &*rows.surface : nullptr;
+    const Surface* surface = camera && rows.surface ? &*rows.surface : nullptr;
     if (camera && options.texels) {
         // The relit atlas looked up at the nearest texel of each hit, as `prt render --texels` draws a bake.
         Image atlas;

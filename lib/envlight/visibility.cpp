@@ -47,12 +47,12 @@ std::vector<float> coneSampleDirections(const ConeLight& light, int samples) {
 
 std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
                                   const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
-                                  int samples, uint64_t* rays) {
+                                  int samples, uint64_t* rays, const Surface* surface) {
     std::vector<float> visibility(count * lights.size(), 0.0f);
     if (lights.empty() || count == 0) return visibility;
     std::vector<std::vector<float>> directions;
     for (const ConeLight& light : lights) directions.push_back(coneSampleDirections(light, samples));
-    EmbreeScene scene(mesh);
+    EmbreeScene scene(mesh, surface);
     const float offset = rayOffset(mesh);
     std::atomic<uint64_t> cast{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 256), [&](const tbb::blocked_range<size_t>& range) {

@@ -32,7 +32,7 @@ std::vector<ConeLight> turnConeLightsY(const std::vector<ConeLight>& lights, dou
 
 std::vector<uint8_t> coneVisibilityTurns(const TriMesh& mesh, const float* points, const float* normals,
                                          const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
-                                         int samples, int turns, uint64_t* rays) {
+                                         int samples, int turns, uint64_t* rays, const Surface* surface) {
     if (turns < 1 || turns > kMaxVisibilityTurns)
         throw Error("", "--visibility-turns", std::to_string(turns) + " is outside 1.." +
                                                   std::to_string(kMaxVisibilityTurns), kExitUsage);
@@ -50,7 +50,7 @@ std::vector<uint8_t> coneVisibilityTurns(const TriMesh& mesh, const float* point
     const size_t layer = count * lights.size();
     for (int t = 0; t < turns; ++t) {
         std::vector<float> visibility = coneVisibility(mesh, points, normals, spawnNormals, count,
-                                                       turnConeLightsY(lights, t * 360.0 / turns), samples, rays);
+                                                       turnConeLightsY(lights, t * 360.0 / turns), samples, rays, surface);
         std::transform(visibility.begin(), visibility.end(), table.begin() + t * layer, quantizeVisibility);
     }
     return table;

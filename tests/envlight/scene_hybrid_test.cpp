@@ -1,7 +1,8 @@
 // The hybrid relight of a scene bundle (docs/bundle.md "Scene bundles"), end to end through the CLI: a textured
-// floor under two instances of one slab (one mirrored), lit by a single cone light with a zero SH residual, so
+// floor under two instances of one slab (one mirrored) and a wholly cut-out slab (MASK), lit by a single cone light with a zero SH residual, so
 // every answer is in closed form: radiance = albedo / pi * L * C(n . d, r) * V with C = pi sin^2 r for n = d; the
-// floor under a slab sees none of the cone (V = 0), the open floor and the slabs' tops all of it (V = 1). The
+// floor under a slab sees none of the cone (V = 0), the open floor, the floor under the cut-out and the slabs' tops
+// all of it (V = 1). The
 // picture (`--image`) multiplies the lights at albedo 1 by the material's base colour per pixel (a nearest-texel
 // checker on the floor), as `prt render` draws a scene. The turn table (--visibility-turns) of a tilted light equals
 // the single-turn visibility cast at each table turn by --rotate-y.
@@ -32,6 +33,8 @@ constexpr float kRadiance = 2.0f;        // its radiance, every channel
 constexpr float kSlabHeight = 0.6f;      // the slabs' height above the floor
 const float kSlabColour[3] = {0.5f, 0.7f, 0.9f};
 const float kSlabX[2] = {-1.0f, 1.0f};   // the slabs' centres (side 1, z = 0); the second is mirrored in x
+constexpr float kCutoutHeight = 0.5f, kCutoutZ = 1.2f; // a third slab (side 1, x = 0), wholly cut out (MASK)
+constexpr size_t kRows = 17 * 17 + 3 * 9; // the floor, then each slab instance its own rows
 
 // sRGB 8-bit to linear (the glTF texture's decoding).
 float srgbLinear(int value) {
@@ -60,15 +63,19 @@ protected:
         dir = fs::temp_directory_path() / ("prt_scene_hybrid_" + std::to_string(getpid()));
         fs::create_directories(dir);
         prt::test::TestScene scene;
-        scene.meshes = {{{prt::makePlane(4.0f, 16, 0.0f), 0}}, {{prt::makePlane(1.0f, 2, 0.0f), 1}}};
+        scene.meshes = {{{prt::makePlane(4.0f, 16, 0.0f), 0}}, {{prt::makePlane(1.0f, 2, 0.0f), 1}},
+                        {{prt::makePlane(1.0f, 2, 0.0f), 2}}};
         scene.nodes = json::array({{{"mesh", 0}},
                                    {{"mesh", 1}, {"translation", {kSlabX[0], kSlabHeight, 0.0}}},
-                                   {{"mesh", 1}, {"translation", {kSlabX[1], kSlabHeight, 0.0}}, {"scale", {-1.0, 1.0, 1.0}}}});
-        scene.roots = {0, 1, 2};
+                                   {{"mesh", 1}, {"translation", {kSlabX[1], kSlabHeight, 0.0}}, {"scale", {-1.0, 1.0, 1.0}}},
+                                   {{"mesh", 2}, {"translation", {0.0, kCutoutHeight, kCutoutZ}}}});
+        scene.roots = {0, 1, 2, 3};
         scene.materials = json::array(
             {{{"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"baseColorTexture", {{"index", 0}}}}}},
              {{"pbrMetallicRoughness",
-               {{"metallicFactor", 0.0}, {"baseColorFactor", {kSlabColour[0], kSlabColour[1], kSlabColour[2], 1.0}}}}}});
+               {{"metallicFactor", 0.0}, {"baseColorFactor", {kSlabColour[0], kSlabColour[1], kSlabColour[2], 1.0}}}}},
+             // Cut out everywhere (alpha 0.2 below the cutoff 0.5): no shadow, no picture.
+             {{"alphaMode", "MASK"}, {"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"baseColorFactor", {0.0, 0.0, 1.0, 0.2}}}}}});
         scene.textures = json::array({{{"source", 0}, {"sampler", 0}}});
         scene.samplers = json::array({{{"magFilter", 9728}, {"minFilter", 9728}}});
         scene.images = json::array({{{"uri", prt::test::pngDataUri(prt::test::pngBytes(
@@ -106,7 +113,7 @@ TEST_F(SceneHybrid, ConeBlockedByAnInstanceIsZeroAndOpenRowsAreInClosedForm) {
     const prt::Layer* albedoLayer = prt::findLayer(bundle, "diffuse_albedo");
     ASSERT_NE(albedoLayer, nullptr);
     const size_t rows = bundle.mesh.vertexCount();
-    ASSERT_EQ(rows, 17u * 17u + 2u * 9u); // the floor, then each slab instance its own rows
+    ASSERT_EQ(rows, kRows);
     std::vector<size_t> shape;
     std::vector<float> visibility = prt::readNpy(path("visibility.npy"), &shape);
     ASSERT_EQ(shape, (std::vector<size_t>{rows, 1}));
@@ -114,7 +121,7 @@ TEST_F(SceneHybrid, ConeBlockedByAnInstanceIsZeroAndOpenRowsAreInClosedForm) {
     ASSERT_EQ(shape, (std::vector<size_t>{rows, 3}));
     const float open = float(kRadiance * std::sin(kRadius) * std::sin(kRadius)); // L C / pi at albedo 1, n = d
     const float penumbra = float(kSlabHeight * std::tan(kRadius)) + 0.02f;
-    int blocked = 0, unblocked = 0, tops = 0;
+    int blocked = 0, unblocked = 0, tops = 0, underCutout = 0;
     for (size_t v = 0; v < rows; ++v) {
         const float* p = &bundle.mesh.positions[3 * v];
         const float* albedo = &albedoLayer->data[3 * v];
@@ -129,6 +136,11 @@ TEST_F(SceneHybrid, ConeBlockedByAnInstanceIsZeroAndOpenRowsAreInClosedForm) {
         } else {
             continue; // in a penumbra
         }
+        // The floor under the cut-out slab sees the whole cone: the rays pass through it, as the transfer's do.
+        if (p[1] == 0.0f && std::abs(p[0]) < 0.42f && std::abs(p[2] - kCutoutZ) < 0.42f) {
+            EXPECT_EQ(visibility[v], 1.0f) << "row " << v << " under the cut-out";
+            ++underCutout;
+        }
         EXPECT_EQ(visibility[v], expectedVisibility) << "row " << v << " at " << p[0] << "," << p[1] << "," << p[2];
         for (int c = 0; c < 3; ++c)
             EXPECT_NEAR(radiance[3 * v + c], albedo[c] * open * expectedVisibility, 1e-5f * open) << "row " << v;
@@ -136,6 +148,7 @@ TEST_F(SceneHybrid, ConeBlockedByAnInstanceIsZeroAndOpenRowsAreInClosedForm) {
     EXPECT_EQ(tops, 18);
     EXPECT_GE(blocked, 2 * 9);   // the floor vertices strictly under each slab
     EXPECT_GE(unblocked, 200);
+    EXPECT_EQ(underCutout, 9);
 }
 
 TEST_F(SceneHybrid, PictureIsTheLightsTimesTheBaseColourPerPixel) {
@@ -190,7 +203,7 @@ TEST_F(SceneHybrid, TurnTableIsTheVisibilityCastAtEachTurn) {
     ASSERT_GT(bytes.size(), 10u);
     const size_t headerLength = uint8_t(bytes[8]) | (size_t(uint8_t(bytes[9])) << 8);
     const std::string header = bytes.substr(10, headerLength);
-    const size_t rows = 17u * 17u + 2u * 9u;
+    const size_t rows = kRows;
     EXPECT_NE(header.find("'|u1'"), std::string::npos) << header;
     EXPECT_NE(header.find("(4," + std::to_string(rows) + ",1)"), std::string::npos) << header;
     ASSERT_EQ(bytes.size(), 10 + headerLength + turns * rows);

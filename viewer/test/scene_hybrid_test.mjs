@@ -31,7 +31,7 @@ const kMaxLevels = 3, kMeanLevels = 0.4;
 // half the light's direct term where prt's shadow at the turn itself shows none or all of it. The boxes' shadows on
 // the floor are sharper and their lights' terms larger than the bunny's (hybrid_turns_test.mjs: max 20), so single
 // pixels differ by up to half a light's term (measured at 45 degrees, midway between the table's 30 and 60: max 26,
-// mean 0.85 levels, 91% of channel values within 1 level); most of the picture must still agree to 1 level.
+// mean 0.95 levels, 87% of channel values within 1 level); most of the picture must still agree to 1 level.
 const kBetweenLevels = { max: 40, mean: 1.5, within1: 0.75 };
 // Interior: 3x3 neighbourhood all surface and within this of the centre in prt's picture (as scene_test.mjs, but
 // tighter: a hard texel edge of up to kEdgeLevels passes the filter, and where the GPU's sub-pixel position falls on
