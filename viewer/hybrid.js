@@ -167,7 +167,8 @@ export async function readTexelHybridLayers(bytes, bundleUrl, transfer) {
     return image.channels[name];
   };
   const surfaceLayer = layers.find((l) => l.name === 'texel_surface');
-  if (!surfaceLayer) throw new Error('lights: the bake has no "texel_surface" layer (texel normals and albedo for the cone lights): bake it again');
+  if (!surfaceLayer)
+    throw new Error('lights: the bake has no "texel_surface" layer (texel normals and albedo for the cone lights): bake it again');
   if (surfaceLayer.domain !== 'texel' || JSON.stringify(surfaceLayer.shape) !== JSON.stringify([texels, 10]))
     throw new Error(`lights: layer "texel_surface" is not a texel layer of shape [${texels}, 10]`);
   let values = layerData(json, bin, surfaceLayer);
@@ -177,7 +178,10 @@ export async function readTexelHybridLayers(bytes, bundleUrl, transfer) {
       throw new Error('lights: layer "texel_surface" has neither data nor an OpenEXR uri with 10 channels');
     const image = await fetchExr(params.uri);
     values = new Float32Array(texels * 10);
-    params.channels.forEach((name, k) => { const data = channel(image, name, params.uri); for (let t = 0; t < texels; ++t) values[t * 10 + k] = data[t]; });
+    params.channels.forEach((name, k) => {
+      const data = channel(image, name, params.uri);
+      for (let t = 0; t < texels; ++t) values[t * 10 + k] = data[t];
+    });
   }
   const surface = new Float32Array(2 * texels * 3);
   for (let t = 0; t < texels; ++t) {

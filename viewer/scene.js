@@ -113,7 +113,8 @@ export async function sceneMeshes(arrayBuffer, json, receivers, shared, hybrid =
     if (geometry.attributes.position.count !== r.rows)
       throw new Error(`scene bundle: receiver ${k} has ${r.rows} rows for ${geometry.attributes.position.count} vertices`);
     if (hybrid && !geometry.attributes.normal)
-      throw new Error(`lights: receiver ${k} (mesh ${r.mesh}, primitive ${r.primitive}) has no normals for the cone lights (prt meshprep)`);
+      throw new Error(`lights: receiver ${k} (mesh ${r.mesh}, primitive ${r.primitive}) has no normals for the cone ` +
+                      'lights (prt meshprep)');
     const primitiveDef = json.meshes[r.mesh].primitives[r.primitive];
     const key = `${primitiveDef.material}:${!!geometry.attributes.color}`;
     if (!materialCache.has(key)) materialCache.set(key, relightMaterial(json, primitiveDef.material, primitiveMesh.material, geometry, shared));

@@ -550,8 +550,9 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--image", options->imageSize,
                         "A W,H picture through --camera instead of per-vertex radiance (-o .exr linear RGBA or .png "
                         "tone mapped); a glossy bundle's lobes are evaluated toward the camera's eye; with --lights the "
-                        "hybrid's per-vertex radiance as `prt render` draws it (a scene's times its materials per pixel), and "
-                        "with --lights --texels the hybrid's relit atlas as `prt render --texels` draws a bake");
+                        "hybrid's per-vertex radiance as `prt render` draws it (a scene's times its materials per "
+                        "pixel), and with --lights --texels the hybrid's relit atlas as `prt render --texels` draws a "
+                        "bake");
     command->add_option("--camera", options->camera,
                         "With --image: EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY (degrees), the camera of "
                         "`prt render` and `prt reference --image`");

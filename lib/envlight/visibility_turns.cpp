@@ -50,7 +50,8 @@ std::vector<uint8_t> coneVisibilityTurns(const TriMesh& mesh, const float* point
     const size_t layer = count * lights.size();
     for (int t = 0; t < turns; ++t) {
         std::vector<float> visibility = coneVisibility(mesh, points, normals, spawnNormals, count,
-                                                       turnConeLightsY(lights, t * 360.0 / turns), samples, rays, surface);
+                                                       turnConeLightsY(lights, t * 360.0 / turns), samples, rays,
+                                                       surface);
         std::transform(visibility.begin(), visibility.end(), table.begin() + t * layer, quantizeVisibility);
     }
     return table;

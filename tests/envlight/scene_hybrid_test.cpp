@@ -1,5 +1,6 @@
 // The hybrid relight of a scene bundle (docs/bundle.md "Scene bundles"), end to end through the CLI: a textured
-// floor under two instances of one slab (one mirrored) and a wholly cut-out slab (MASK), lit by a single cone light with a zero SH residual, so
+// floor under two instances of one slab (one mirrored) and a wholly cut-out slab (MASK), lit by a single cone
+// light with a zero SH residual, so
 // every answer is in closed form: radiance = albedo / pi * L * C(n . d, r) * V with C = pi sin^2 r for n = d; the
 // floor under a slab sees none of the cone (V = 0), the open floor, the floor under the cut-out and the slabs' tops
 // all of it (V = 1). The
@@ -67,7 +68,9 @@ protected:
                         {{prt::makePlane(1.0f, 2, 0.0f), 2}}};
         scene.nodes = json::array({{{"mesh", 0}},
                                    {{"mesh", 1}, {"translation", {kSlabX[0], kSlabHeight, 0.0}}},
-                                   {{"mesh", 1}, {"translation", {kSlabX[1], kSlabHeight, 0.0}}, {"scale", {-1.0, 1.0, 1.0}}},
+                                   {{"mesh", 1},
+                                    {"translation", {kSlabX[1], kSlabHeight, 0.0}},
+                                    {"scale", {-1.0, 1.0, 1.0}}},
                                    {{"mesh", 2}, {"translation", {0.0, kCutoutHeight, kCutoutZ}}}});
         scene.roots = {0, 1, 2, 3};
         scene.materials = json::array(
@@ -75,11 +78,12 @@ protected:
              {{"pbrMetallicRoughness",
                {{"metallicFactor", 0.0}, {"baseColorFactor", {kSlabColour[0], kSlabColour[1], kSlabColour[2], 1.0}}}}},
              // Cut out everywhere (alpha 0.2 below the cutoff 0.5): no shadow, no picture.
-             {{"alphaMode", "MASK"}, {"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"baseColorFactor", {0.0, 0.0, 1.0, 0.2}}}}}});
+             {{"alphaMode", "MASK"},
+              {"pbrMetallicRoughness", {{"metallicFactor", 0.0}, {"baseColorFactor", {0.0, 0.0, 1.0, 0.2}}}}}});
         scene.textures = json::array({{{"source", 0}, {"sampler", 0}}});
         scene.samplers = json::array({{{"magFilter", 9728}, {"minFilter", 9728}}});
-        scene.images = json::array({{{"uri", prt::test::pngDataUri(prt::test::pngBytes(
-                                                 2, 2, {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 188, 188, 188, 255}))}}});
+        const std::vector<uint8_t> checker = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 188, 188, 188, 255};
+        scene.images = json::array({{{"uri", prt::test::pngDataUri(prt::test::pngBytes(2, 2, checker))}}});
         prt::test::writeSceneGltf(path("scene.gltf"), scene);
         ASSERT_EQ(run("meshprep " + path("scene.gltf") + " -o " + path("prepped.glb")).exitCode, 0);
         CliRun transfer = run("transfer " + path("prepped.glb") + " -o " + path("scene.prt.glb") +
@@ -167,7 +171,8 @@ TEST_F(SceneHybrid, PictureIsTheLightsTimesTheBaseColourPerPixel) {
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
             // From above with up = -Z: right is +X, down is +Z.
-            const double sx = (2.0 * (x + 0.5) / size - 1.0) * halfHeight, sz = (2.0 * (y + 0.5) / size - 1.0) * halfHeight;
+            const double sx = (2.0 * (x + 0.5) / size - 1.0) * halfHeight;
+            const double sz = (2.0 * (y + 0.5) / size - 1.0) * halfHeight;
             const float* pixel = &picture.rgb[3 * (size_t(y) * size + x)];
             const float topX = float(sx * (height - kSlabHeight)), topZ = float(sz * (height - kSlabHeight));
             const float floorX = float(sx * height), floorZ = float(sz * height);
@@ -218,7 +223,8 @@ TEST_F(SceneHybrid, TurnTableIsTheVisibilityCastAtEachTurn) {
         ASSERT_EQ(visibility.size(), rows);
         int shadowed = 0;
         for (size_t v = 0; v < rows; ++v) {
-            EXPECT_EQ(int(table[t * rows + v]), int(std::lround(255.0f * visibility[v]))) << "turn " << t << " row " << v;
+            EXPECT_EQ(int(table[t * rows + v]), int(std::lround(255.0f * visibility[v])))
+                << "turn " << t << " row " << v;
             shadowed += visibility[v] == 0.0f;
         }
         EXPECT_GT(shadowed, 0) << "turn " << t; // the slabs cast shadows at every turn
@@ -245,7 +251,8 @@ TEST_F(SceneHybrid, BakePictureIsTheTexelHybridAsRenderTexelsDrawsIt) {
     int on = 0, off = 0;
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
-            const double px = (2.0 * (x + 0.5) / size - 1.0) * halfHeight * 4.0, pz = (2.0 * (y + 0.5) / size - 1.0) * halfHeight * 4.0;
+            const double px = (2.0 * (x + 0.5) / size - 1.0) * halfHeight * 4.0;
+            const double pz = (2.0 * (y + 0.5) / size - 1.0) * halfHeight * 4.0;
             const float* pixel = &picture.rgb[3 * (size_t(y) * size + x)];
             const double edge = std::max(std::abs(px), std::abs(pz));
             if (std::abs(edge - 1.0) < 0.05) continue; // the plane's border
@@ -281,7 +288,8 @@ TEST_F(SceneHybrid, SceneBakePictureIsTheLightsTimesTheBaseColourPerPixel) {
     int floorPixels = 0, slabPixels = 0;
     for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) {
-            const double sx = (2.0 * (x + 0.5) / size - 1.0) * halfHeight, sz = (2.0 * (y + 0.5) / size - 1.0) * halfHeight;
+            const double sx = (2.0 * (x + 0.5) / size - 1.0) * halfHeight;
+            const double sz = (2.0 * (y + 0.5) / size - 1.0) * halfHeight;
             const float* pixel = &picture.rgb[3 * (size_t(y) * size + x)];
             const float topX = float(sx * (height - kSlabHeight)), topZ = float(sz * (height - kSlabHeight));
             const float floorX = float(sx * height), floorZ = float(sz * height);

@@ -166,13 +166,18 @@ try {
   // 3. A bake per texel: the hybrid against prt relight --texels --lights --image, the toggle against prt render --texels.
   await page.goto(`${base}/?bundle=data/bunny.bake.glb&mode=texel&maps=data/studio.sh.json&camera=${bunnyCamera}` +
                   `&size=${size.join(',')}&lights=data/studio.lights.json&visibility=data/texel_visibility.npy`);
-  const bake = await page.evaluate(async () => { const api = await window.prtReady; return { kind: api.kind, lights: api.lights, locked: api.turnLocked }; });
-  check(bake.kind === 'texel' && bake.lights === lightCount && bake.locked, `bake read per texel with ${bake.lights} lights, the turn locked`);
+  const bake = await page.evaluate(async () => {
+    const api = await window.prtReady;
+    return { kind: api.kind, lights: api.lights, locked: api.turnLocked };
+  });
+  check(bake.kind === 'texel' && bake.lights === lightCount && bake.locked,
+        `bake read per texel with ${bake.lights} lights, the turn locked`);
   for (const [png, changes, what] of [['bake_hybrid.png', { hybrid: true }, 'hybrid against prt relight --texels --lights --image'],
                                       ['bake_plain.png', { hybrid: false }, 'toggled to plain SH against prt render --texels']]) {
     const r = await againstPng(page, fs.readFileSync(file(png)), size, changes, { step: 2 });
     const off = Object.entries(r.histogram).filter(([d]) => Number(d) > kTexelLevels.max).reduce((n, [, k]) => n + k, 0);
-    check(r.points >= 400 && r.max <= kTexelLevels.outlierMax && off <= kTexelLevels.outlierShare * r.points && r.mean <= kTexelLevels.mean,
+    check(r.points >= 400 && r.max <= kTexelLevels.outlierMax && off <= kTexelLevels.outlierShare * r.points &&
+          r.mean <= kTexelLevels.mean,
           `bake per texel, ${what}: ${r.points} pixels, max ${r.max} mean ${r.mean.toFixed(3)} levels, ${off} pixels above ` +
           `${kTexelLevels.max} (tolerance: max ${kTexelLevels.max} but ${100 * kTexelLevels.outlierShare}% up to ` +
           `${kTexelLevels.outlierMax}, mean ${kTexelLevels.mean}; pixels by worst channel ${JSON.stringify(r.histogram)})`);
@@ -180,7 +185,8 @@ try {
     results.bake = { ...(results.bake || {}), [changes.hybrid ? 'hybrid' : 'plain']: { ...r, state: undefined, above: off } };
   }
   const bakeHybridVsPlain = await againstPng(page, fs.readFileSync(file('bake_plain.png')), size, { hybrid: true }, { step: 2 });
-  check(bakeHybridVsPlain.mean > 1, `the bake's toggle changes the picture: hybrid against plain SH ${bakeHybridVsPlain.mean.toFixed(2)} levels on average (must exceed 1)`);
+  check(bakeHybridVsPlain.mean > 1, `the bake's toggle changes the picture: hybrid against plain SH ` +
+                                    `${bakeHybridVsPlain.mean.toFixed(2)} levels on average (must exceed 1)`);
   results.bake.hybridVsPlainMean = bakeHybridVsPlain.mean;
   results.bake.frameMs = await page.evaluate(() => {
     const hybrid = window.prt.bench(40);
