@@ -11,6 +11,7 @@
 // (visibilityTurnBlend); without a file the cones are unshadowed (V = 1, as `--light-samples 0`).
 import * as THREE from 'three';
 import { layerData, parseGlb } from './bundle.js';
+import { readExr } from './exr.js';
 import { relightRowGlsl } from './glsl.js';
 import { evaluate, rotateLightingY } from './sh.js';
 
@@ -126,6 +127,105 @@ export function readHybridLayers(bytes, vertexCount) {
   return { bounce, albedo, normals };
 }
 
+// A scene bundle's bounce layer ("transfer_bounce", irradiance transfer of the transfer's shape, or null): what the
+// hybrid reads beyond the transfer for a scene. The albedo is the materials' per pixel (scene.js), the normals
+// each receiver's in world space (the node's normal matrix, scene.js). Throws Error for a malformed layer.
+export function readSceneBounce(json, bin) {
+  const layers = json.extensions.PRT_bundle.layers || [];
+  const transfer = layers.find((l) => l.name === 'transfer');
+  const bounceLayer = layers.find((l) => l.name === 'transfer_bounce');
+  if (!bounceLayer) return null;
+  if (bounceLayer.semantic !== 'sh_transfer_bounce_rgb' || !transfer || JSON.stringify(bounceLayer.shape) !== JSON.stringify(transfer.shape))
+    throw new Error('lights: layer "transfer_bounce" is not sh_transfer_bounce_rgb of the transfer\'s shape');
+  const data = layerData(json, bin, bounceLayer);
+  if (!data) throw new Error('lights: layer "transfer_bounce" has no data in the bundle');
+  return data;
+}
+
+// A bake's texel hybrid layers (`prt bake`, docs/bundle.md): "texel_surface" ([texels][10]: position, unit normal,
+// albedo, coverage, gutters filled; inline with --format bundle, else the OpenEXR params.uri with the channels
+// params.channels) and "texel_transfer_bounce" (the transfer's shape; inline, or the OpenEXR params.uri with channels
+// T000.R ... as the transfer's), as lib/runtime's texelHybridModel reads them. `bundleUrl` resolves the files, `bytes`
+// are the bundle's, `transfer` its texel transfer ({width, height, order}). Returns {bounce: Float32Array
+// [texels][C][3] or null, surface: Float32Array [2][texels][3] (normals, then albedo)}. Throws Error naming the
+// problem (no surface layer: a bake made before the texel hybrid; a layer of the wrong shape).
+export async function readTexelHybridLayers(bytes, bundleUrl, transfer) {
+  const { json, bin } = parseGlb(bytes);
+  const layers = json.extensions.PRT_bundle.layers || [];
+  const texels = transfer.width * transfer.height, C = transfer.order * transfer.order;
+  const fetchExr = async (uri) => {
+    const url = new URL(uri, new URL(bundleUrl, location.href)).href;
+    const response = await fetch(url);
+    if (!response.ok) throw new Error(`${uri}: HTTP ${response.status}`);
+    const image = await readExr(await response.arrayBuffer(), uri);
+    if (image.width !== transfer.width || image.height !== transfer.height)
+      throw new Error(`${uri}: ${image.width} x ${image.height} texels, the transfer's atlas ${transfer.width} x ${transfer.height}`);
+    return image;
+  };
+  const channel = (image, name, uri) => {
+    if (!image.channels[name]) throw new Error(`${uri}: no channel ${name}`);
+    return image.channels[name];
+  };
+  const surfaceLayer = layers.find((l) => l.name === 'texel_surface');
+  if (!surfaceLayer)
+    throw new Error('lights: the bake has no "texel_surface" layer (texel normals and albedo for the cone lights): bake it again');
+  if (surfaceLayer.domain !== 'texel' || JSON.stringify(surfaceLayer.shape) !== JSON.stringify([texels, 10]))
+    throw new Error(`lights: layer "texel_surface" is not a texel layer of shape [${texels}, 10]`);
+  let values = layerData(json, bin, surfaceLayer);
+  const params = surfaceLayer.params || {};
+  if (!values) {
+    if (!params.uri || !Array.isArray(params.channels) || params.channels.length !== 10)
+      throw new Error('lights: layer "texel_surface" has neither data nor an OpenEXR uri with 10 channels');
+    const image = await fetchExr(params.uri);
+    values = new Float32Array(texels * 10);
+    params.channels.forEach((name, k) => {
+      const data = channel(image, name, params.uri);
+      for (let t = 0; t < texels; ++t) values[t * 10 + k] = data[t];
+    });
+  }
+  const surface = new Float32Array(2 * texels * 3);
+  for (let t = 0; t < texels; ++t) {
+    const row = values.subarray(t * 10, t * 10 + 10), length = Math.hypot(row[3], row[4], row[5]);
+    if (!(length > 0.5 && length < 1.5)) throw new Error(`lights: layer "texel_surface", texel ${t}: normal is not unit length`);
+    for (let a = 0; a < 3; ++a) {
+      surface[t * 3 + a] = row[3 + a] / length;
+      surface[(texels + t) * 3 + a] = row[6 + a];
+    }
+  }
+  const bounceLayer = layers.find((l) => l.name === 'texel_transfer_bounce');
+  let bounce = null;
+  if (bounceLayer) {
+    if (bounceLayer.semantic !== 'sh_transfer_bounce_rgb' || JSON.stringify(bounceLayer.shape) !== JSON.stringify([texels, C, 3]))
+      throw new Error(`lights: layer "texel_transfer_bounce" is not sh_transfer_bounce_rgb of shape [${texels}, ${C}, 3]`);
+    bounce = layerData(json, bin, bounceLayer);
+    if (!bounce) {
+      const uri = (bounceLayer.params || {}).uri, format = (bounceLayer.params || {}).format;
+      if (!uri || !(format === 'half' || format === 'float'))
+        throw new Error(`lights: layer "texel_transfer_bounce" keeps its texels as ${format}: the viewer reads OpenEXR (half, float) or bundle texels`);
+      const image = await fetchExr(uri);
+      bounce = new Float32Array(texels * C * 3);
+      for (let j = 0; j < C; ++j)
+        for (let c = 0; c < 3; ++c) {
+          const data = channel(image, `T${String(j).padStart(3, '0')}.${'RGB'[c]}`, uri);
+          for (let t = 0; t < texels; ++t) bounce[(t * C + j) * 3 + c] = data[t];
+        }
+    }
+  }
+  return { bounce, surface };
+}
+
+// The texel surface (readTexelHybridLayers: normals, then albedo) as a 2-layer RGB32F array texture of the atlas.
+export function texelSurfaceTexture(surface, width, height) {
+  const texture = new THREE.DataArrayTexture(surface, width, height, 2);
+  texture.format = THREE.RGBFormat;
+  texture.type = THREE.FloatType;
+  texture.internalFormat = 'RGB32F';
+  texture.minFilter = texture.magFilter = THREE.NearestFilter;
+  texture.generateMipmaps = false;
+  texture.needsUpdate = true;
+  return texture;
+}
+
 // A prt .npy of float32 [rows, lights] (prt relight --visibility-out) as {turns: 1, rows, lights, data}, or of uint8
 // [turns, rows, lights] (with --visibility-turns) as {turns, rows, lights, bytes}. Throws Error otherwise.
 export function parseVisibilityNpy(arrayBuffer, url) {
@@ -213,9 +313,12 @@ export function setHybridUniforms(uniforms, turned, maxCoefficients) {
   });
 }
 
-// The vertex shader's part: hybridLights(row) is B . bounceLighting plus the cones' direct light at the vertex.
-// Needs relightRowGlsl's uniforms (transfer layout: rowsPerLine, coefficients) and the attributes normal, albedo.
-export const hybridGlsl = (maxCoefficients) => /* glsl */ `
+// The vertex shader's part: hybridLightsAt(row, n, albedo) is B . bounceLighting plus the cones' direct light at a
+// vertex of normal n (normalised here) and albedo; with `attributes` also hybridLights(row), which takes both from
+// the attributes normal and albedo (a plain bundle). A scene (scene.js) passes its world normal and albedo 1: its
+// transfer and bounce layer are irradiance transfer, and the materials multiply per pixel.
+// Needs relightRowGlsl's uniforms (transfer layout: rowsPerLine, coefficients).
+export const hybridGlsl = (maxCoefficients, attributes = true) => /* glsl */ `
 uniform bool hybrid;
 uniform sampler2DArray bounce;
 uniform bool hasBounce;
@@ -228,8 +331,6 @@ uniform sampler2DArray visibility;
 uniform bool hasVisibility;
 uniform int visibilityTurnA, visibilityTurnB; // table turns blended (visibilityTurnBlend); 0, 0 for one turn
 uniform float visibilityWeight;
-in vec3 normal;
-in vec3 albedo;
 ${relightRowGlsl(maxCoefficients, 'relightBounce', 'bounce', 'bounceLighting')}
 // sh::capCosineIntegral: the integral of max(0, n . w) over the cap of half-angle sigma about an axis at cosine
 // cosTheta from n (Snyder 1996, horizon-clipped form of Lagarde and de Rousiers 2014).
@@ -245,11 +346,11 @@ float capCosineIntegral(float cosTheta, float sinSigmaSquared) {
   float value = (cosTheta * acos(y) - x * sinThetaSqrtY) * sinSigmaSquared + (x > 0.0 ? atan(sinThetaSqrtY / x) : pi / 2.0);
   return max(0.0, value);
 }
-vec3 hybridLights(int row) {
+vec3 hybridLightsAt(int row, vec3 vertexNormal, vec3 albedo) {
   const float pi = 3.14159265358979;
   vec3 sum = hasBounce ? relightBounce(row) : vec3(0.0);
   ivec2 at = ivec2(row % rowsPerLine, row / rowsPerLine);
-  vec3 n = normalize(normal);
+  vec3 n = normalize(vertexNormal);
   for (int k = 0; k < ${kMaxLights}; ++k) {
     if (k >= lightCount) break;
     float visible = 1.0;
@@ -263,4 +364,7 @@ vec3 hybridLights(int row) {
     sum += albedo / pi * lightRadiance[k] * irradiance;
   }
   return sum;
-}`;
+}
+${attributes ? `in vec3 normal;
+in vec3 albedo;
+vec3 hybridLights(int row) { return hybridLightsAt(row, normal, albedo); }` : ''}`;

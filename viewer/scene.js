@@ -9,6 +9,7 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { relightRowGlsl, toneMapGlsl } from './glsl.js';
+import { hybridGlsl } from './hybrid.js';
 
 const kMaxCoefficients = 64; // order 8, as viewer.js
 
@@ -26,7 +27,9 @@ uniform int firstRow;      // the receiver's first row in the transfer layer
 uniform mat3 uvTransform;  // KHR_texture_transform of the base colour texture (identity without)
 uniform int texCoord;      // the texture's TEXCOORD set
 uniform bool hasColor;     // COLOR_0 present
+uniform mat3 normalWorld;  // the node's normal matrix (inverse transpose of its world matrix's linear part)
 in vec3 position;
+in vec3 normal;
 in vec2 uv;
 in vec2 uv1;
 in vec4 color;
@@ -34,8 +37,13 @@ out vec3 vRelit;
 out vec2 vUv;
 out vec4 vColor;
 ${relightRowGlsl(kMaxCoefficients)}
+${hybridGlsl(kMaxCoefficients, false)}
 void main() {
-  vRelit = relightRow(firstRow + gl_VertexID); // rows are the primitive's vertices in accessor order
+  int row = firstRow + gl_VertexID; // rows are the primitive's vertices in accessor order
+  vRelit = relightRow(row);
+  // Hybrid lights (hybrid.js) at albedo 1, in world space: the materials multiply per pixel, as prt relight --lights
+  // --image draws a scene.
+  if (hybrid) vRelit += hybridLightsAt(row, normalWorld * normal, vec3(1.0));
   vUv = (uvTransform * vec3(texCoord == 1 ? uv1 : uv, 1.0)).xy;
   vColor = hasColor ? color : vec4(1.0);
   gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
@@ -87,8 +95,9 @@ function nodeWorldMatrices(json) {
 
 // Parses the scene bundle's bytes with GLTFLoader and returns {group, materials} where group holds one THREE.Mesh
 // per receiver (`receivers` from readSceneTransfer), each drawn with the relighting material above; `shared` holds
-// the uniforms every receiver shares (transfer, coefficients, rowsPerLine, lighting, exposure), by reference.
-export async function sceneMeshes(arrayBuffer, json, receivers, shared) {
+// the uniforms every receiver shares (transfer, coefficients, rowsPerLine, lighting, exposure, and hybridUniforms'
+// of hybrid.js), by reference. With `hybrid` every receiver must have normals (the cone lights need them).
+export async function sceneMeshes(arrayBuffer, json, receivers, shared, hybrid = false) {
   const gltf = await new Promise((resolve, reject) => new GLTFLoader().parse(arrayBuffer, '', resolve, reject));
   const parser = gltf.parser;
   const world = nodeWorldMatrices(json);
@@ -103,6 +112,9 @@ export async function sceneMeshes(arrayBuffer, json, receivers, shared) {
     const geometry = primitiveMesh.geometry;
     if (geometry.attributes.position.count !== r.rows)
       throw new Error(`scene bundle: receiver ${k} has ${r.rows} rows for ${geometry.attributes.position.count} vertices`);
+    if (hybrid && !geometry.attributes.normal)
+      throw new Error(`lights: receiver ${k} (mesh ${r.mesh}, primitive ${r.primitive}) has no normals for the cone ` +
+                      'lights (prt meshprep)');
     const primitiveDef = json.meshes[r.mesh].primitives[r.primitive];
     const key = `${primitiveDef.material}:${!!geometry.attributes.color}`;
     if (!materialCache.has(key)) materialCache.set(key, relightMaterial(json, primitiveDef.material, primitiveMesh.material, geometry, shared));
@@ -112,6 +124,7 @@ export async function sceneMeshes(arrayBuffer, json, receivers, shared) {
     for (const name of Object.keys(shared)) material.uniforms[name] = shared[name];
     material.uniforms.map.value = template.uniforms.map.value;
     material.uniforms.firstRow = { value: r.first_row };
+    material.uniforms.normalWorld = { value: new THREE.Matrix3().getNormalMatrix(world.get(r.node)) };
     const mesh = new THREE.Mesh(geometry, material);
     mesh.matrixAutoUpdate = false;
     mesh.matrix.copy(world.get(r.node));
@@ -148,6 +161,7 @@ function relightMaterial(json, index, loaded, geometry, shared) {
     uniforms: {
       ...shared,
       firstRow: { value: 0 },
+      normalWorld: { value: new THREE.Matrix3() },
       uvTransform: { value: map ? map.matrix.clone() : new THREE.Matrix3() },
       texCoord: { value: map ? map.channel || 0 : 0 },
       hasColor: { value: !!geometry.attributes.color },

@@ -4,8 +4,9 @@
 import * as THREE from 'three';
 import { isSceneBundle, loadBundle, parseGlb, readSceneTransfer, syntheticBundle } from './bundle.js';
 import { relightRowGlsl, toneMapGlsl } from './glsl.js';
-import { hybridGlsl, hybridUniforms, loadLights, parseVisibilityNpy, readHybridLayers, setHybridUniforms,
-         turnedHybridLighting, visibilityTexture, visibilityTurnBlend } from './hybrid.js';
+import { hybridGlsl, hybridUniforms, loadLights, parseVisibilityNpy, readHybridLayers, readSceneBounce,
+         readTexelHybridLayers, setHybridUniforms, texelSurfaceTexture, turnedHybridLighting, visibilityTexture,
+         visibilityTurnBlend } from './hybrid.js';
 import { sceneMeshes } from './scene.js';
 import { fitLighting, rotateLightingY } from './sh.js';
 import { loadSky, skyMesh } from './sky.js';
@@ -56,11 +57,14 @@ uniform bool showError;
 uniform float errorScale;
 uniform ivec2 atlasSize;
 uniform float exposure;
+uniform int rowsPerLine;
+uniform sampler2DArray texelSurface; // a bake's hybrid: layer 0 the texels' normals, layer 1 their albedo
 in vec3 vRadiance;
 in vec2 vUv;
 in float vError;
 out vec4 colour;
 ${toneMapGlsl}
+${hybridGlsl(kMaxCoefficients, false)}
 // Viridis at five stops, as prt compare --image draws relative error.
 vec3 falseColour(float t) {
   vec3 stops[5] = vec3[5](vec3(0.267, 0.005, 0.329), vec3(0.229, 0.322, 0.546), vec3(0.128, 0.567, 0.551),
@@ -81,6 +85,10 @@ void main() {
       if (j >= coefficients) break;
       radiance += texelFetch(transfer, ivec3(texel, j), 0).rgb * lighting[j];
     }
+    // A bake's hybrid: the same texel's cone lights and bounce part, as prt relight --texels --lights.
+    if (hybrid)
+      radiance += hybridLightsAt(texel.y * atlasSize.x + texel.x, texelFetch(texelSurface, ivec3(texel, 0), 0).rgb,
+                                 texelFetch(texelSurface, ivec3(texel, 1), 0).rgb);
   }
   colour = vec4(toneMap(radiance), 1.0);
 }`;
@@ -120,21 +128,30 @@ function transferTexture(transfer, rowsPerLine, lines) {
 // Loads what `params` (the page's query, README "Query parameters") names and draws it. Returns the api the page
 // and the tests drive: set(changes), read(points), bench(frames), metrics(), state(), query().
 // lights=URL (prt-lights JSON, `prt envlight`) and visibility=URL (its cone visibility per vertex, `prt relight
-// --lights ... --visibility-out`): the hybrid's inputs (hybrid.js), or null without lights. Plain bundles per vertex
-// only. The synthetic sphere (frame times) takes its normals from its positions, albedo 1, its transfer as a
+// --lights ... --visibility-out`): the hybrid's inputs (hybrid.js), or null without lights. Plain and scene bundles
+// per vertex only. The synthetic sphere (frame times) takes its normals from its positions, albedo 1, its transfer as a
 // stand-in bounce layer of the same cost, and a visibility of ones.
-async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
+// A scene bundle (sceneTransfer given): its rows (receivers in node order, then their vertices, as `prt relight`
+// writes the visibility), its bounce layer, and per receiver its world normals and materials (scene.js).
+// A bake (kind texel): its texels are the rows (`prt relight --texels --lights --visibility-out` writes their
+// visibility), with the bounce layer and the texel surface (normals, albedo) from readTexelHybridLayers.
+async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes, sceneTransfer, sceneJson, sceneBin, bundleUrl }) {
   const url = params.get('lights');
   if (!url) return null;
-  if (isScene || kind === 'texel') throw new Error('lights: the hybrid relights plain bundles per vertex (not scenes or texels)');
+  if (kind === 'texel' && synthetic) throw new Error('lights: a synthetic mesh is relit per vertex');
   const lights = await loadLights(url);
-  if (lights.order !== mesh.transfer.order)
-    throw new Error(`${url}: the lights' residual has order ${lights.order}, the bundle's transfer order ${mesh.transfer.order}: ` +
-                    `run prt envlight --order ${mesh.transfer.order}`);
-  const vertexCount = mesh.positions.length / 3;
+  const transfer = isScene ? sceneTransfer.transfer : mesh.transfer;
+  if (lights.order !== transfer.order)
+    throw new Error(`${url}: the lights' residual has order ${lights.order}, the bundle's transfer order ${transfer.order}: ` +
+                    `run prt envlight --order ${transfer.order}`);
+  const vertexCount = isScene || kind === 'texel' ? transfer.rows : mesh.positions.length / 3;
   let layers;
   let visibility = null;
-  if (synthetic) {
+  if (kind === 'texel') {
+    layers = await readTexelHybridLayers(bytes, bundleUrl, transfer);
+  } else if (isScene) {
+    layers = { bounce: readSceneBounce(sceneJson, sceneBin) }; // normals and albedo: scene.js, per receiver and pixel
+  } else if (synthetic) {
     layers = { bounce: mesh.transfer.data, albedo: new Float32Array(vertexCount * 3).fill(1),
                normals: mesh.positions.map((x) => 2 * x) };
     // A visibility of ones, so that its texture fetches are in the frame time.
@@ -149,7 +166,7 @@ async function loadHybrid(params, { isScene, kind, synthetic, mesh, bytes }) {
     visibility = parseVisibilityNpy(await response.arrayBuffer(), visibilityUrl);
     if (visibility.rows !== vertexCount || visibility.lights !== lights.lights.length)
       throw new Error(`${visibilityUrl}: visibility of ${visibility.rows} rows x ${visibility.lights} lights, the bundle has ` +
-                      `${vertexCount} vertices and ${url} ${lights.lights.length} lights`);
+                      `${vertexCount} ${isScene ? 'rows' : 'vertices'} and ${url} ${lights.lights.length} lights`);
   }
   return { lights, layers, visibility };
 }
@@ -215,7 +232,7 @@ export async function startViewer(canvas, panel, params) {
   // sky=URL,URL: the OpenEXR maps behind the lighting, one per entry of maps (empty: black for that one).
   const skyUrls = (params.get('sky') || '').split(',');
   const skies = await Promise.all(maps.map((_, i) => (skyUrls[i] ? loadSky(skyUrls[i]) : null)));
-  const hybrid = await loadHybrid(params, { isScene, kind, synthetic, mesh, bytes });
+  const hybrid = await loadHybrid(params, { isScene, kind, synthetic, mesh, bytes, sceneTransfer, sceneJson, sceneBin, bundleUrl });
   const glossy = await loadGlossy(params, { isScene, kind, synthetic, mesh, bytes, mapCount: maps.length });
   const reference = !isScene && params.get('reference') ? parseNpy(await (await fetch(params.get('reference'))).arrayBuffer()) : null;
 
@@ -240,8 +257,10 @@ export async function startViewer(canvas, panel, params) {
     atlasSize: { value: new THREE.Vector2(t.width || 1, t.height || 1) },
     exposure: { value: Number(params.get('exposure') || 0) },
     linearOutput: { value: false },
+    texelSurface: { value: null },
     ...hybridUniforms(kMaxCoefficients),
   };
+  if (hybrid && kind === 'texel') uniforms.texelSurface.value = texelSurfaceTexture(hybrid.layers.surface, t.width, t.height);
   if (hybrid && hybrid.layers.bounce) {
     uniforms.bounce.value = transferTexture({ ...t, data: hybrid.layers.bounce }, rowsPerLine, lines);
     uniforms.hasBounce.value = true;
@@ -257,7 +276,9 @@ export async function startViewer(canvas, panel, params) {
   if (isScene) {
     const shared = { transfer: uniforms.transfer, coefficients: uniforms.coefficients, rowsPerLine: uniforms.rowsPerLine,
                      lighting: uniforms.lighting, exposure: uniforms.exposure, linearOutput: uniforms.linearOutput };
-    const built = await sceneMeshes(bytes, sceneJson, sceneTransfer.receivers, shared);
+    // The hybrid's uniforms too (hybrid.js), by reference: every receiver relights its rows with the same lights.
+    for (const name of Object.keys(hybridUniforms(kMaxCoefficients))) shared[name] = uniforms[name];
+    const built = await sceneMeshes(bytes, sceneJson, sceneTransfer.receivers, shared, !!hybrid);
     scene.add(built.group);
     vertexCount = t.rows;
     receiverCount = built.receivers;
@@ -269,7 +290,7 @@ export async function startViewer(canvas, panel, params) {
     errors = new Float32Array(vertexCount);
     geometry.setAttribute('relativeError', new THREE.BufferAttribute(errors, 1));
     geometry.setIndex(new THREE.BufferAttribute(mesh.indices, 1));
-    if (hybrid) {
+    if (hybrid && kind === 'vertex') {
       geometry.setAttribute('normal', new THREE.BufferAttribute(hybrid.layers.normals, 3));
       geometry.setAttribute('albedo', new THREE.BufferAttribute(hybrid.layers.albedo, 3));
     }

@@ -93,12 +93,20 @@ struct HybridRows {
     std::vector<float> points, spawn; // [rows][3]; spawn empty: the normals (points inside triangles)
     int width = 0, height = 0;        // texels: the atlas
     std::vector<uint8_t> covered;     // texels: 1 where the bake sampled the surface
-    bool scene = false;               // a scene bundle (its materials are not drawn by a hybrid picture)
+    bool scene = false;               // a scene bundle
+    std::optional<Surface> surface;   // a scene's materials, for a picture or cut-outs (surface->mesh: the caller's)
+    std::vector<float> cornerUv;      // a picture of a scene bake: its atlas (layer "lightmap_uv")
 };
 
-HybridRows hybridRows(const RelightOptions& options) {
+// A scene's materials are decoded for a picture (`picture`: --image) and for cut-outs, which the cone visibility's
+// rays pass through as the transfer's do.
+HybridRows hybridRows(const RelightOptions& options, bool picture) {
     HybridRows rows;
     Bundle bundle = readBundle(options.bundle);
+    if (bundle.asset) {
+        Surface surface = decodeSurface(bundle, options.bundle);
+        if (picture || surface.cutouts) rows.surface = std::move(surface);
+    }
     if (!options.texels) {
         rows.scene = !!bundle.asset;
         rows.mesh = bundle.mesh;
@@ -112,6 +120,10 @@ HybridRows hybridRows(const RelightOptions& options) {
         throw Error(options.bundle, "layer \"texel_transfer\", params.high",
                     "the bake sampled a high-resolution mesh, whose shadows the texel hybrid's cone visibility would "
                     "need; only bakes of one mesh are supported");
+    if (picture && bundle.asset) {
+        rows.scene = true;
+        rows.cornerUv = lightmapCorners(bundle, options.bundle);
+    }
     rows.mesh = std::move(bundle.mesh); // the texel layers do not need it
     TexelHybridModel texels = texelHybridModel(std::move(bundle), options.bundle);
     rows.model = std::move(texels.rows);
@@ -127,11 +139,12 @@ HybridRows hybridRows(const RelightOptions& options) {
 std::vector<float> hybridVisibility(const HybridRows& rows, const std::vector<envlight::ConeLight>& cones, int samples,
                                     uint64_t* rays) {
     const size_t count = rows.model.total.vertexCount;
+    const Surface* cutouts = rows.surface && rows.surface->cutouts ? &*rows.surface : nullptr;
     if (samples == 0 || cones.empty()) return std::vector<float>(count * cones.size(), 1.0f);
     const float* normals = rows.model.normals.data();
     if (rows.covered.empty())
         return envlight::coneVisibility(rows.mesh, rows.points.data(), normals, rows.spawn.data(), count, cones,
-                                        samples, rays);
+                                        samples, rays, cutouts);
     std::vector<size_t> texels;
     std::vector<float> points, coveredNormals;
     for (size_t t = 0; t < count; ++t)
@@ -141,7 +154,7 @@ std::vector<float> hybridVisibility(const HybridRows& rows, const std::vector<en
             coveredNormals.insert(coveredNormals.end(), normals + 3 * t, normals + 3 * t + 3);
         }
     std::vector<float> visible = envlight::coneVisibility(rows.mesh, points.data(), coveredNormals.data(), nullptr,
-                                                          texels.size(), cones, samples, rays);
+                                                          texels.size(), cones, samples, rays, cutouts);
     std::vector<float> visibility(count * cones.size(), 0.0f);
     for (size_t i = 0; i < texels.size(); ++i)
         std::copy(&visible[i * cones.size()], &visible[(i + 1) * cones.size()], &visibility[texels[i] * cones.size()]);
@@ -151,17 +164,23 @@ std::vector<float> hybridVisibility(const HybridRows& rows, const std::vector<en
 
 // The hybrid: cone lights from `prt envlight` plus their SH residual, with Embree cone visibility standing in for
 // an engine's shadow maps.
-// With `camera` (--image), a picture of the per-vertex hybrid radiance as `prt render` draws per-vertex radiance.
+// With `camera` (--image), a picture of the per-vertex hybrid radiance as `prt render` draws per-vertex radiance;
+// of a scene, the hybrid at albedo 1 per vertex (its irradiance over pi) times the materials' base colour per pixel,
+// as `prt render` draws a scene's SH relight.
 void runHybridRelight(const RelightOptions& options, double start, const PinholeCamera* camera) {
     if (!options.shJson.empty()) throw Error("", "--lights", "give --lights or --sh, not both", kExitUsage);
     if (options.lightSamples < 0 || options.lightSamples > 65536)
         throw Error("", "--light-samples", "outside 0..65536", kExitUsage);
     sh::Window window = sh::parseWindow(options.window);
-    HybridRows rows = hybridRows(options);
-    if (camera && rows.scene)
-        throw Error(options.bundle, "--image", "a hybrid picture of a scene is not supported (its materials are drawn "
-                                               "per pixel by `prt render`)", kExitUsage);
+    HybridRows rows = hybridRows(options, camera != nullptr);
     HybridModel& model = rows.model;
+    if (rows.surface) rows.surface->mesh = &rows.mesh;
+    if (camera && rows.surface && !options.texels) {
+        // The picture multiplies by the materials per pixel: the rows are relit at albedo 1 (texelHybridModel
+        // already relights a scene bake's texels so).
+        model.total.albedo.clear();
+        std::fill(model.albedo.begin(), model.albedo.end(), 1.0f);
+    }
     HybridLighting lighting = readHybridLightingJson(options.lights);
     checkHybridOrder(model, lighting, options.lights);
     if (!options.env.empty()) {
@@ -190,7 +209,8 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
     if (options.visibilityTurns != -1) {
         turnTable = envlight::coneVisibilityTurns(rows.mesh, rows.points.data(), rows.model.normals.data(),
                                                   rows.spawn.data(), rows.model.total.vertexCount, cones,
-                                                  options.lightSamples, options.visibilityTurns, &rays);
+                                                  options.lightSamples, options.visibilityTurns, &rays,
+                                                  rows.surface && rows.surface->cutouts ? &*rows.surface : nullptr);
         char turnsLine[160];
         std::snprintf(turnsLine, sizeof turnsLine, "relight: cone visibility for %d turns in %.1f ms (%zu bytes)",
                       options.visibilityTurns, (nowSeconds() - visibilityStart) * 1e3, turnTable.size());
@@ -226,8 +246,20 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
         writeNpy(options.visibilityOut, visibility, {size_t(model.total.vertexCount), cones.size()});
         logInfo("relight: wrote " + options.visibilityOut + " (cone visibility per row and light)");
     }
-    if (camera)
-        writeRenderedPicture(options.output, renderVertexRadiance(rows.mesh, radiance, *camera), options.exposure);
+    const Surface* surface = camera && rows.surface ? &*rows.surface : nullptr;
+    if (camera && options.texels) {
+        // The relit atlas looked up at the nearest texel of each hit, as `prt render --texels` draws a bake.
+        Image atlas;
+        atlas.width = rows.width;
+        atlas.height = rows.height;
+        atlas.rgb = std::move(radiance);
+        writeRenderedPicture(options.output,
+                             renderTexelRadiance(rows.mesh, atlas, *camera,
+                                                 rows.cornerUv.empty() ? nullptr : rows.cornerUv.data(), surface),
+                             options.exposure);
+    } else if (camera)
+        writeRenderedPicture(options.output, renderVertexRadiance(rows.mesh, radiance, *camera, surface),
+                             options.exposure);
     else
         writeRelit(options.output, options.texels, rows.width, rows.height, std::move(radiance));
     logInfo("relight: wrote " + options.output);
@@ -337,8 +369,8 @@ void runRelight(const RelightOptions& options) {
         throw Error("", "--image", "--image and --camera go together", kExitUsage);
     PinholeCamera camera;
     if (imageMode) {
-        if (options.texels)
-            throw Error("", "--image", "pictures are of per-vertex relights (use `prt render --texels` for a bake)",
+        if (options.texels && options.lights.empty())
+            throw Error("", "--image", "pictures of a bake's texels are `prt render --texels`'s (or give --lights)",
                         kExitUsage);
         if (!options.eye.empty())
             throw Error("", "--eye", "with --image the eye is the camera's (--camera)", kExitUsage);
@@ -518,7 +550,9 @@ void addRelightCommand(CLI::App& app) {
     command->add_option("--image", options->imageSize,
                         "A W,H picture through --camera instead of per-vertex radiance (-o .exr linear RGBA or .png "
                         "tone mapped); a glossy bundle's lobes are evaluated toward the camera's eye; with --lights the "
-                        "hybrid's per-vertex radiance as `prt render` draws it");
+                        "hybrid's per-vertex radiance as `prt render` draws it (a scene's times its materials per "
+                        "pixel), and with --lights --texels the hybrid's relit atlas as `prt render --texels` draws a "
+                        "bake");
     command->add_option("--camera", options->camera,
                         "With --image: EYEX,EYEY,EYEZ,TARGETX,TARGETY,TARGETZ,UPX,UPY,UPZ,FOVY (degrees), the camera of "
                         "`prt render` and `prt reference --image`");

@@ -35,6 +35,10 @@
 #include <string>
 #include <vector>
 
+namespace prt {
+struct Surface; // lib/material: a scene's materials, for cut-outs in the cone visibility
+}
+
 namespace prt::envlight {
 
 inline constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722};
@@ -287,10 +291,11 @@ EnvironmentMap subtractConeLights(const EnvironmentMap& env, const std::vector<C
 // the point's spawn normal (`spawnNormals` [count][3], or null: the normals; mesh vertices pass
 // prt::spawnNormals(mesh)), tnear 0. 0 where the whole cone is below the horizon. Returns [points][lights].
 // Deterministic for any thread count. Needs finite points and unit normals, samples >= 1, a mesh Embree accepts.
-// *rays counts the rays cast.
+// *rays counts the rays cast. With a scene's `surface` (lib/material, its mesh `mesh`), rays pass through its
+// cut-outs as the transfer's do (EmbreeScene's filter); null: every triangle occludes.
 std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
                                   const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
-                                  int samples, uint64_t* rays = nullptr);
+                                  int samples, uint64_t* rays = nullptr, const Surface* surface = nullptr);
 
 // The sample directions coneVisibility casts toward `light`: `samples` unit vectors [samples][3], a Hammersley set
 // on the cap uniform in solid angle (sample s at cos theta = 1 - (s + 0.5) / samples (1 - cos r), azimuth the
@@ -319,11 +324,13 @@ std::vector<float> coneVisibilityFromSamples(const float* normals, size_t count,
 // t * 360 / turns), exactly what `prt relight --lights --rotate-y DEG --visibility-out` casts at that angle. samples 0:
 // unshadowed (all 255). Grows as turns x count x lights bytes; refuses (Error, kExitUsage) turns outside
 // 1..kMaxVisibilityTurns and a table above kMaxVisibilityTableBytes, before allocating. *rays counts the rays.
+// `surface` as coneVisibility's.
 constexpr int kMaxVisibilityTurns = 720;
 constexpr uint64_t kMaxVisibilityTableBytes = uint64_t(1) << 30;
 std::vector<uint8_t> coneVisibilityTurns(const TriMesh& mesh, const float* points, const float* normals,
                                          const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
-                                         int samples, int turns, uint64_t* rays = nullptr);
+                                         int samples, int turns, uint64_t* rays = nullptr,
+                                         const Surface* surface = nullptr);
 // `lights` turned by `degrees` about +Y (sh::rotationY) as rotateHybridLighting turns a prt-lights JSON's cones:
 // each direction's float components rotated in double and rounded to float. 0 degrees: unchanged.
 std::vector<ConeLight> turnConeLightsY(const std::vector<ConeLight>& lights, double degrees);

@@ -51,13 +51,15 @@ namespace {
 // Casts, for every point i < count, one occlusion ray toward each sample of each light that lies above the point's
 // horizon (n_i . w > 0), from the point's spawn origin (lib/raycast's rule: spawnNormals, or normals when null),
 // and hands the results to `store(i, hits)`, where hits is [lights][samples] with 1 visible, 0 occluded or below
-// the horizon. Needs: `directions` [lights][samples * 3] unit vectors. Guarantees: the same rays in the same order
+// the horizon. With a scene's `surface` (its mesh `mesh`), rays pass through its cut-outs (EmbreeScene's filter);
+// null: every triangle occludes. Needs: `directions` [lights][samples * 3] unit vectors. Guarantees: the same rays in the same order
 // per point whatever the thread count, so every caller's reduction is deterministic; returns the rays cast.
 template <class Store>
 uint64_t castConeSamples(const TriMesh& mesh, const float* points, const float* normals, const float* spawnNormals,
-                         size_t count, const std::vector<std::vector<float>>& directions, int samples, Store store) {
+                         size_t count, const std::vector<std::vector<float>>& directions, int samples,
+                         const Surface* surface, Store store) {
     const size_t lights = directions.size(), perPoint = lights * size_t(samples);
-    EmbreeScene scene(mesh);
+    EmbreeScene scene(mesh, surface);
     const float offset = rayOffset(mesh);
     std::atomic<uint64_t> cast{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 256), [&](const tbb::blocked_range<size_t>& range) {
@@ -112,12 +114,12 @@ std::vector<std::vector<float>> sampleDirections(const std::vector<ConeLight>& l
 
 std::vector<float> coneVisibility(const TriMesh& mesh, const float* points, const float* normals,
                                   const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
-                                  int samples, uint64_t* rays) {
+                                  int samples, uint64_t* rays, const Surface* surface) {
     std::vector<float> visibility(count * lights.size(), 0.0f);
     if (lights.empty() || count == 0) return visibility;
     const std::vector<std::vector<float>> directions = sampleDirections(lights, samples);
     const size_t lightCount = lights.size();
-    uint64_t cast = castConeSamples(mesh, points, normals, spawnNormals, count, directions, samples,
+    uint64_t cast = castConeSamples(mesh, points, normals, spawnNormals, count, directions, samples, surface,
                                     [&](size_t i, const uint8_t* hits) {
                                         for (size_t k = 0; k < lightCount; ++k)
                                             visibility[i * lightCount + k] = visibleFraction(
@@ -134,7 +136,7 @@ std::vector<uint8_t> coneSampleVisibility(const TriMesh& mesh, const float* poin
     std::vector<uint8_t> visible(count * perPoint, 0);
     if (lights.empty() || count == 0 || samples <= 0) return visible;
     uint64_t cast = castConeSamples(mesh, points, normals, spawnNormals, count, sampleDirections(lights, samples),
-                                    samples, [&](size_t i, const uint8_t* hits) {
+                                    samples, nullptr, [&](size_t i, const uint8_t* hits) {
                                         std::copy(hits, hits + perPoint, visible.begin() + i * perPoint);
                                     });
     if (rays) *rays = cast;

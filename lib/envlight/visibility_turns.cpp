@@ -32,7 +32,7 @@ std::vector<ConeLight> turnConeLightsY(const std::vector<ConeLight>& lights, dou
 
 std::vector<uint8_t> coneVisibilityTurns(const TriMesh& mesh, const float* points, const float* normals,
                                          const float* spawnNormals, size_t count, const std::vector<ConeLight>& lights,
-                                         int samples, int turns, uint64_t* rays) {
+                                         int samples, int turns, uint64_t* rays, const Surface* surface) {
     if (turns < 1 || turns > kMaxVisibilityTurns)
         throw Error("", "--visibility-turns", std::to_string(turns) + " is outside 1.." +
                                                   std::to_string(kMaxVisibilityTurns), kExitUsage);
@@ -48,11 +48,16 @@ std::vector<uint8_t> coneVisibilityTurns(const TriMesh& mesh, const float* point
     std::vector<uint8_t> table(bytes, 255);
     if (samples == 0 || lights.empty()) return table;
     const size_t layer = count * lights.size();
+    uint64_t cast = 0; // every turn's rays
     for (int t = 0; t < turns; ++t) {
+        uint64_t turnRays = 0;
         std::vector<float> visibility = coneVisibility(mesh, points, normals, spawnNormals, count,
-                                                       turnConeLightsY(lights, t * 360.0 / turns), samples, rays);
+                                                       turnConeLightsY(lights, t * 360.0 / turns), samples, &turnRays,
+                                                       surface);
+        cast += turnRays;
         std::transform(visibility.begin(), visibility.end(), table.begin() + t * layer, quantizeVisibility);
     }
+    if (rays) *rays = cast;
     return table;
 }
 

@@ -10,6 +10,7 @@ import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
+import { againstPng } from './pixels.mjs';
 import { serve } from '../serve.mjs';
 
 // 8-bit levels. At a table turn: the GPU's float sums and interpolation (as methods_test.mjs's hybrid) plus the
@@ -65,44 +66,18 @@ try {
                   '&lights=data/studio.lights.json&visibility=data/table.npy');
   const info = await page.evaluate(async () => { const api = await window.prtReady; return { locked: api.turnLocked, lights: api.lights }; });
   check(!info.locked, `with a table of ${turns} turns the turn is free`);
-  // The canvas against a prt PNG at every 4th pixel whose 3x3 neighbourhood is lit in the PNG (methods_test.mjs).
-  const against = (png, changes) => page.evaluate(async ({ png, size, changes }) => {
-    const blob = await (await fetch(`data:image/png;base64,${png}`)).blob();
-    const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-    const context = new OffscreenCanvas(size[0], size[1]).getContext('2d');
-    context.drawImage(bitmap, 0, 0);
-    const rendered = context.getImageData(0, 0, size[0], size[1]).data;
-    const at = (x, y, ch) => rendered[(y * size[0] + x) * 4 + ch];
-    const lit = (x, y) => at(x, y, 0) + at(x, y, 1) + at(x, y, 2) > 0;
-    const points = [];
-    for (let y = 1; y < size[1] - 1; y += 4)
-      for (let x = 1; x < size[0] - 1; x += 4) {
-        let inside = true;
-        for (let dy = -1; dy <= 1; ++dy) for (let dx = -1; dx <= 1; ++dx) inside &&= lit(x + dx, y + dy);
-        if (inside) points.push([x, y]);
-      }
-    window.prt.set(changes);
-    const viewer = window.prt.read(points);
-    let max = 0, sum = 0, within1 = 0;
-    points.forEach(([x, y], k) => {
-      for (let ch = 0; ch < 3; ++ch) {
-        const d = Math.abs(viewer[k][ch] - at(x, y, ch));
-        max = Math.max(max, d); sum += d; within1 += d <= 1;
-      }
-    });
-    return { points: points.length, max, mean: sum / (3 * points.length), within1: within1 / (3 * points.length),
-             rotate: window.prt.state().rotate };
-  }, { png: fs.readFileSync(file(png)).toString('base64'), size, changes });
+  // The canvas against a prt PNG at every 4th pixel whose 3x3 neighbourhood is lit in the PNG (pixels.mjs).
+  const against = (png, changes) => againstPng(page, fs.readFileSync(file(png)), size, changes);
 
   for (const angle of [...tableAngles, ...betweenAngles]) {
     const table = tableAngles.includes(angle), limit = table ? kTableLevels : kBetweenLevels;
     const r = await against(`hybrid${angle}.png`, { rotate: angle, hybrid: true });
     await page.locator('#view').screenshot({ path: file(`viewer_hybrid_turn${angle}.png`) });
-    check(r.rotate === angle && r.points >= 200 && r.max <= limit.max && r.mean <= limit.mean,
+    check(r.state.rotate === angle && r.points >= 200 && r.max <= limit.max && r.mean <= limit.mean,
           `hybrid with the table, turned ${angle} (${table ? 'a table turn' : 'between table turns'}): ${r.points} pixels, ` +
           `max ${r.max} mean ${r.mean.toFixed(3)} levels, ${(100 * r.within1).toFixed(1)}% within 1 level, against ` +
           `prt relight --lights --rotate-y ${angle} --image (tolerance max ${limit.max}, mean ${limit.mean})`);
-    results.cases.push({ angle, table, ...r });
+    results.cases.push({ angle, table, ...r, state: undefined });
   }
   const plain = await against('plain.png', { rotate: 0, hybrid: false });
   await page.locator('#view').screenshot({ path: file('viewer_hybrid_turn_plain.png') });

@@ -19,6 +19,7 @@ import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
+import { againstPng } from './pixels.mjs';
 import { serve } from '../serve.mjs';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import * as THREE from 'three';
@@ -129,30 +130,8 @@ try {
     await page.goto(`${base}/?bundle=data/bunny.prt.glb&maps=data/studio.sh.json&camera=${camera}&size=${size.join(',')}${query}`);
     return page.evaluate(async () => { const api = await window.prtReady; return { renderer: api.renderer, lights: api.lights, locked: api.turnLocked }; });
   };
-  // The canvas against a prt PNG at every 4th pixel whose 3x3 neighbourhood is lit in the PNG.
-  const against = (png, changes) => page.evaluate(async ({ png, size, changes }) => {
-    const blob = await (await fetch(`data:image/png;base64,${png}`)).blob();
-    const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-    const context = new OffscreenCanvas(size[0], size[1]).getContext('2d');
-    context.drawImage(bitmap, 0, 0);
-    const rendered = context.getImageData(0, 0, size[0], size[1]).data;
-    const at = (x, y, ch) => rendered[(y * size[0] + x) * 4 + ch];
-    const lit = (x, y) => at(x, y, 0) + at(x, y, 1) + at(x, y, 2) > 0;
-    const points = [];
-    for (let y = 1; y < size[1] - 1; y += 4)
-      for (let x = 1; x < size[0] - 1; x += 4) {
-        let inside = true;
-        for (let dy = -1; dy <= 1; ++dy) for (let dx = -1; dx <= 1; ++dx) inside &&= lit(x + dx, y + dy);
-        if (inside) points.push([x, y]);
-      }
-    window.prt.set(changes);
-    const viewer = window.prt.read(points);
-    let max = 0, sum = 0;
-    points.forEach(([x, y], k) => {
-      for (let ch = 0; ch < 3; ++ch) { const d = Math.abs(viewer[k][ch] - at(x, y, ch)); max = Math.max(max, d); sum += d; }
-    });
-    return { points: points.length, max, mean: sum / (3 * points.length), state: window.prt.state() };
-  }, { png: fs.readFileSync(file(png)).toString('base64'), size, changes });
+  // The canvas against a prt PNG at every 4th pixel whose 3x3 neighbourhood is lit in the PNG (pixels.mjs).
+  const against = (png, changes) => againstPng(page, fs.readFileSync(file(png)), size, changes);
 
   // 1. Hybrid lights against prt relight --lights --image.
   for (const c of hybridCases) {

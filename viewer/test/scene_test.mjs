@@ -16,6 +16,7 @@ import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
+import { againstPng } from './pixels.mjs';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import * as THREE from 'three';
 import { serve } from '../serve.mjs';
@@ -134,49 +135,15 @@ try {
       check(info.kind === 'scene' && info.receivers === 5, `scene bundle read as ${info.kind} with ${info.receivers} receivers (expected scene, 5)`);
       loadedCamera = c.camera;
     }
-    const png = fs.readFileSync(file(`render_scene${i}.png`)).toString('base64');
-    const result = await page.evaluate(async ({ png, c, size, edge }) => {
-      const blob = await (await fetch(`data:image/png;base64,${png}`)).blob();
-      const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-      const context = new OffscreenCanvas(size[0], size[1]).getContext('2d');
-      context.drawImage(bitmap, 0, 0);
-      const rendered = context.getImageData(0, 0, size[0], size[1]).data;
-      const at = (x, y, ch) => rendered[(y * size[0] + x) * 4 + ch];
-      const lit = (x, y) => at(x, y, 0) + at(x, y, 1) + at(x, y, 2) > 0;
-      const points = [];
-      for (let y = 1; y < size[1] - 1; y += 2)
-        for (let x = 1; x < size[0] - 1; x += 2) {
-          let inside = true;
-          for (let dy = -1; dy <= 1; ++dy)
-            for (let dx = -1; dx <= 1; ++dx) {
-              inside &&= lit(x + dx, y + dy);
-              for (let ch = 0; ch < 3; ++ch) inside &&= Math.abs(at(x + dx, y + dy, ch) - at(x, y, ch)) <= edge;
-            }
-          if (inside) points.push([x, y]);
-        }
-      window.prt.set({ rotate: c.rotate, order: c.order });
-      const viewer = window.prt.read(points);
-      let max = 0, sum = 0, where = null;
-      const histogram = {};
-      points.forEach(([x, y], k) => {
-        let worst = 0;
-        for (let ch = 0; ch < 3; ++ch) {
-          const d = Math.abs(viewer[k][ch] - at(x, y, ch));
-          worst = Math.max(worst, d);
-          sum += d;
-        }
-        histogram[worst] = (histogram[worst] || 0) + 1;
-        if (worst > max) where = { x, y, prt: [0, 1, 2].map((ch) => at(x, y, ch)), viewer: viewer[k].slice(0, 3) };
-        max = Math.max(max, worst);
-      });
-      return { points: points.length, max, mean: sum / (3 * points.length), histogram, where };
-    }, { png, c, size, edge: kEdgeLevels });
+    // Every second pixel whose 3x3 neighbourhood in prt's picture is surface and within kEdgeLevels (pixels.mjs).
+    const result = await againstPng(page, fs.readFileSync(file(`render_scene${i}.png`)), size,
+                                    { rotate: c.rotate, order: c.order }, { step: 2, edge: kEdgeLevels });
     await page.locator('#view').screenshot({ path: file(`viewer_scene${i}.png`) });
     check(result.points >= 400 && result.max <= kMaxLevels && result.mean <= kMeanLevels,
           `scene ${c.camera} rotate ${c.rotate} order ${c.order}: ${result.points} interior pixels, max ${result.max} ` +
           `mean ${result.mean.toFixed(3)} levels (tolerance max ${kMaxLevels}, mean ${kMeanLevels}; ` +
           `pixels by worst channel ${JSON.stringify(result.histogram)}; worst ${JSON.stringify(result.where)})`);
-    results.surface.push({ ...c, ...result });
+    results.surface.push({ ...c, ...result, state: undefined });
   }
 
   // 2. The sky behind it, turned with the lighting.
