@@ -8,11 +8,11 @@
 // a stack for the first of two maps only, the lobes are off under the second. Screenshots and agreement.json land in
 // WORK_DIR.
 // usage: node viewer/test/glossy_test.mjs PRT DATA_DIR WORK_DIR
-import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
 import { serve } from '../serve.mjs';
+import { testWorkspace } from './workspace.mjs';
 
 // 8-bit levels at interior pixels. The GPU evaluates the lobes in float where the runtime mixes float and double
 // (the view weights' triple products, the turn, the kernel's integral) and the rasteriser's barycentrics are not
@@ -20,19 +20,7 @@ import { serve } from '../serve.mjs';
 // continuous there). Measured: see agreement.json and docs/results.md.
 const kMaxLevels = 3, kMeanLevels = 0.3;
 
-const [prt, data, work] = process.argv.slice(2);
-if (!prt || !data || !work) {
-  console.error('usage: glossy_test.mjs PRT DATA_DIR WORK_DIR');
-  process.exit(2);
-}
-fs.rmSync(work, { recursive: true, force: true });
-fs.mkdirSync(work, { recursive: true });
-const file = (name) => path.join(work, name);
-const run = (...args) => {
-  const result = spawnSync(prt, ['--quiet', ...args], { encoding: 'utf8', cwd: work });
-  if (result.status !== 0) throw new Error(`prt ${args.join(' ')} failed (${result.status}):\n${result.stderr}`);
-  return result.stdout;
-};
+const { prt, data, work, file, run } = testWorkspace('glossy_test.mjs');
 const map = path.join(data, 'env/studio.exr');
 const size = [160, 120];
 const cameras = ['3.46275,7.798,18.8643,-0.00481248,4.8258,0.040403,0,1,0,35', // docs/strips' bunny camera

@@ -6,12 +6,12 @@
 // nearest turns against the visibility cast at THETA itself) within kBetweenLevels; the toggle to plain SH must
 // still match `prt render`. Screenshots and agreement.json land in WORK_DIR.
 // usage: node viewer/test/hybrid_turns_test.mjs PRT DATA_DIR WORK_DIR
-import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
 import { againstPng } from './pixels.mjs';
 import { serve } from '../serve.mjs';
+import { testWorkspace } from './workspace.mjs';
 
 // 8-bit levels. At a table turn: the GPU's float sums and interpolation (as methods_test.mjs's hybrid) plus the
 // table's byte quantisation (|dV| <= 1/510 of a light's direct term).
@@ -22,19 +22,7 @@ const kTableLevels = { max: 1, mean: 0.1 };
 const kBetweenLevels = { max: 20, mean: 1.5 };
 const turns = 12;
 
-const [prt, data, work] = process.argv.slice(2);
-if (!prt || !data || !work) {
-  console.error('usage: hybrid_turns_test.mjs PRT DATA_DIR WORK_DIR');
-  process.exit(2);
-}
-fs.rmSync(work, { recursive: true, force: true });
-fs.mkdirSync(work, { recursive: true });
-const file = (name) => path.join(work, name);
-const run = (...args) => {
-  const result = spawnSync(prt, ['--quiet', ...args], { encoding: 'utf8', cwd: work });
-  if (result.status !== 0) throw new Error(`prt ${args.join(' ')} failed (${result.status}):\n${result.stderr}`);
-  return result;
-};
+const { prt, data, work, file, run } = testWorkspace('hybrid_turns_test.mjs');
 const map = path.join(data, 'env/studio.exr');
 const size = [160, 120];
 const camera = '3.46275,7.798,18.8643,-0.00481248,4.8258,0.040403,0,1,0,35';

@@ -15,7 +15,6 @@
 //     page (kFivTolerance); a view reloaded from its URL keeps the positions.
 // Screenshots and agreement.json land in WORK_DIR.
 // usage: node viewer/test/methods_test.mjs PRT DATA_DIR WORK_DIR
-import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
@@ -23,6 +22,7 @@ import { againstPng } from './pixels.mjs';
 import { serve } from '../serve.mjs';
 import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import * as THREE from 'three';
+import { testWorkspace } from './workspace.mjs';
 
 // 8-bit levels at interior pixels (3x3 neighbourhood all surface): as viewer_test.mjs (sums in another order, the
 // GPU's interpolation), plus the cone integral in float on the GPU against double in the runtime.
@@ -44,19 +44,7 @@ const kErrorPanelShare = 0.97;
 // N . FIV_self, two terms several times the result, so float cancellation reaches about 2e-4 (0.1% of the mean).
 const kFivTolerance = { cpu: { abs: 1e-5, rel: 1e-4 }, gpu: { abs: 5e-4, rel: 1e-3 } };
 
-const [prt, data, work] = process.argv.slice(2);
-if (!prt || !data || !work) {
-  console.error('usage: methods_test.mjs PRT DATA_DIR WORK_DIR');
-  process.exit(2);
-}
-fs.rmSync(work, { recursive: true, force: true });
-fs.mkdirSync(work, { recursive: true });
-const file = (name) => path.join(work, name);
-const run = (...args) => {
-  const result = spawnSync(prt, ['--quiet', ...args], { encoding: 'utf8', cwd: work });
-  if (result.status !== 0) throw new Error(`prt ${args.join(' ')} failed (${result.status}):\n${result.stderr}`);
-  return result.stdout;
-};
+const { prt, data, work, file, run } = testWorkspace('methods_test.mjs');
 const map = path.join(data, 'env/studio.exr'); // three cone lights of 2.5 to 3.1 degrees
 const size = [160, 120];
 const camera = '3.46275,7.798,18.8643,-0.00481248,4.8258,0.040403,0,1,0,35'; // docs/strips' bunny camera

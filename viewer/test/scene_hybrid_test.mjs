@@ -14,13 +14,13 @@
 // with the texel visibility of `--visibility-out`, and toggled against `prt render --texels`.
 // Also a frame time of the hybrid and of plain SH (api.bench). Screenshots and agreement.json land in WORK_DIR.
 // usage: node viewer/test/scene_hybrid_test.mjs PRT DATA_DIR WORK_DIR
-import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
 import { againstPng } from './pixels.mjs';
 import { serve } from '../serve.mjs';
 import { writeTexturedScene } from './scene_fixture.mjs';
+import { testWorkspace } from './workspace.mjs';
 
 // 8-bit levels at interior pixels: as scene_test.mjs (GPU sums and interpolation, the GPU's bilinear texture weights),
 // plus the cone integral in float on the GPU against double in the runtime (methods_test.mjs), plus at table turns
@@ -43,18 +43,7 @@ const kEdgeLevels = 3;
 const kTexelLevels = { max: 2, mean: 0.3, outlierShare: 0.02, outlierMax: 12 };
 const turns = 12;
 
-const [prt, data, work] = process.argv.slice(2);
-if (!prt || !data || !work) {
-  console.error('usage: scene_hybrid_test.mjs PRT DATA_DIR WORK_DIR');
-  process.exit(2);
-}
-fs.rmSync(work, { recursive: true, force: true });
-fs.mkdirSync(work, { recursive: true });
-const file = (name) => path.join(work, name);
-const run = (...args) => {
-  const result = spawnSync(prt, ['--quiet', ...args], { encoding: 'utf8', cwd: work });
-  if (result.status !== 0) throw new Error(`prt ${args.join(' ')} failed (${result.status}):\n${result.stderr}`);
-};
+const { prt, data, work, file, run } = testWorkspace('scene_hybrid_test.mjs');
 const map = path.join(data, 'env/studio.exr');
 const size = [160, 120];
 const cameras = { front: '0,1.4,2.6,0,0.3,0,0,1,0,40', side: '2.2,0.9,1.2,0,0.3,0,0,1,0,45' };

@@ -12,7 +12,6 @@
 //     frame-time readout and the screenshot button.
 // Screenshots and agreement.json land in WORK_DIR.
 // usage: node viewer/test/scene_test.mjs PRT DATA_DIR WORK_DIR
-import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launchChromium } from './chromium.mjs';
@@ -21,6 +20,7 @@ import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import * as THREE from 'three';
 import { serve } from '../serve.mjs';
 import { writeTexturedScene } from './scene_fixture.mjs';
+import { testWorkspace } from './workspace.mjs';
 
 // 8-bit levels. Surface: as viewer_test.mjs (sums in another order, GPU interpolation), plus the GPU's bilinear
 // texture filter, whose weights have fewer bits than prt's float weights.
@@ -33,19 +33,8 @@ const kEdgeLevels = 8;
 // Sky: EXRLoader's half floats decoded to float, the direction and bilinear weights in float on the GPU.
 const kSkyMaxLevels = 2, kSkyMeanLevels = 0.5;
 
-const [prt, data, work] = process.argv.slice(2);
-if (!prt || !data || !work) {
-  console.error('usage: scene_test.mjs PRT DATA_DIR WORK_DIR');
-  process.exit(2);
-}
+const { prt, data, work, file, run } = testWorkspace('scene_test.mjs');
 const mapFile = path.join(data, 'env/courtyard.exr');
-fs.rmSync(work, { recursive: true, force: true });
-fs.mkdirSync(work, { recursive: true });
-const file = (name) => path.join(work, name);
-const run = (...args) => {
-  const result = spawnSync(prt, ['--quiet', ...args], { encoding: 'utf8', cwd: work });
-  if (result.status !== 0) throw new Error(`prt ${args.join(' ')} failed (${result.status}):\n${result.stderr}`);
-};
 
 writeTexturedScene(file('scene.gltf'));
 run('meshprep', file('scene.gltf'), '-o', file('prepped.glb'));
