@@ -330,6 +330,44 @@ TEST(FivCli, HardenedReadersRefuseEveryCrashClassWithoutOutput) {
         EXPECT_FALSE(std::filesystem::exists(npy) || std::filesystem::exists(glb)) << c.file;
     }
 
+    // The sources' own grid (decision 13) goes through the same validator in both commands.
+    Image sunny;
+    sunny.width = 32, sunny.height = 16;
+    sunny.rgb.assign(32 * 16 * 3, 1.0f);
+    for (int c = 0; c < 3; ++c) sunny.rgb[3 * (5 * 32 + 20) + size_t(c)] = 4000.0f;
+    writeImage(out / "sunny.exr", sunny);
+    ASSERT_EQ(run("fiv " + f / "sphere.glb --env " + out / "sunny.exr --grid 16,9,6 --cube 8 --sources --source-grid 16,9,6 -o " +
+                  out / "sg.glb"), 0);
+    auto sourceEdited = [&](const std::string& name, const std::function<void(Bundle&)>& edit) {
+        Bundle bundle = readBundle(out / "sg.glb");
+        edit(bundle);
+        writeBundle(out / name, bundle);
+        return out / name;
+    };
+    const std::vector<Case> sourceCases = {
+        {sourceEdited("sg-above-one.glb", [&](Bundle& b) { layer(b, "fiv_source_grid").data[7] = 1.5f; }), "outside 0..1"},
+        {sourceEdited("sg-uint8.glb",
+                      [&](Bundle& b) {
+                          Layer& l = layer(b, "fiv_source_grid");
+                          l.componentType = "uint8", l.integers.assign(l.data.size(), 0u), l.data.clear();
+                      }),
+         "component type is uint8"},
+        {sourceEdited("sg-radius.glb", [&](Bundle& b) { layer(b, "fiv_source_grid").params["radius"] = 0.25; }),
+         "differs from the main grid"},
+        {sourceEdited("sg-no-valid.glb",
+                      [&](Bundle& b) { std::erase_if(b.layers, [](const Layer& l) { return l.name == "fiv_source_valid"; }); }),
+         "come together"},
+    };
+    for (const Case& c : sourceCases) {
+        EXPECT_EQ(run("fivshade " + f / "plane.glb --env " + out / "sunny.exr --occluder " + c.file + " --at 0,1,0 -o " + npy,
+                      &message), 3) << c.file << "\n" << message;
+        EXPECT_NE(message.find(c.says), std::string::npos) << message;
+        EXPECT_EQ(run("fivscene " + f / "plane.glb --occluder " + c.file + " --at 0,1,0 -o " + glb, &message), 3)
+            << c.file << "\n" << message;
+        EXPECT_NE(message.find(c.says), std::string::npos) << message;
+        EXPECT_FALSE(std::filesystem::exists(npy) || std::filesystem::exists(glb)) << c.file;
+    }
+
     // Visibility bundles: a mask layer typed as floats, a centre of the wrong type, a row short of bits (the
     // reduction's error names the file).
     ASSERT_EQ(run("fiv-visibility " + f / "sphere.glb --grid 16,9,6 --cube 8 -o " + out / "vis.glb"), 0);
