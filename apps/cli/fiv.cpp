@@ -54,6 +54,10 @@ void runFivCommand(FivArgs args) {
     fiv::checkGrid(args.stage.visibility.grid, "", kExitUsage); // before anything is read or allocated
     fiv::checkWork(args.stage.visibility.grid, args.stage.visibility.cube, args.stage.visibility.supersample, "",
                    kExitUsage);
+    if (args.sourceGrid == "auto") { // twice the main grid's resolution: 2 NT, 2 NP - 1 (the poles kept), 2 NR
+        const fiv::GridSpec& g = args.stage.visibility.grid;
+        args.sourceGrid = std::to_string(2 * g.azimuth) + "," + std::to_string(2 * g.polar - 1) + "," + std::to_string(2 * g.shells);
+    }
     if (!args.sourceGrid.empty()) {
         std::vector<double> sg = parseList(args.sourceGrid, 3, "--source-grid");
         for (double g : sg)
@@ -112,7 +116,8 @@ static void addFivOptions(CLI::App* command, const std::shared_ptr<FivArgs>& arg
                           "through the cube (docs/fiv.md, decision 13)");
     if (!visibilityStage) {
         command->add_option("--source-grid", args->sourceGrid,
-                            "With --sources: the sources' own grid NT,NP,NR (e.g. 256,129,60 for the default grid), "
+                            "With --sources: the sources' own grid NT,NP,NR, or auto (2 NT, 2 NP - 1, 2 NR of --grid: "
+                            "256,129,60 for the default), "
                             "interpolated and sharpened on its own; the main grid keeps the rest (docs/fiv.md, decision 13)");
         command->add_option("--source-sharpen", args->sourceSharpen,
                             "With --source-grid: K of the sharpened fraction clamp(0.5 + K (f - 0.5), 0, 1), 1..100 "

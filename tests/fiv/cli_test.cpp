@@ -502,8 +502,8 @@ TEST(FivCli, SourceGridIsWrittenAsLayersReadByFivshadeAndCarriedByFivscene) {
     ASSERT_EQ(run("fiv " + common + "--source-grid 32,17,12 --env " + dir / "flat.exr -o " + dir / "flat.grid.glb", &log), 0);
     EXPECT_EQ(readFileBytes(dir / "flat.glb"), readFileBytes(dir / "flat.grid.glb"));
     ASSERT_EQ(run("fiv " + common + "--env " + dir / "sunny.exr -o " + dir / "sunny.glb"), 0);
-    ASSERT_EQ(run("fiv " + common + "--source-grid 32,17,12 --source-sharpen 3 --self-vertices --env " + dir / "sunny.exr -o " +
-                  dir / "sunny.grid.glb"), 0);
+    ASSERT_EQ(run("fiv " + common + "--source-grid auto --source-sharpen 3 --self-vertices --env " + dir / "sunny.exr -o " +
+                  dir / "sunny.grid.glb"), 0); // auto: 2 NT, 2 NP - 1, 2 NR = 32, 17, 12
     Bundle sources = readBundle(dir / "sunny.glb"), grid = readBundle(dir / "sunny.grid.glb");
     const Layer* fraction = findLayer(grid, "fiv_source_grid");
     const Layer* valid = findLayer(grid, "fiv_source_valid");
@@ -561,7 +561,7 @@ TEST(FivCli, SourceGridIsWrittenAsLayersReadByFivshadeAndCarriedByFivscene) {
     EXPECT_EQ(run("fiv " + f / "sphere.glb --grid 16,9,6 --cube 8 --source-grid 32,17,12 --env " + dir / "sunny.exr" + out,
                   &message), 2);
     EXPECT_NE(message.find("needs --sources"), std::string::npos) << message;
-    for (const char* bad : {"--source-grid 2,17,12", "--source-grid 32,17", "--source-grid 32,1.5,4",
+    for (const char* bad : {"--source-grid 2,17,12", "--source-grid 32,17", "--source-grid 32,1.5,4", "--source-grid Auto",
                             "--source-grid 4096,2049,1024", "--source-grid 32,17,12 --source-sharpen 0.5",
                             "--source-sharpen 2"}) {
         EXPECT_EQ(run("fiv " + common + bad + " --env " + dir / "sunny.exr" + out, &message), 2) << bad;
