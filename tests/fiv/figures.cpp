@@ -1,6 +1,8 @@
 // The FIV figures of docs/results.md, measured in one run and printed as JSON (not a test: it takes minutes).
 //   fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--quick] [--grids 32x17x15,...] [--scenes "one bunny,self-shadow"]
 //               [--maps sunrise,courtyard] [--sources] [--self-vertices] [--source-grid NTxNPxNR [--sharpen K,...]]
+// --sources --source-grid G [--sharpen K,...] (K default 2; --sharpen alone: G the main grid): the sources' own grid
+// (fiv::sampleSourceGrid, docs/fiv.md decision 13) through the bundle layers, one bundle per K, every scene.
 // Scenes (receiver 8x8 plane of 65x65 vertices unless said): the bunny scaled to 2 units hovering 0.5 above the
 // plane; two bunnies with overlapping shadows; three; one straddling the plane; one 0.05 above it (close); one
 // low beside the plane (grazing); the bunny as its own receiver. Maps: courtyard, sunrise (sharp sun), constant.
@@ -315,18 +317,21 @@ int main(int argc, char** argv) {
                 // --source-grid NTxNPxNR [--sharpen K,...]: the sources' own grid (fiv::sampleSourceGrid, docs/fiv.md
                 // decision 13) through the real layer path: the bundle of `prt fiv --sources --source-grid` (float16,
                 // the rest of the map on the main grid), written, read back by fivOccluder and shaded by fivIrradiance.
-                if (sources && !sourceGrid.empty() && !found.direction.empty()) {
+                // --sharpen without --source-grid: the source grid at the main grid's resolution (the experiment's
+                // "main grid" row of docs/results.md).
+                if (sources && (!sourceGrid.empty() || !sharpen.empty()) && !found.direction.empty()) {
+                    const std::string sourceGridName = sourceGrid.empty() ? gridName : sourceGrid;
                     fiv::FivGrid rest = fiv::reduceVisibility(vis, residualCube);
                     fiv::SourceGridOptions so;
                     so.grid = options.grid;
-                    if (std::sscanf(sourceGrid.c_str(), "%dx%dx%d", &so.grid.azimuth, &so.grid.polar, &so.grid.shells) != 3)
+                    if (std::sscanf(sourceGridName.c_str(), "%dx%dx%d", &so.grid.azimuth, &so.grid.polar, &so.grid.shells) != 3)
                         return 2;
                     so.threads = 2;
                     double sourceSeconds = nowSeconds();
                     fiv::SourceGrid sg = fiv::sampleSourceGrid(bunny, found, so, "bunny");
                     sourceSeconds = nowSeconds() - sourceSeconds;
                     std::fprintf(stderr, "source grid %s: %zu samples, %.1f s, %llu source rays, %llu inside-vote rays\n",
-                                 sourceGrid.c_str(), sg.fraction.size(), sourceSeconds, (unsigned long long)sg.sourceRays,
+                                 sourceGridName.c_str(), sg.fraction.size(), sourceSeconds, (unsigned long long)sg.sourceRays,
                                  (unsigned long long)sg.insideRays);
                     for (double k : sharpen.empty() ? std::vector<double>{2.0} : sharpen) {
                         sg.sharpen = k;
@@ -352,12 +357,12 @@ int main(int argc, char** argv) {
                             Errors full = errors(free, shaded, refFree[key], refShadowed[key]);
                             results.push_back({{"grid", gridName}, {"samples", options.grid.sampleCount()}, {"map", m},
                                                {"scene", s.name}, {"mode", "cap+paper, source grid K " + std::to_string(k)},
-                                               {"source_grid", sourceGrid}, {"source_samples", sg.fraction.size()},
+                                               {"source_grid", sourceGridName}, {"source_samples", sg.fraction.size()},
                                                {"source_seconds", sourceSeconds}, {"source_rays", sg.sourceRays},
                                                {"inside_rays", sg.insideRays}, {"source_layer_bytes", layerBytes},
                                                {"storage", "float16"}, {"nrmse", full.nrmse},
                                                {"relative_rmse", full.relativeRmse}});
-                            std::fprintf(stderr, "source grid %s K %g: %s %s NRMSE %.4f\n", sourceGrid.c_str(), k,
+                            std::fprintf(stderr, "source grid %s K %g: %s %s NRMSE %.4f\n", sourceGridName.c_str(), k,
                                          s.name.c_str(), m.c_str(), full.nrmse);
                         }
                     }
