@@ -554,6 +554,18 @@ TEST(FivCli, SourceGridIsWrittenAsLayersReadByFivshadeAndCarriedByFivscene) {
     ASSERT_EQ(run("fivshade " + f / "sphere.glb --env " + dir / "sunny.exr --self " + dir / "sunny.grid.glb -o " +
                   dir / "self-files.npy", &log), 0);
     EXPECT_EQ(readFileBytes(dir / "self-scene.npy"), readFileBytes(dir / "self-files.npy"));
+    std::string validator = PRT_SOURCE_DIR "/tests/bundle/gltf_validator";
+    if (std::filesystem::exists(validator + "/node_modules/gltf-validator")) { // the Khronos validator accepts both
+        std::string output;
+        std::FILE* pipe = popen(("node " + validator + "/validate.mjs " + dir / "scene.glb " + dir / "self.glb 2>&1").c_str(), "r");
+        char buffer[4096];
+        size_t got;
+        while ((got = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) output.append(buffer, got);
+        EXPECT_EQ(WEXITSTATUS(pclose(pipe)), 0) << output;
+        size_t clean = 0;
+        for (size_t at = output.find("\"errors\":0"); at != std::string::npos; at = output.find("\"errors\":0", at + 1)) ++clean;
+        EXPECT_EQ(clean, 2u) << output; // no error in either file
+    }
 
     // Usage errors (exit 2), nothing written.
     std::string message;
