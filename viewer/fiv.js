@@ -78,6 +78,11 @@ export function readFivScene(arrayBuffer) {
         p.shell_radii.length !== p.shells)
       throw new Error(`FIV scene: fiv.${k} params radius, centre or shell_radii are missing or malformed`);
     layer(extension, 'fiv', k, [rows, 3, 3]);
+    // `prt fiv --source-grid` (docs/fiv.md decision 13): the grid then holds the map without its sun, whose shadow
+    // is in a grid of its own that the viewer does not shade yet: refused rather than drawn without the sun's shadow.
+    if (layer(extension, 'fiv_source_grid', k))
+      throw new Error(`FIV scene: object ${k} carries fiv_source_grid (prt fiv --source-grid), which the viewer does not shade yet; ` +
+                      'make its FIV bundle without --source-grid');
     const shellRadii = p.shell_radii.map((rho) => Math.fround(rho * p.radius));
     return {
       azimuth: p.azimuth, polar: p.polar, shells: p.shells, radius: Math.fround(p.radius), centre: p.centre.map(Math.fround),

@@ -16,6 +16,8 @@ struct FivArgs {
     std::string grid = "128,65,30";
     std::string shells = "0.25,8";
     std::string shard;
+    std::string sourceGrid;    // --source-grid NT,NP,NR ("" none)
+    std::string sourceSharpen; // --source-sharpen K ("" the default)
     bool float32 = false;
 };
 
@@ -52,6 +54,27 @@ void runFivCommand(FivArgs args) {
     fiv::checkGrid(args.stage.visibility.grid, "", kExitUsage); // before anything is read or allocated
     fiv::checkWork(args.stage.visibility.grid, args.stage.visibility.cube, args.stage.visibility.supersample, "",
                    kExitUsage);
+    if (args.sourceGrid == "auto") { // twice the main grid's resolution: 2 NT, 2 NP - 1 (the poles kept), 2 NR
+        const fiv::GridSpec& g = args.stage.visibility.grid;
+        args.sourceGrid = std::to_string(2 * g.azimuth) + "," + std::to_string(2 * g.polar - 1) + "," + std::to_string(2 * g.shells);
+    }
+    if (!args.sourceGrid.empty()) {
+        std::vector<double> sg = parseList(args.sourceGrid, 3, "--source-grid");
+        for (double g : sg)
+            if (g != std::floor(g) || g < 1 || g > 1e9)
+                throw Error("", "--source-grid", "'" + args.sourceGrid + "' needs three whole numbers", kExitUsage);
+        fiv::GridSpec& g = args.stage.sourceGrid;
+        g = args.stage.visibility.grid; // the main grid's shells and spacing
+        g.azimuth = int(sg[0]), g.polar = int(sg[1]), g.shells = int(sg[2]);
+        fiv::checkSourceGrid(g, 0, "", kExitUsage); // before anything is read or allocated
+    }
+    if (!args.sourceSharpen.empty()) {
+        if (args.sourceGrid.empty()) throw Error("", "--source-sharpen", "needs --source-grid", kExitUsage);
+        double k = parseList(args.sourceSharpen, 1, "--source-sharpen")[0];
+        if (!(k >= fiv::kMinSourceSharpen && k <= fiv::kMaxSourceSharpen))
+            throw Error("", "--source-sharpen", "'" + args.sourceSharpen + "' is outside 1..100", kExitUsage);
+        args.stage.sourceSharpen = k;
+    }
     if (!args.shard.empty()) parseShard(args.shard, args.stage.visibility.shardIndex, args.stage.visibility.shardCount);
     args.stage.visibility.threads = resolveThreads(args.stage.visibility.threads);
     args.stage.half = !args.float32;
@@ -91,6 +114,15 @@ static void addFivOptions(CLI::App* command, const std::shared_ptr<FivArgs>& arg
         command->add_flag("--sources", args->stage.sources,
                           "Shadow the map's dominant small sources (a sun) by rays toward their own texels, not "
                           "through the cube (docs/fiv.md, decision 13)");
+    if (!visibilityStage) {
+        command->add_option("--source-grid", args->sourceGrid,
+                            "With --sources: the sources' own grid NT,NP,NR, or auto (2 NT, 2 NP - 1, 2 NR of --grid: "
+                            "256,129,60 for the default), "
+                            "interpolated and sharpened on its own; the main grid keeps the rest (docs/fiv.md, decision 13)");
+        command->add_option("--source-sharpen", args->sourceSharpen,
+                            "With --source-grid: K of the sharpened fraction clamp(0.5 + K (f - 0.5), 0, 1), 1..100 "
+                            "(default 2)");
+    }
     if (!visibilityStage)
         command->add_flag("--self-vertices", args->stage.selfVertices,
                           "Store the mesh's own self-shadowed irradiance at its vertices (layer fiv_self), which "

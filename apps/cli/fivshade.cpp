@@ -132,6 +132,21 @@ void runFivshade(const FivshadeArgs& args) {
         selfShadowing = scene.selfShadowing;
     }
 
+    // What the sources' own grids (decision 13) do here, said once per run.
+    for (const FivInstance& instance : instances)
+        if (instance.occluder->sources.azimuth > 0) {
+            const FivSourceGrid& g = instance.occluder->sources;
+            logInfo("fivshade: the small sources' shadow comes from their own grid " + std::to_string(g.azimuth) + "x" +
+                    std::to_string(g.polar) + "x" + std::to_string(g.shells) + " (sharpened, K " +
+                    std::to_string(g.sharpen) + "); --partial does not apply to it, and it combines over occluders as "
+                    "1 - prod(1 - g)" + (options.overlap == FivOverlap::None ? " (--overlap none: the sum)" : ""));
+            break;
+        }
+    if (selfShadowing && self.occluder && self.occluder->sources.azimuth > 0)
+        logInfo(self.selfIrradiance ? "fivshade: self-shadowing from fiv_self, which holds the sources exactly"
+                                    : "fivshade: self-shadowing through the grid: its sources' hidden part comes back from "
+                                      "the source grid, signed (N . FIV_sources, as FIV_self held it with --sources alone)");
+
     size_t count = receiver.vertexCount();
     std::vector<float> normals(receiver.normals);
     for (size_t v = 0; v < count; ++v) {

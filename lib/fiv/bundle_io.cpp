@@ -229,6 +229,36 @@ Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector
                        {"layout", "[vertex][channel]: irradiance with the mesh itself as the only occluder"}};
         bundle.layers.push_back(std::move(self));
     }
+    if (options.sourceGrid) { // optional: readers without it see the rest of the map only (docs/fiv.md)
+        const SourceGrid& sg = *options.sourceGrid;
+        json sourceParams = gridParams(sg.grid, sg.sphere);
+        sourceParams["sharpen"] = sg.sharpen;
+        sourceParams["source_power"] = sg.power;
+        sourceParams["source_fiv"] = json::array();
+        for (int c = 0; c < 3; ++c)
+            sourceParams["source_fiv"].push_back({sg.fiv[size_t(3 * c)], sg.fiv[size_t(3 * c + 1)], sg.fiv[size_t(3 * c + 2)]});
+        sourceParams["source_texels"] = sg.texels;
+        sourceParams["source_rays"] = sg.sourceRays;
+        sourceParams["inside_rays"] = sg.insideRays;
+        sourceParams["env"] = options.envHash;
+        sourceParams["layout"] = "[row]: hidden fraction f of the sources' luminance power; the runtime subtracts "
+                                 "clamp(0.5 + sharpen (f - 0.5), 0, 1) max(0, N . source_fiv[channel])";
+        Layer fraction;
+        fraction.name = "fiv_source_grid";
+        fraction.domain = "grid";
+        fraction.semantic = "fiv_source_hidden_fraction";
+        fraction.shape = {sg.fraction.size()};
+        fraction.componentType = options.half ? "float16" : "float32";
+        fraction.data = sg.fraction;
+        fraction.params = std::move(sourceParams);
+        bundle.layers.push_back(std::move(fraction));
+        bundle.layers.push_back(integerLayer("fiv_source_valid", "fiv_valid", "uint8",
+                                             std::vector<uint32_t>(sg.valid.begin(), sg.valid.end()),
+                                             {{"grid", "fiv_source_grid"},
+                                              {"resolution", {sg.grid.shells, sg.grid.polar, sg.grid.azimuth}},
+                                              {"meaning", "1 usable, 0 receiver inside the occluder"}}));
+        bundle.layers[0].params["sources"] = "fiv_source_grid"; // the grid holds the rest of the map
+    }
     return bundle;
 }
 

@@ -192,6 +192,41 @@ SmallSources extractSmallSources(EnvironmentMap& env, const SmallSourceOptions& 
 uint64_t addSourceShadows(const TriMesh& occluder, const Visibility& vis, const SmallSources& sources, FivGrid& grid,
                           int threads = 0);
 
+// ---- the sources' own grid ------------------------------------------------------------------------------------
+// A sun's shadow is a step, and the main grid's trilinear interpolant spreads it over a cell (2.8 degrees and one
+// shell at 128x65x30). The sources' hidden fraction f gets a grid of its own, finer and cheap (one ray per source
+// texel per sample, no cube), which the runtime interpolates as the main grid (trilinear, rho^2 between shells),
+// sharpens to g = clamp(0.5 + K (f - 0.5), 0, 1) and subtracts as g max(0, N . FIV_sources); the main grid then
+// holds the rest of the map (layers fiv_source_grid, fiv_source_valid; docs/fiv.md decision 13).
+inline constexpr double kMinSourceSharpen = 1.0, kMaxSourceSharpen = 100.0;
+struct SourceGridOptions {
+    GridSpec grid;        // the source grid's own dimensions and shells (prt fiv: the main grid's shells)
+    double sharpen = 2.0; // K, in kMinSourceSharpen..kMaxSourceSharpen; recorded for the runtime
+    int threads = 0;      // 0 = all
+};
+struct SourceGrid {
+    GridSpec grid;
+    BoundingSphere sphere;         // the occluder's (boundingSphere), the main grid's too
+    double sharpen = 2.0;
+    size_t texels = 0;             // source texels
+    std::array<double, 3> power{}; // the sources' power sum L dw [channel]
+    std::array<double, 9> fiv{};   // FIV_sources = sum L w dw [channel][xyz]
+    std::vector<float> fraction;   // [row]: hidden share of the sources' luminance power in [0, 1]; 0 when invalid
+    std::vector<uint8_t> valid;    // [row]: 1 usable, 0 receiver inside the occluder
+    uint64_t sourceRays = 0, insideRays = 0;
+};
+// Refuses (prt::Error(source, "--source-grid", ..., exitCode)) a grid that checkGrid refuses, or one whose rays,
+// samples x (sourceTexels + 26), exceed 16 x prt::maxElements() (the bound checkWork puts on the main grid).
+void checkSourceGrid(const GridSpec& grid, size_t sourceTexels, const std::string& source, int exitCode);
+// Needs a mesh with triangles and at least one source texel of positive power (extractSmallSources' output);
+// throws prt::Error(source, ..., kExitUsage) for a grid checkSourceGrid refuses, K out of range or no sources.
+// Each sample's receiver point is placed as sampleVisibility places it (rows, shells, poles alike); samples with
+// rho < 1 get sampleVisibility's inside vote (26 rays; exact for a closed mesh, a majority for an open one); a
+// valid sample casts one ray per source texel that can meet the bounding sphere (traced once per pole row).
+// f = luminance of the hidden texels' power / luminance of all of it. Deterministic for any thread count.
+SourceGrid sampleSourceGrid(const TriMesh& occluder, const SmallSources& sources, const SourceGridOptions& options,
+                            const std::string& source);
+
 // ---- self-shadowing at the mesh's own vertices ---------------------------------------------------------------
 // The irradiance each vertex of `mesh` receives with the mesh itself as the only occluder:
 // E_v = sum_t L_t dw_t V(p_v, w_t) max(0, n_v . w_t) over the texels of `env` and the texels of `sources` (their
@@ -211,12 +246,16 @@ std::vector<float> selfIrradiance(const TriMesh& mesh, const CubeEnvironment& en
 Bundle visibilityBundle(const TriMesh& occluder, const Visibility& vis, const nlohmann::json& inputs);
 Visibility readVisibility(const Bundle& bundle, const std::string& path);
 
-// The FIV bundle: the occluder mesh, fiv (float16 [S,3,3] or float32), fiv_power, fiv_valid, difmap, fiv_env.
+// The FIV bundle: the occluder mesh, fiv (float16 [S,3,3] or float32), fiv_power, fiv_valid, difmap, fiv_env, and
+// the optional fiv_self ([V,3]) and fiv_source_grid ([S'], float16 unless !half) with fiv_source_valid ([S'] u8),
+// whose params carry the source grid's header (gridParams), sharpen, source_power [3] and source_fiv [3][3]; the
+// grid's `fiv` params then say sources "fiv_source_grid" (the grid holds the rest of the map).
 struct FivBundleOptions {
     bool half = true;
     int difmapSize = 32;
     std::string envHash;
     std::vector<float> selfIrradiance; // [vertex][3] (selfIrradiance) or empty: then no fiv_self layer
+    const SourceGrid* sourceGrid = nullptr; // or null: then no fiv_source_grid / fiv_source_valid layers
 };
 Bundle fivBundle(const TriMesh& occluder, const FivGrid& grid, const std::vector<float>& difmap,
                  const std::array<double, 9>& fivEnv, const FivBundleOptions& options, const nlohmann::json& inputs);
@@ -259,10 +298,17 @@ struct FivStageOptions {
     bool half = true;                // FIV layers as float16 (else float32)
     bool sources = false;            // the map's dominant small sources shadowed from their own texels
     bool selfVertices = false;       // the mesh's own self-shadowed irradiance at its vertices (layer fiv_self)
+    // With sources: the sources' own grid (sampleSourceGrid; azimuth 0 = none), its K. A map without a small source
+    // gets none (the bundle is then the one without the option).
+    GridSpec sourceGrid{0, 0, 0};
+    double sourceSharpen = 2.0;
 };
 // `prt fiv`: (a) from a mesh input, unless the input is a visibility bundle already; then (b) unless
 // visibilityOnly. With visibilityOnly and `merge`, joins those visibility shards into one visibility bundle. Writes one bundle atomically, logs rays against the naive count, reports its cost.
-// Throws prt::Error: kExitUsage for bad options (a shard without visibilityOnly, no env, several meshes),
+// With sourceGrid (needs sources), the grid's layers hold the rest of the map and the sources' shadow is the
+// source grid's (layers fiv_source_grid, fiv_source_valid).
+// Throws prt::Error: kExitUsage for bad options (a shard without visibilityOnly, no env, several meshes,
+// a source grid without sources or one checkSourceGrid refuses),
 // kExitInput for bad inputs (see sampleVisibility, readVisibility, joinShards).
 void runFiv(const FivStageOptions& options);
 

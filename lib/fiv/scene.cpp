@@ -13,6 +13,7 @@ namespace {
 
 const char* const kGridLayers[] = {"fiv", "fiv_power", "fiv_valid"};
 const char* const kLightingLayers[] = {"difmap", "fiv_env"};
+const char* const kSourceLayers[] = {"fiv_source_grid", "fiv_source_valid"};
 
 const Layer& requireFivLayer(const Bundle& bundle, const char* name, const std::string& source) {
     const Layer* layer = findObjectLayer(bundle, name, 0);
@@ -64,6 +65,14 @@ Bundle fivSceneBundle(const Bundle& receiver, const std::string& receiverSource,
             layer.object = object;
             scene.layers.push_back(std::move(layer));
         }
+        // Optional: the sources' own grid (decision 13), renamed like the grid.
+        for (const char* name : kSourceLayers)
+            if (findObjectLayer(bundle, name, 0)) {
+                Layer layer = requireFivLayer(bundle, name, source);
+                layer.name = objectLayerName(name, object);
+                layer.object = object;
+                scene.layers.push_back(std::move(layer));
+            }
         if (!lighting) return;
         for (const char* name : kLightingLayers) {
             Layer layer = requireFivLayer(bundle, name, source);
@@ -76,6 +85,17 @@ Bundle fivSceneBundle(const Bundle& receiver, const std::string& receiverSource,
             throw Error(selfSource, "mesh", "is not the receiver's mesh: --self needs the receiver's own FIV grid");
         checkEnv(*self, selfSource);
         copyLayers(*self, selfSource, 0, types.empty());
+        // The receiver's exact self-shadowing at its vertices (decision 14) holds for this mesh, normals included.
+        if (findObjectLayer(*self, "fiv_self", 0)) {
+            if (self->mesh.normals == receiver.mesh.normals) {
+                Layer layer = requireFivLayer(*self, "fiv_self", selfSource);
+                layer.object = 0;
+                scene.layers.push_back(std::move(layer));
+            } else {
+                logWarn(selfSource + ": fiv_self is for other vertex normals than " + receiverSource +
+                        "'s; the scene shades self-shadowing through the grid");
+            }
+        }
         scene.inputs["self"] = hashFile(selfSource);
     }
     std::set<std::string> names = {"receiver"};

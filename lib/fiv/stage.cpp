@@ -19,6 +19,18 @@ void runFiv(const FivStageOptions& options) {
     if (options.difmapSize < 1 || options.difmapSize > kMaxCube)
         throw Error("", "--difmap", "must lie in 1.." + std::to_string(kMaxCube), kExitUsage);
 
+    const bool withSourceGrid = options.sourceGrid.azimuth > 0;
+    if (withSourceGrid) {
+        if (!options.sources) throw Error("", "--source-grid", "needs --sources (it is the sources' own grid)", kExitUsage);
+        if (options.visibilityOnly)
+            throw Error("", "--source-grid", "belongs to the reduction (the sources come from --env), not --visibility-only",
+                        kExitUsage);
+        checkSourceGrid(options.sourceGrid, 0, "", kExitUsage);
+        if (!(options.sourceSharpen >= kMinSourceSharpen && options.sourceSharpen <= kMaxSourceSharpen))
+            throw Error("", "--source-sharpen", "must lie in " + std::to_string(int(kMinSourceSharpen)) + ".." +
+                                                    std::to_string(int(kMaxSourceSharpen)), kExitUsage);
+    }
+
     if (!options.merge.empty()) {
         if (!options.visibilityOnly) throw Error("", "--merge", "joins visibility shards only", kExitUsage);
         std::vector<Visibility> parts;
@@ -39,6 +51,7 @@ void runFiv(const FivStageOptions& options) {
     TriMesh occluder;
     nlohmann::json inputs;
     double visibilitySeconds = 0.0;
+    uint64_t extraRays = 0; // the source grid's rays
     if (fromVisibility) {
         if (options.visibilityOnly) throw Error(options.inputs[0], "--visibility-only", "input is visibility already", kExitUsage);
         std::vector<Visibility> parts;
@@ -85,18 +98,39 @@ void runFiv(const FivStageOptions& options) {
         FivGrid grid;
         uint64_t sourceRays = 0, selfRays = 0;
         SmallSources sources;
+        SourceGrid sourceGrid; // with a source grid and a map with sources: its samples (else empty)
         CubeEnvironment residualCube; // the cube of the map without its small sources (with options.sources)
         if (options.sources) { // the masks see the map without its small sources; those get rays of their own
             EnvironmentMap residual = env;
             sources = extractSmallSources(residual);
             residualCube = resampleToCube(residual, vis.cube);
             grid = reduceVisibility(vis, residualCube, options.inputs[0]);
-            sourceRays = addSourceShadows(occluder, vis, sources, grid, options.visibility.threads);
+            if (withSourceGrid && !sources.direction.empty()) { // the grid keeps the rest; the sources get their own
+                const GridSpec& g = options.sourceGrid;
+                checkSourceGrid(g, sources.direction.size() / 3, options.inputs[0], kExitUsage);
+                SourceGridOptions so;
+                so.grid = g;
+                so.sharpen = options.sourceSharpen;
+                so.threads = options.visibility.threads;
+                double s0 = nowSeconds();
+                sourceGrid = sampleSourceGrid(occluder, sources, so, options.inputs[0]);
+                char line[240];
+                std::snprintf(line, sizeof line,
+                              "fiv: source grid %dx%dx%d (%zu samples, K %g): %llu source rays + %llu inside-vote rays in %.2f s",
+                              g.azimuth, g.polar, g.shells, g.sampleCount(), so.sharpen,
+                              (unsigned long long)sourceGrid.sourceRays, (unsigned long long)sourceGrid.insideRays,
+                              nowSeconds() - s0);
+                logInfo(line);
+            } else {
+                if (withSourceGrid) logInfo("fiv: the map has no small source: no source grid (the bundle is the one without it)");
+                sourceRays = addSourceShadows(occluder, vis, sources, grid, options.visibility.threads);
+            }
             std::string shares;
             for (double f : sources.powerFraction) shares += (shares.empty() ? "" : ", ") + std::to_string(f);
             logInfo("fiv: " + std::to_string(sources.powerFraction.size()) + " small sources (" +
                     std::to_string(sources.direction.size() / 3) + " texels, power shares " + (shares.empty() ? "-" : shares) +
-                    ") shadowed by " + std::to_string(sourceRays) + " rays of their own");
+                    ") shadowed by " + std::to_string(sourceRays + sourceGrid.sourceRays) + " rays of their own" +
+                    (sourceGrid.fraction.empty() ? "" : " on their own grid"));
         } else {
             grid = reduceVisibility(vis, cube, options.inputs[0]);
         }
@@ -120,6 +154,8 @@ void runFiv(const FivStageOptions& options) {
         bundleOptions.difmapSize = options.difmapSize;
         bundleOptions.envHash = envHash;
         bundleOptions.selfIrradiance = std::move(self);
+        if (!sourceGrid.fraction.empty()) bundleOptions.sourceGrid = &sourceGrid;
+        extraRays = sourceGrid.sourceRays + sourceGrid.insideRays;
         Bundle bundle = fivBundle(occluder, grid, difmap, fivEnv, bundleOptions, inputs);
         for (Layer& layer : bundle.layers)
             if (layer.name == "fiv") {
@@ -136,7 +172,7 @@ void runFiv(const FivStageOptions& options) {
     StageCost cost;
     cost.stage = "fiv";
     cost.seconds = nowSeconds() - start;
-    cost.rays = vis.rays;
+    cost.rays = vis.rays + extraRays;
     cost.peakMemoryBytes = peakMemoryBytes();
     reportCost(cost);
 }

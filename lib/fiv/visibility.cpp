@@ -1,11 +1,10 @@
 // (a) Visibility: per grid sample, which cube texels the occluder hides, by Embree rays from the receiver point.
 // Only texels whose cone reaches the bounding sphere are candidates, and only subsample rays that meet the sphere
 // are cast; the rest are unoccluded by construction.
-#include "fiv.h"
+#include "fiv_internal.h"
 
 #include "core.h"
 #include "mesh.h"
-#include "raycast.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -20,64 +19,6 @@ namespace prt::fiv {
 
 namespace {
 
-// 26 fixed directions (the non-zero points of {-1, 0, 1}^3), slightly skewed so none runs along an axis or an
-// edge of an axis-aligned mesh.
-std::vector<std::array<float, 3>> voteDirections() {
-    std::vector<std::array<float, 3>> out;
-    for (int x = -1; x <= 1; ++x)
-        for (int y = -1; y <= 1; ++y)
-            for (int z = -1; z <= 1; ++z) {
-                if (!x && !y && !z) continue;
-                double d[3] = {x + 0.0123, y + 0.0217, z - 0.0171};
-                double n = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                out.push_back({float(d[0] / n), float(d[1] / n), float(d[2] / n)});
-            }
-    return out;
-}
-
-RTCRay makeRay(const float origin[3], const float d[3]) {
-    RTCRay ray{};
-    ray.org_x = origin[0], ray.org_y = origin[1], ray.org_z = origin[2];
-    ray.dir_x = d[0], ray.dir_y = d[1], ray.dir_z = d[2];
-    ray.tnear = 0.0f;
-    ray.tfar = std::numeric_limits<float>::infinity();
-    ray.mask = ~0u;
-    return ray;
-}
-
-struct Tracer {
-    const TriMesh& mesh;
-    EmbreeScene embree;
-    std::vector<std::array<float, 3>> votes = voteDirections();
-
-    explicit Tracer(const TriMesh& m) : mesh(m), embree(m) {} // EmbreeScene is always robust (lib/raycast)
-
-    // Most of the 26 vote rays first meet a back face: the point is inside. Exact for a closed, consistently wound
-    // mesh (every ray then agrees), a majority vote for an open one.
-    bool inside(const float origin[3], uint64_t& rays) const {
-        int backFaces = 0;
-        for (const auto& d : votes) {
-            RTCIntersectContext context;
-            rtcInitIntersectContext(&context);
-            RTCRayHit hit{};
-            hit.ray = makeRay(origin, d.data());
-            hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(embree.scene, &context, &hit);
-            ++rays;
-            if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-            const uint32_t* tri = &mesh.indices[3 * size_t(hit.hit.primID)];
-            const float* p0 = &mesh.positions[3 * size_t(tri[0])];
-            const float* p1 = &mesh.positions[3 * size_t(tri[1])];
-            const float* p2 = &mesh.positions[3 * size_t(tri[2])];
-            float e1[3], e2[3];
-            for (int c = 0; c < 3; ++c) e1[c] = p1[c] - p0[c], e2[c] = p2[c] - p0[c];
-            float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-            if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0.0f) ++backFaces;
-        }
-        return 2 * backFaces > int(votes.size());
-    }
-};
-
 struct BitWriter {
     std::vector<uint8_t>& out;
     int used = 8; // bits used in the last byte
@@ -89,31 +30,6 @@ struct BitWriter {
         }
     }
 };
-
-// Grid row `row`'s direction d, the vector from its receiver point to the sphere centre (rho R d) and the point
-// itself (as float, where every ray of the row starts); returns rho.
-double receiverPoint(const Visibility& vis, const std::vector<double>& radii, size_t row, double d[3],
-                     double toCentre[3], float origin[3]) {
-    const GridSpec& grid = vis.grid;
-    int i = int(row % size_t(grid.azimuth)), j = int(row / size_t(grid.azimuth) % size_t(grid.polar));
-    int k = int(row / (size_t(grid.azimuth) * grid.polar));
-    double rho = radii[size_t(k)], radius = vis.sphere.radius;
-    gridDirection(grid, i, j, d);
-    for (int c = 0; c < 3; ++c) {
-        toCentre[c] = rho * radius * d[c];
-        origin[c] = float(vis.sphere.centre[size_t(c)] - toCentre[c]);
-    }
-    return rho;
-}
-
-// Whether a ray from a receiver point at rho R from the sphere centre (toCentre: the vector to it, world units)
-// along unit w can meet the bounding sphere: always from inside (rho < 1), else it must point at it and pass
-// within R of the centre.
-bool canMeetSphere(const double toCentre[3], double rho, double radius, const double w[3]) {
-    if (rho < 1.0) return true;
-    double along = toCentre[0] * w[0] + toCentre[1] * w[1] + toCentre[2] * w[2];
-    return along > 0.0 && !(along * along < rho * rho * radius * radius - radius * radius);
-}
 
 // Per-thread buffers of sampleMask: the sample's candidates, and its rays with the candidate each belongs to.
 struct MaskScratch {
@@ -130,7 +46,7 @@ bool sampleMask(const Tracer& tracer, const CubeTexels& cube, const Visibility& 
                 size_t row, MaskScratch& scratch, std::vector<uint8_t>& bytes, uint64_t& rays) {
     double d[3], toCentre[3];
     float origin[3];
-    double rho = receiverPoint(vis, radii, row, d, toCentre, origin), radius = vis.sphere.radius;
+    double rho = receiverPoint(vis.grid, vis.sphere, radii, row, d, toCentre, origin), radius = vis.sphere.radius;
     if (rho < 1.0 && tracer.inside(origin, rays)) return false;
     std::vector<uint32_t>& candidates = scratch.candidates;
     candidates.clear();
@@ -296,41 +212,18 @@ uint64_t addSourceShadows(const TriMesh& occluder, const Visibility& vis, const 
     std::atomic<uint64_t> rays{0};
     tbb::task_arena arena(threads > 0 ? threads : int(tbb::task_arena::automatic));
     arena.execute([&] {
-        EmbreeScene embree(occluder);
+        Tracer tracer(occluder);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, samples, 256), [&](const tbb::blocked_range<size_t>& range) {
-            std::vector<RTCRay> batch;
-            std::vector<uint32_t> texelOf;
+            SourceScratch scratch;
             uint64_t cast = 0;
             for (size_t row = range.begin(); row < range.end(); ++row) {
                 if (!vis.valid[row]) continue;
-                double d[3], toCentre[3];
+                double d[3], toCentre[3], fiv[9], occluded[3];
                 float origin[3];
-                double rho = receiverPoint(vis, radii, row, d, toCentre, origin);
-                batch.clear();
-                texelOf.clear();
-                for (size_t t = 0; t < texels; ++t) {
-                    const double* w = &sources.direction[3 * t];
-                    if (!canMeetSphere(toCentre, rho, vis.sphere.radius, w)) continue;
-                    float wf[3] = {float(w[0]), float(w[1]), float(w[2])};
-                    batch.push_back(makeRay(origin, wf));
-                    texelOf.push_back(uint32_t(t));
-                }
-                if (batch.empty()) continue;
-                RTCIntersectContext context;
-                rtcInitIntersectContext(&context);
-                context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-                rtcOccluded1M(embree.scene, &context, batch.data(), unsigned(batch.size()), sizeof(RTCRay));
-                cast += batch.size();
-                double fiv[9] = {0}, occluded[3] = {0};
-                for (size_t r = 0; r < batch.size(); ++r) {
-                    if (!(batch[r].tfar < 0.0f)) continue;
-                    const size_t t = texelOf[r];
-                    for (int c = 0; c < 3; ++c) {
-                        occluded[c] += sources.power[3 * t + size_t(c)];
-                        for (int a = 0; a < 3; ++a)
-                            fiv[3 * c + a] += sources.power[3 * t + size_t(c)] * sources.direction[3 * t + size_t(a)];
-                    }
-                }
+                double rho = receiverPoint(vis.grid, vis.sphere, radii, row, d, toCentre, origin);
+                uint64_t traced = traceSources(tracer, sources, origin, toCentre, rho, vis.sphere.radius, scratch, fiv, occluded);
+                if (traced == 0) continue;
+                cast += traced;
                 for (int e = 0; e < 9; ++e) grid.fiv[9 * row + size_t(e)] = float(double(grid.fiv[9 * row + size_t(e)]) + fiv[e]);
                 for (int c = 0; c < 3; ++c)
                     grid.power[3 * row + size_t(c)] = float(double(grid.power[3 * row + size_t(c)]) + occluded[c]);

@@ -57,7 +57,11 @@ FivScene fivScene(const Bundle& bundle, const std::string& source) {
         scene.instances.push_back(placed);
     }
     scene.selfShadowing = hasGrid[0];
-    if (scene.selfShadowing) scene.self.occluder = &scene.grids[0];
+    if (scene.selfShadowing) {
+        scene.self.occluder = &scene.grids[0];
+        // fiv_self (fivOccluder checked it against the receiver's vertex count): the receiver is that mesh.
+        if (!scene.grids[0].selfIrradiance.empty()) scene.self.selfIrradiance = scene.grids[0].selfIrradiance.data();
+    }
     if (scene.instances.empty() && !scene.selfShadowing)
         throw Error(source, "instances", "place no occluder, and the receiver has no grid of its own");
     return scene;

@@ -80,6 +80,9 @@ float gather(const FivOccluder& o, const Corner* corners, int count, float fiv[9
     return total;
 }
 
+// The source grid's sharpened fraction g = clamp(0.5 + K (f - 0.5), 0, 1).
+float sharpened(float f, float k) { return std::clamp(0.5f + k * (f - 0.5f), 0.0f, 1.0f); }
+
 // Irradiance the occluder hides from a receiver whose tangent plane lies `d` from the sphere centre, per channel.
 void occludedIrradiance(const float n[3], const float fiv[9], const float power[3], float d, float radius,
                         FivPartial partial, float out[3]) {
@@ -157,6 +160,79 @@ void checkFivPoints(const std::vector<float>& positions, const std::string& sour
                                                                      std::to_string(int64_t(kFivMaxCoordinate)));
 }
 
+namespace {
+
+// Layers fiv_source_grid / fiv_source_valid of `object`, checked through fivLayer and against the main grid `o`.
+FivSourceGrid sourceGrid(const Bundle& bundle, const std::string& source, uint32_t object, const FivOccluder& o) {
+    const Layer* header = findObjectLayer(bundle, "fiv_source_grid", object);
+    FivSourceGrid g;
+    g.azimuth = intParam(*header, "azimuth", source, 3, 4096);
+    g.polar = intParam(*header, "polar", source, 2, 2049);
+    g.shells = intParam(*header, "shells", source, 1, 1024);
+    uint64_t rows = uint64_t(g.azimuth) * g.polar * g.shells;
+    if (rows > (uint64_t(1) << 26))
+        throw Error(source, objectLayerName("fiv_source_grid", object), "holds more than 2^26 samples");
+    const Layer& fraction = fivLayer(bundle, "fiv_source_grid", object, "fiv_source_hidden_fraction", FivStorage::Float,
+                                     {rows}, source);
+    const Layer& valid = fivLayer(bundle, "fiv_source_valid", object, "fiv_valid", FivStorage::Uint8, {rows}, source);
+    const std::string name = objectLayerName("fiv_source_grid", object);
+    for (float f : fraction.data)
+        if (!(f >= 0.0f && f <= 1.0f)) throw Error(source, name, "holds a fraction outside 0..1");
+    for (uint32_t v : valid.integers)
+        if (v > 1) throw Error(source, objectLayerName("fiv_source_valid", object), "holds a value other than 0 and 1");
+    const std::string place = name + ", params.";
+    const nlohmann::json& p = fraction.params;
+    // The same occluder: its bounding sphere, as the main grid's header gives it.
+    if (!p.contains("radius") || coordinateParam(p.at("radius"), source, place + "radius") != o.radius)
+        throw Error(source, place + "radius", "is missing or differs from the main grid's (not the same occluder)");
+    if (!p.contains("centre") || !p.at("centre").is_array() || p.at("centre").size() != 3)
+        throw Error(source, place + "centre", "is not an array of 3 numbers");
+    for (int c = 0; c < 3; ++c)
+        if (coordinateParam(p.at("centre")[size_t(c)], source, place + "centre[" + std::to_string(c) + "]") != o.centre[c])
+            throw Error(source, place + "centre", "differs from the main grid's (not the same occluder)");
+    if (!p.contains("shell_radii") || !p.at("shell_radii").is_array() || p.at("shell_radii").size() != size_t(g.shells))
+        throw Error(source, place + "shell_radii", "is not an array of `shells` numbers");
+    for (size_t k = 0; k < size_t(g.shells); ++k) {
+        const std::string at = place + "shell_radii[" + std::to_string(k) + "]";
+        double rho = coordinateParam(p.at("shell_radii")[k], source, at);
+        float radius = coordinateParam(rho * o.radius, source, at + " times params.radius");
+        if (!(rho > 0.0) || (!g.shellRadii.empty() && !(radius > g.shellRadii.back())))
+            throw Error(source, at, "shell radii are not positive and ascending");
+        g.shellRadii.push_back(radius);
+    }
+    if (!p.contains("sharpen")) throw Error(source, place + "sharpen", "is missing");
+    g.sharpen = coordinateParam(p.at("sharpen"), source, place + "sharpen");
+    if (!(g.sharpen >= 1.0f && g.sharpen <= 100.0f)) throw Error(source, place + "sharpen", "is outside 1..100");
+    if (!p.contains("source_power") || !p.at("source_power").is_array() || p.at("source_power").size() != 3)
+        throw Error(source, place + "source_power", "is not an array of 3 numbers");
+    if (!p.contains("source_fiv") || !p.at("source_fiv").is_array() || p.at("source_fiv").size() != 3)
+        throw Error(source, place + "source_fiv", "is not an array of 3 arrays of 3 numbers");
+    for (size_t c = 0; c < 3; ++c) {
+        const std::string at = place + "source_power[" + std::to_string(c) + "]";
+        g.power[c] = coordinateParam(p.at("source_power")[c], source, at);
+        if (!(g.power[c] >= 0.0f)) throw Error(source, at, "is negative");
+        const nlohmann::json& row = p.at("source_fiv")[c];
+        if (!row.is_array() || row.size() != 3)
+            throw Error(source, place + "source_fiv[" + std::to_string(c) + "]", "is not an array of 3 numbers");
+        double length2 = 0.0;
+        for (size_t a = 0; a < 3; ++a) {
+            g.fiv[3 * c + a] = coordinateParam(row[a], source, place + "source_fiv[" + std::to_string(c) + "][" +
+                                                                   std::to_string(a) + "]");
+            length2 += double(g.fiv[3 * c + a]) * g.fiv[3 * c + a];
+        }
+        // A sum of power times unit directions is no longer than the power.
+        if (std::sqrt(length2) > 1.001 * double(g.power[c]) + 1e-30)
+            throw Error(source, place + "source_fiv[" + std::to_string(c) + "]", "is longer than source_power");
+    }
+    if (stringParam(fraction, "env") != o.envHash)
+        throw Error(source, place + "env", "differs from the main grid's environment");
+    g.fraction = fraction.data;
+    g.valid.assign(valid.integers.begin(), valid.integers.end());
+    return g;
+}
+
+} // namespace
+
 FivOccluder fivOccluder(const Bundle& bundle, const std::string& source, uint32_t object) {
     const Layer* header = findObjectLayer(bundle, "fiv", object);
     if (!header) throw Error(source, objectLayerName("fiv", object), "layer is missing (not a FIV bundle from `prt fiv`)");
@@ -200,6 +276,11 @@ FivOccluder fivOccluder(const Bundle& bundle, const std::string& source, uint32_
             if (v < 0.0f) throw Error(source, "fiv_self", "holds a negative irradiance");
         o.selfIrradiance = self.data;
     }
+    const bool hasSources = findObjectLayer(bundle, "fiv_source_grid", object) != nullptr;
+    if (hasSources != (findObjectLayer(bundle, "fiv_source_valid", object) != nullptr))
+        throw Error(source, objectLayerName(hasSources ? "fiv_source_valid" : "fiv_source_grid", object),
+                    "layer is missing (fiv_source_grid and fiv_source_valid come together)");
+    if (hasSources) o.sources = sourceGrid(bundle, source, object, o);
     return o;
 }
 
@@ -245,7 +326,15 @@ void fivDifmap(const FivLighting& lighting, const float n[3], float out[3]) {
     }
 }
 
-bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float power[3]) {
+namespace {
+
+// The lookup both grids share: the eight corners around `offset` (angles bilinear, periodic in azimuth; shells
+// linear in r with r_k^2 weights), handed to `gather` (which sums the usable ones and returns their weight); when
+// none is usable, the nearest shells further out, four corners at a time. `scale` receives the factor that
+// renormalises the sum and divides by rho^2. Returns false when no usable sample exists along the way out.
+template <class Gather>
+bool gridLookup(int azimuth, int polar, int shells, const std::vector<float>& r, const float offset[3], Gather gather,
+                double& scale) {
     // In double: a float squared distance overflows for offsets past ~1.8e19.
     const double length = std::sqrt(double(offset[0]) * offset[0] + double(offset[1]) * offset[1] +
                                     double(offset[2]) * offset[2]);
@@ -256,23 +345,22 @@ bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float 
     float theta = std::acos(std::clamp(u[1], -1.0f, 1.0f));
     float phi = std::atan2(u[0], -u[2]);
     if (phi < 0.0f) phi += float(2.0 * kPi);
-    float fj = theta / float(kPi) * float(o.polar - 1);
-    int j0 = std::clamp(int(fj), 0, o.polar - 2);
+    float fj = theta / float(kPi) * float(polar - 1);
+    int j0 = std::clamp(int(fj), 0, polar - 2);
     float tj = std::clamp(fj - float(j0), 0.0f, 1.0f);
-    float fi = phi / float(2.0 * kPi) * float(o.azimuth);
+    float fi = phi / float(2.0 * kPi) * float(azimuth);
     int i0 = int(fi);
     float ti = std::clamp(fi - float(i0), 0.0f, 1.0f);
-    i0 %= o.azimuth;
-    int i1 = (i0 + 1) % o.azimuth;
+    i0 %= azimuth;
+    int i1 = (i0 + 1) % azimuth;
 
     // Shell: interpolate rho^2 FIV (which tends to a constant far away) between the shells around `distance`.
-    const std::vector<float>& r = o.shellRadii;
     int k0, k1;
     float tk;
     if (distance <= r.front()) {
         k0 = k1 = 0, tk = 0.0f;
     } else if (distance >= r.back()) {
-        k0 = k1 = o.shells - 1, tk = 0.0f;
+        k0 = k1 = shells - 1, tk = 0.0f;
     } else {
         k1 = int(std::upper_bound(r.begin(), r.end(), distance) - r.begin());
         k0 = k1 - 1;
@@ -281,7 +369,7 @@ bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float 
     // rho^2 FIV interpolated, then divided by rho^2: the weights carry r_k^2 and the 1 / rho^2 comes last, in
     // double, so a far occluder's tiny value underflows to 0 (it hides nothing) rather than every weight.
     const double inverse2 = distance > r.front() ? 1.0 / (length * length) : 1.0 / (double(r.front()) * r.front());
-    auto rowOf = [&](int k, int j, int i) { return (size_t(k) * o.polar + size_t(j)) * o.azimuth + size_t(i); };
+    auto rowOf = [&](int k, int j, int i) { return (size_t(k) * polar + size_t(j)) * azimuth + size_t(i); };
     auto shellWeight = [&](int k) { return r[size_t(k)] * r[size_t(k)]; };
     float angular[4] = {(1 - ti) * (1 - tj), ti * (1 - tj), (1 - ti) * tj, ti * tj};
     Corner corners[8];
@@ -296,20 +384,49 @@ bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float 
     }
     // The weights sum to sum_s kt[s] shellWeight; renormalise to that sum over the usable corners.
     float full = kt[0] * shellWeight(k0) + kt[1] * shellWeight(k1);
-    float used = gather(o, corners, 8, fiv, power);
+    float used = gather(corners, 8);
     if (used <= 1e-6f * full) {
         // All eight inside the occluder: step outwards until a shell has usable corners.
         used = 0.0f;
-        for (int k = k1 + 1; k < o.shells && used <= 0.0f; ++k) {
+        for (int k = k1 + 1; k < shells && used <= 0.0f; ++k) {
             full = shellWeight(k);
             for (int c = 0; c < 4; ++c) corners[c].row = rowOf(k, c < 2 ? j0 : j0 + 1, c % 2 ? i1 : i0), corners[c].weight = full * angular[c];
-            used = gather(o, corners, 4, fiv, power);
+            used = gather(corners, 4);
         }
         if (used <= 0.0f) return false;
     }
-    const double scale = double(full) / double(used) * inverse2;
+    scale = double(full) / double(used) * inverse2;
+    return true;
+}
+
+} // namespace
+
+bool fivLookup(const FivOccluder& o, const float offset[3], float fiv[9], float power[3]) {
+    double scale = 0.0;
+    if (!gridLookup(o.azimuth, o.polar, o.shells, o.shellRadii, offset,
+                    [&](const Corner* corners, int count) { return gather(o, corners, count, fiv, power); }, scale))
+        return false;
     for (int e = 0; e < 9; ++e) fiv[e] = float(fiv[e] * scale);
     for (int e = 0; e < 3; ++e) power[e] = float(power[e] * scale);
+    return true;
+}
+
+bool fivSourceLookup(const FivSourceGrid& g, const float offset[3], float* fraction) {
+    if (g.azimuth <= 0 || g.shellRadii.empty()) return false;
+    float sum = 0.0f;
+    auto gatherFraction = [&](const Corner* corners, int count) {
+        float total = 0.0f;
+        sum = 0.0f;
+        for (int c = 0; c < count; ++c) {
+            if (corners[c].weight <= 0.0f || !g.valid[corners[c].row]) continue;
+            sum += corners[c].weight * g.fraction[corners[c].row];
+            total += corners[c].weight;
+        }
+        return total;
+    };
+    double scale = 0.0;
+    if (!gridLookup(g.azimuth, g.polar, g.shells, g.shellRadii, offset, gatherFraction, scale)) return false;
+    *fraction = float(std::clamp(double(sum) * scale, 0.0, 1.0));
     return true;
 }
 
@@ -334,15 +451,28 @@ void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, si
         } else if (self) {
             const FivOccluder& o = *self->occluder;
             for (int c = 0; c < 3; ++c) offset[c] = o.centre[c] + self->translation[c] - p[c];
-            if (fivLookup(o, offset, fiv, power))
+            if (fivLookup(o, offset, fiv, power)) {
                 for (int c = 0; c < 3; ++c) unoccluded[c] = dot3(n, &lighting.fivEnv[3 * c]) - dot3(n, &fiv[3 * c]);
+                float f = 1.0f; // the grid holds the rest of the map: its sources come back signed, as FIV_self held them
+                if (o.sources.azimuth > 0) {
+                    float g = fivSourceLookup(o.sources, offset, &f) ? sharpened(f, o.sources.sharpen) : 1.0f;
+                    for (int c = 0; c < 3; ++c) unoccluded[c] -= g * dot3(n, &o.sources.fiv[3 * c]);
+                }
+            }
         }
+        float visible = 1.0f, sumHidden = 0.0f, sourceIrradiance[3] = {0, 0, 0}; // the sources' term
         size_t used = 0;
         for (size_t j = 0; j < instanceCount; ++j) {
             const FivOccluder& o = *instances[j].occluder;
             for (int c = 0; c < 3; ++c) offset[c] = o.centre[c] + instances[j].translation[c] - p[c];
             float d = dot3(n, offset);
             if (d <= -o.radius) continue; // case C: wholly behind the tangent plane
+            if (o.sources.azimuth > 0) { // rays decided it: no partial correction
+                float f = 1.0f;
+                float g = fivSourceLookup(o.sources, offset, &f) ? sharpened(f, o.sources.sharpen) : 1.0f;
+                visible *= 1.0f - g, sumHidden += g;
+                for (int c = 0; c < 3; ++c) sourceIrradiance[c] = std::max(sourceIrradiance[c], dot3(n, &o.sources.fiv[3 * c]));
+            }
             Hidden& h = hidden[used];
             if (!fivLookup(o, offset, fiv, power)) {
                 std::copy(total, total + 3, h.value); // the point lies inside the occluder
@@ -395,6 +525,8 @@ void fivIrradiance(const FivLighting& lighting, const FivInstance* instances, si
                 for (int c = 0; c < 3; ++c) occluded[c] += hidden[a].value[c] / (1.0f + covered);
             }
         }
+        const float share = options.overlap == FivOverlap::None ? std::min(sumHidden, 1.0f) : 1.0f - visible;
+        for (int c = 0; c < 3; ++c) occluded[c] += share * sourceIrradiance[c];
         float* out = &irradiance[3 * point];
         for (int c = 0; c < 3; ++c) out[c] = std::clamp(unoccluded[c] - occluded[c], 0.0f, std::max(total[c], 0.0f));
     }

@@ -330,6 +330,44 @@ TEST(FivCli, HardenedReadersRefuseEveryCrashClassWithoutOutput) {
         EXPECT_FALSE(std::filesystem::exists(npy) || std::filesystem::exists(glb)) << c.file;
     }
 
+    // The sources' own grid (decision 13) goes through the same validator in both commands.
+    Image sunny;
+    sunny.width = 32, sunny.height = 16;
+    sunny.rgb.assign(32 * 16 * 3, 1.0f);
+    for (int c = 0; c < 3; ++c) sunny.rgb[3 * (5 * 32 + 20) + size_t(c)] = 4000.0f;
+    writeImage(out / "sunny.exr", sunny);
+    ASSERT_EQ(run("fiv " + f / "sphere.glb --env " + out / "sunny.exr --grid 16,9,6 --cube 8 --sources --source-grid 16,9,6 -o " +
+                  out / "sg.glb"), 0);
+    auto sourceEdited = [&](const std::string& name, const std::function<void(Bundle&)>& edit) {
+        Bundle bundle = readBundle(out / "sg.glb");
+        edit(bundle);
+        writeBundle(out / name, bundle);
+        return out / name;
+    };
+    const std::vector<Case> sourceCases = {
+        {sourceEdited("sg-above-one.glb", [&](Bundle& b) { layer(b, "fiv_source_grid").data[7] = 1.5f; }), "outside 0..1"},
+        {sourceEdited("sg-uint8.glb",
+                      [&](Bundle& b) {
+                          Layer& l = layer(b, "fiv_source_grid");
+                          l.componentType = "uint8", l.integers.assign(l.data.size(), 0u), l.data.clear();
+                      }),
+         "component type is uint8"},
+        {sourceEdited("sg-radius.glb", [&](Bundle& b) { layer(b, "fiv_source_grid").params["radius"] = 0.25; }),
+         "differs from the main grid"},
+        {sourceEdited("sg-no-valid.glb",
+                      [&](Bundle& b) { std::erase_if(b.layers, [](const Layer& l) { return l.name == "fiv_source_valid"; }); }),
+         "come together"},
+    };
+    for (const Case& c : sourceCases) {
+        EXPECT_EQ(run("fivshade " + f / "plane.glb --env " + out / "sunny.exr --occluder " + c.file + " --at 0,1,0 -o " + npy,
+                      &message), 3) << c.file << "\n" << message;
+        EXPECT_NE(message.find(c.says), std::string::npos) << message;
+        EXPECT_EQ(run("fivscene " + f / "plane.glb --occluder " + c.file + " --at 0,1,0 -o " + glb, &message), 3)
+            << c.file << "\n" << message;
+        EXPECT_NE(message.find(c.says), std::string::npos) << message;
+        EXPECT_FALSE(std::filesystem::exists(npy) || std::filesystem::exists(glb)) << c.file;
+    }
+
     // Visibility bundles: a mask layer typed as floats, a centre of the wrong type, a row short of bits (the
     // reduction's error names the file).
     ASSERT_EQ(run("fiv-visibility " + f / "sphere.glb --grid 16,9,6 --cube 8 -o " + out / "vis.glb"), 0);
@@ -442,4 +480,104 @@ TEST(FivCli, SelfVerticesStoreTheMeshsOwnShadowingAndFivshadeUsesItOnThatMeshOnl
     ASSERT_EQ(run("fivshade " + f / "plane.glb --env " + f / "env.exr --self " + dir / "self.fiv.glb -o " + dir / "c.npy"), 0);
     ASSERT_EQ(run("fivshade " + f / "plane.glb --env " + f / "env.exr --self " + f / "sphere.fiv.glb -o " + dir / "d.npy"), 0);
     EXPECT_EQ(readFileBytes(dir / "c.npy"), readFileBytes(dir / "d.npy"));
+}
+
+// `prt fiv --sources --source-grid`: under a map with a sun the bundle carries the sources' own grid (its grid the
+// rest of the map), `prt fivshade` reads it and says so, `prt fivscene` carries it (and fiv_self) and shades the
+// same bytes; a map without a small source gives the bundle without the option, byte for byte; bad values are
+// usage errors that write nothing.
+TEST(FivCli, SourceGridIsWrittenAsLayersReadByFivshadeAndCarriedByFivscene) {
+    const Files& f = files();
+    TempDir dir;
+    Image flat;
+    flat.width = 32, flat.height = 16;
+    flat.rgb.assign(32 * 16 * 3, 1.0f);
+    writeImage(dir / "flat.exr", flat);
+    Image sunny = flat;
+    for (int c = 0; c < 3; ++c) sunny.rgb[3 * (5 * 32 + 20) + size_t(c)] = 4000.0f;
+    writeImage(dir / "sunny.exr", sunny);
+    const std::string common = f / "sphere.glb --grid 16,9,6 --cube 8 --threads 1 --sources ";
+    ASSERT_EQ(run("fiv " + common + "--env " + dir / "flat.exr -o " + dir / "flat.glb"), 0);
+    std::string log;
+    ASSERT_EQ(run("fiv " + common + "--source-grid 32,17,12 --env " + dir / "flat.exr -o " + dir / "flat.grid.glb", &log), 0);
+    EXPECT_EQ(readFileBytes(dir / "flat.glb"), readFileBytes(dir / "flat.grid.glb"));
+    ASSERT_EQ(run("fiv " + common + "--env " + dir / "sunny.exr -o " + dir / "sunny.glb"), 0);
+    ASSERT_EQ(run("fiv " + common + "--source-grid auto --source-sharpen 3 --self-vertices --env " + dir / "sunny.exr -o " +
+                  dir / "sunny.grid.glb"), 0); // auto: 2 NT, 2 NP - 1, 2 NR = 32, 17, 12
+    Bundle sources = readBundle(dir / "sunny.glb"), grid = readBundle(dir / "sunny.grid.glb");
+    const Layer* fraction = findLayer(grid, "fiv_source_grid");
+    const Layer* valid = findLayer(grid, "fiv_source_valid");
+    ASSERT_TRUE(fraction && valid);
+    EXPECT_EQ(findLayer(sources, "fiv_source_grid"), nullptr);
+    EXPECT_EQ(fraction->componentType, "float16");
+    EXPECT_EQ(fraction->shape, (std::vector<uint64_t>{32 * 17 * 12}));
+    EXPECT_EQ(valid->componentType, "uint8");
+    EXPECT_EQ(fraction->params["sharpen"], 3.0);
+    EXPECT_EQ(fraction->params["azimuth"], 32);
+    EXPECT_EQ(fraction->params["centre"], findLayer(grid, "fiv")->params["centre"]);
+    EXPECT_GT(fraction->params["source_rays"].get<uint64_t>(), 0u);
+    EXPECT_EQ(findLayer(grid, "fiv")->params["sources"], "fiv_source_grid");
+    EXPECT_FALSE(findLayer(grid, "fiv")->params.contains("source_rays")); // the grid holds the rest of the map
+    EXPECT_NE(findLayer(grid, "fiv")->data, findLayer(sources, "fiv")->data);
+    size_t hidden = 0;
+    for (float v : fraction->data) hidden += v > 0.5f;
+    EXPECT_GT(hidden, 50u);
+
+    // fivshade reads it; the sun's shadow is closer to the brute-force reference's than --sources alone gives it.
+    const std::string shade = "fivshade " + f / "plane.glb --env " + dir / "sunny.exr --at 0.3,1,0 --occluder ";
+    ASSERT_EQ(run(shade + dir / "sunny.grid.glb -o " + dir / "grid.npy", &log), 0);
+    ASSERT_EQ(run(shade + dir / "sunny.glb -o " + dir / "sources.npy"), 0);
+    ASSERT_EQ(run("reference " + f / "plane.glb --env " + dir / "sunny.exr --occluder " + f / "sphere.glb --at 0.3,1,0 " +
+                  "--bounces 0 -o " + dir / "ref.npy"), 0);
+    ASSERT_EQ(run("reference " + f / "plane.glb --env " + dir / "sunny.exr --unshadowed --bounces 0 -o " + dir / "free.npy"), 0);
+    std::vector<float> g = readVertexRadiance(dir / "grid.npy"), s = readVertexRadiance(dir / "sources.npy"),
+                       ref = readVertexRadiance(dir / "ref.npy"), free = readVertexRadiance(dir / "free.npy");
+    ASSERT_EQ(g.size(), ref.size());
+    double errorGrid = 0, errorSources = 0, shadow = 0;
+    for (size_t i = 1; i < g.size(); i += 3) {
+        errorGrid += std::pow(double(g[i]) - ref[i], 2), errorSources += std::pow(double(s[i]) - ref[i], 2);
+        shadow = std::max(shadow, double(free[i]) - ref[i]);
+    }
+    EXPECT_GT(shadow, 1.0); // the sun's shadow is there to get right
+    EXPECT_LT(errorGrid, 0.8 * errorSources) << errorGrid << " " << errorSources; // measured 722 against 1221
+    // fivscene carries the layers, and fiv_self for the receiver; the scene shades like the separate files.
+    const std::string placed = " --occluder " + dir / "sunny.grid.glb --at 0.3,1,0";
+    ASSERT_EQ(run("fivscene " + f / "plane.glb" + placed + " -o " + dir / "scene.glb"), 0);
+    Bundle scene = readBundle(dir / "scene.glb");
+    EXPECT_NE(findObjectLayer(scene, "fiv_source_grid", 1), nullptr);
+    EXPECT_NE(findObjectLayer(scene, "fiv_source_valid", 1), nullptr);
+    ASSERT_EQ(run("fivshade " + dir / "scene.glb --env " + dir / "sunny.exr -o " + dir / "scene.npy"), 0);
+    EXPECT_EQ(readFileBytes(dir / "scene.npy"), readFileBytes(dir / "grid.npy"));
+    ASSERT_EQ(run("fivscene " + f / "sphere.glb --self " + dir / "sunny.grid.glb -o " + dir / "self.glb"), 0);
+    EXPECT_NE(findObjectLayer(readBundle(dir / "self.glb"), "fiv_self", 0), nullptr);
+    ASSERT_EQ(run("fivshade " + dir / "self.glb --env " + dir / "sunny.exr -o " + dir / "self-scene.npy"), 0);
+    ASSERT_EQ(run("fivshade " + f / "sphere.glb --env " + dir / "sunny.exr --self " + dir / "sunny.grid.glb -o " +
+                  dir / "self-files.npy", &log), 0);
+    EXPECT_EQ(readFileBytes(dir / "self-scene.npy"), readFileBytes(dir / "self-files.npy"));
+    std::string validator = PRT_SOURCE_DIR "/tests/bundle/gltf_validator";
+    if (std::filesystem::exists(validator + "/node_modules/gltf-validator")) { // the Khronos validator accepts both
+        std::string output;
+        std::FILE* pipe = popen(("node " + validator + "/validate.mjs " + dir / "scene.glb " + dir / "self.glb 2>&1").c_str(), "r");
+        char buffer[4096];
+        size_t got;
+        while ((got = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) output.append(buffer, got);
+        EXPECT_EQ(WEXITSTATUS(pclose(pipe)), 0) << output;
+        size_t clean = 0;
+        for (size_t at = output.find("\"errors\":0"); at != std::string::npos; at = output.find("\"errors\":0", at + 1)) ++clean;
+        EXPECT_EQ(clean, 2u) << output; // no error in either file
+    }
+
+    // Usage errors (exit 2), nothing written.
+    std::string message;
+    const std::string out = " -o " + dir / "bad.glb";
+    EXPECT_EQ(run("fiv " + f / "sphere.glb --grid 16,9,6 --cube 8 --source-grid 32,17,12 --env " + dir / "sunny.exr" + out,
+                  &message), 2);
+    EXPECT_NE(message.find("needs --sources"), std::string::npos) << message;
+    for (const char* bad : {"--source-grid 2,17,12", "--source-grid 32,17", "--source-grid 32,1.5,4", "--source-grid Auto",
+                            "--source-grid 4096,2049,1024", "--source-grid 32,17,12 --source-sharpen 0.5",
+                            "--source-sharpen 2"}) {
+        EXPECT_EQ(run("fiv " + common + bad + " --env " + dir / "sunny.exr" + out, &message), 2) << bad;
+        EXPECT_NE(message.find("--source-"), std::string::npos) << bad << ": " << message;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.glb"));
 }

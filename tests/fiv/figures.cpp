@@ -1,6 +1,8 @@
 // The FIV figures of docs/results.md, measured in one run and printed as JSON (not a test: it takes minutes).
 //   fiv_figures BUNNY.ply ENV_DIR OUT_DIR [--quick] [--grids 32x17x15,...] [--scenes "one bunny,self-shadow"]
-//               [--maps sunrise,courtyard] [--sources] [--self-vertices] [--sharpen K,...]
+//               [--maps sunrise,courtyard] [--sources] [--self-vertices] [--source-grid NTxNPxNR [--sharpen K,...]]
+// --sources --source-grid G [--sharpen K,...] (K default 2; --sharpen alone: G the main grid): the sources' own grid
+// (fiv::sampleSourceGrid, docs/fiv.md decision 13) through the bundle layers, one bundle per K, every scene.
 // Scenes (receiver 8x8 plane of 65x65 vertices unless said): the bunny scaled to 2 units hovering 0.5 above the
 // plane; two bunnies with overlapping shadows; three; one straddling the plane; one 0.05 above it (close); one
 // low beside the plane (grazing); the bunny as its own receiver. Maps: courtyard, sunrise (sharp sun), constant.
@@ -115,8 +117,8 @@ int main(int argc, char** argv) {
     std::string bunnyPath = argv[1], envDir = argv[2], outDir = argv[3];
     bool quick = false;
     bool sources = false; // --sources: the map's small sources shadowed from their own texels (extractSmallSources)
-    std::string sourceGrid; // --source-grid NTxNPxNR: with --sharpen, the sources' own grid at this resolution
-    std::vector<double> sharpen; // --sharpen K,...: the source term's sharpened interpolant (an experiment)
+    std::string sourceGrid; // --source-grid NTxNPxNR: with --sources, the sources' own grid (fiv::sampleSourceGrid)
+    std::vector<double> sharpen; // --sharpen K,...: its K values (default 2), one bundle each
     bool selfVertices = false; // --self-vertices: the bunny's own self-shadowing at its vertices (fiv::selfIrradiance)
     std::string gridList, sceneList, mapList;
     for (int a = 4; a < argc; ++a) {
@@ -312,72 +314,56 @@ int main(int argc, char** argv) {
                 std::array<double, 9> fivEnv = fiv::environmentFiv(cube);
                 double reductionSeconds = nowSeconds() - r0;
                 reductions.push_back({{"map", m}, {"seconds", reductionSeconds}, {"sources", sourceReport}, {"self_vertices", selfReport}});
-                // --sharpen K,...: an experiment on the source term's interpolant (issue 20): the sources' hidden
-                // fraction f per grid sample is interpolated on its own, sharpened to clamp(0.5 + K (f - 0.5), 0, 1)
-                // (K 0: a threshold at 0.5) and times max(0, N . FIV_sources); the rest of the map as before.
-                if (sources && !sharpen.empty() && !found.direction.empty()) {
-                    fiv::FivGrid rest = fiv::reduceVisibility(vis, residualCube), src = rest;
-                    // --source-grid NTxNPxNR: the sources' own grid at another resolution; its samples' inside flags
-                    // from sampleVisibility on a 6x1^2 cube (6 mask rays per sample, the 26 inside votes).
-                    fiv::Visibility sourceVis;
+                // --source-grid NTxNPxNR [--sharpen K,...]: the sources' own grid (fiv::sampleSourceGrid, docs/fiv.md
+                // decision 13) through the real layer path: the bundle of `prt fiv --sources --source-grid` (float16,
+                // the rest of the map on the main grid), written, read back by fivOccluder and shaded by fivIrradiance.
+                // --sharpen without --source-grid: the source grid at the main grid's resolution (the experiment's
+                // "main grid" row of docs/results.md).
+                if (sources && (!sourceGrid.empty() || !sharpen.empty()) && !found.direction.empty()) {
+                    const std::string sourceGridName = sourceGrid.empty() ? gridName : sourceGrid;
+                    fiv::FivGrid rest = fiv::reduceVisibility(vis, residualCube);
+                    fiv::SourceGridOptions so;
+                    so.grid = options.grid;
+                    if (std::sscanf(sourceGridName.c_str(), "%dx%dx%d", &so.grid.azimuth, &so.grid.polar, &so.grid.shells) != 3)
+                        return 2;
+                    so.threads = 2;
                     double sourceSeconds = nowSeconds();
-                    if (!sourceGrid.empty()) {
-                        fiv::VisibilityOptions so = options;
-                        std::sscanf(sourceGrid.c_str(), "%dx%dx%d", &so.grid.azimuth, &so.grid.polar, &so.grid.shells);
-                        so.cube = 1;
-                        sourceVis = fiv::sampleVisibility(bunny, so, "bunny");
-                        fiv::CubeEnvironment none;
-                        none.size = 1, none.radiance.assign(18, 0.0);
-                        src = fiv::reduceVisibility(sourceVis, none);
-                    }
-                    const fiv::Visibility& sv = sourceGrid.empty() ? vis : sourceVis;
-                    std::fill(src.fiv.begin(), src.fiv.end(), 0.0f);
-                    std::fill(src.power.begin(), src.power.end(), 0.0f);
-                    uint64_t srcRays = fiv::addSourceShadows(bunny, sv, found, src, 2);
+                    fiv::SourceGrid sg = fiv::sampleSourceGrid(bunny, found, so, "bunny");
                     sourceSeconds = nowSeconds() - sourceSeconds;
-                    std::fprintf(stderr, "source grid %s: %zu samples, %.1f s, %llu source rays, %llu inside/mask rays\n",
-                                 sourceGrid.c_str(), src.valid.size(), sourceSeconds, (unsigned long long)srcRays,
-                                 (unsigned long long)sv.rays);
-                    double sourcePower[3] = {0, 0, 0}, sourceFiv[9] = {0};
-                    for (size_t t = 0; t < found.direction.size() / 3; ++t)
-                        for (int c = 0; c < 3; ++c) {
-                            sourcePower[c] += found.power[3 * t + c];
-                            for (int a = 0; a < 3; ++a) sourceFiv[3 * c + a] += found.power[3 * t + c] * found.direction[3 * t + a];
-                        }
-                    fiv::FivBundleOptions plain;
-                    plain.half = false;
-                    Bundle restBundle = fiv::fivBundle(bunny, rest, difmap, fivEnv, plain, {});
-                    Bundle srcBundle = fiv::fivBundle(bunny, src, difmap, fivEnv, plain, {});
-                    FivOccluder restOccluder = fivOccluder(restBundle, "rest"), srcOccluder = fivOccluder(srcBundle, "src");
-                    FivLighting lighting = fivLighting(restBundle, "rest");
-                    for (const SceneSpec& s : scenes) {
-                        if (s.self || s.placements.size() != 1) continue;
-                        std::string key = s.name + "|" + m;
-                        std::vector<float> free = shadeFiv(plane, lighting, &restOccluder, {}, false, {});
-                        std::vector<float> restShaded = shadeFiv(plane, lighting, &restOccluder, s.placements, false, {});
-                        for (double k : sharpen) {
-                            std::vector<float> shaded = restShaded;
-                            for (size_t v = 0; v < plane.vertexCount(); ++v) {
-                                const float* p = &plane.positions[3 * v];
-                                const float* n = &plane.normals[3 * v];
-                                float offset[3], fiv[9], power[3];
-                                for (int c = 0; c < 3; ++c) offset[c] = srcOccluder.centre[c] + s.placements[0][size_t(c)] - p[c];
-                                if (n[0] * offset[0] + n[1] * offset[1] + n[2] * offset[2] <= -srcOccluder.radius) continue;
-                                if (!fivLookup(srcOccluder, offset, fiv, power)) continue;
-                                double f = std::clamp(double(power[1]) / sourcePower[1], 0.0, 1.0);
-                                double g = k > 0 ? std::clamp(0.5 + k * (f - 0.5), 0.0, 1.0) : (f >= 0.5 ? 1.0 : 0.0);
-                                for (int c = 0; c < 3; ++c) {
-                                    double cosine = n[0] * sourceFiv[3 * c] + n[1] * sourceFiv[3 * c + 1] + n[2] * sourceFiv[3 * c + 2];
-                                    shaded[3 * v + c] = float(std::max(0.0, shaded[3 * v + c] - g * std::max(0.0, cosine) / std::numbers::pi));
-                                }
-                            }
+                    std::fprintf(stderr, "source grid %s: %zu samples, %.1f s, %llu source rays, %llu inside-vote rays\n",
+                                 sourceGridName.c_str(), sg.fraction.size(), sourceSeconds, (unsigned long long)sg.sourceRays,
+                                 (unsigned long long)sg.insideRays);
+                    for (double k : sharpen.empty() ? std::vector<double>{2.0} : sharpen) {
+                        sg.sharpen = k;
+                        fiv::FivBundleOptions bundleOptions;
+                        bundleOptions.selfIrradiance = self;
+                        bundleOptions.sourceGrid = &sg;
+                        std::string file = outDir + "/source_grid-" + m + "-" + gridName + ".fiv.glb";
+                        writeBundle(file, fiv::fivBundle(bunny, rest, difmap, fivEnv, bundleOptions, {}));
+                        Bundle bundle = readBundle(file);
+                        size_t layerBytes = 0;
+                        for (const Layer& layer : bundle.layers)
+                            if (layer.name == "fiv_source_grid") layerBytes += 2 * layer.data.size();
+                            else if (layer.name == "fiv_source_valid") layerBytes += layer.integers.size();
+                        FivOccluder occluder = fivOccluder(bundle, file);
+                        FivLighting lighting = fivLighting(bundle, file);
+                        for (const SceneSpec& s : scenes) {
+                            if (s.failureOnly && m != "courtyard") continue;
+                            std::string key = s.name + "|" + m;
+                            const TriMesh& receiver = s.self ? bunny : plane;
+                            std::vector<float> free = shadeFiv(receiver, lighting, &occluder, {}, false, {});
+                            FivShadeOptions mode{FivPartial::Cap, FivOverlap::Paper};
+                            std::vector<float> shaded = shadeFiv(receiver, lighting, &occluder, s.placements, s.self, mode);
                             Errors full = errors(free, shaded, refFree[key], refShadowed[key]);
                             results.push_back({{"grid", gridName}, {"samples", options.grid.sampleCount()}, {"map", m},
-                                               {"scene", s.name}, {"mode", "sources sharpened " + std::to_string(k)},
-                                               {"source_grid", sourceGrid}, {"source_seconds", sourceSeconds},
-                                               {"storage", "float32"}, {"nrmse", full.nrmse}, {"relative_rmse", full.relativeRmse}});
-                            std::fprintf(stderr, "sharpen %s %s K %g source grid %s: NRMSE %.4f\n", s.name.c_str(), m.c_str(), k,
-                                         sourceGrid.c_str(), full.nrmse);
+                                               {"scene", s.name}, {"mode", "cap+paper, source grid K " + std::to_string(k)},
+                                               {"source_grid", sourceGridName}, {"source_samples", sg.fraction.size()},
+                                               {"source_seconds", sourceSeconds}, {"source_rays", sg.sourceRays},
+                                               {"inside_rays", sg.insideRays}, {"source_layer_bytes", layerBytes},
+                                               {"storage", "float16"}, {"nrmse", full.nrmse},
+                                               {"relative_rmse", full.relativeRmse}});
+                            std::fprintf(stderr, "source grid %s K %g: %s %s NRMSE %.4f\n", sourceGridName.c_str(), k,
+                                         s.name.c_str(), m.c_str(), full.nrmse);
                         }
                     }
                 }

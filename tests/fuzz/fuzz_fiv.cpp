@@ -2,8 +2,9 @@
 // input is a whole GLB; when its JSON parses, the harness recomputes the PRT_bundle checksum (so mutations of the
 // extension reach the layer readers, as fuzz_bundle does), reads the bundle, then runs what `prt fiv` and `prt
 // fivshade` run on it: readVisibility and the reduction, or fivScene / fivOccluder and fivLighting, then the
-// shading at a few points. Seeds: tests/fuzz/corpus/fiv/ (a FIV grid, one with the fiv_self layer, a visibility
-// bundle, a scene).
+// shading at a few points. Seeds: tests/fuzz/corpus/fiv/ (a FIV grid, one with the fiv_self layer, one with fiv_self
+// and the sources' own grid (fiv_source_grid, fiv_source_valid), a visibility bundle, a scene, and a scene whose
+// receiver and occluder carry the source grid and fiv_self).
 #include "bundle.h"
 #include "bundle_internal.h"
 #include "fiv.h"

@@ -20,6 +20,20 @@ namespace prt {
 // self instance carries per-point self-shadowed irradiance E_self (layer fiv_self), I = E_self - sum_j I_occ,j.
 // Everything here is std only and single-threaded; outgoing radiance is albedo / pi times I.
 
+// The sources' own grid (optional layers fiv_source_grid, fiv_source_valid of `prt fiv --sources --source-grid`;
+// docs/fiv.md decision 13): per sample the hidden fraction f of the map's small sources (a sun), on a grid of its
+// own with the occluder's centre and radius. When an occluder has one, its main grid holds the rest of the map and
+// the sources' hidden irradiance is g max(0, N . fiv[channel]), g = clamp(0.5 + sharpen (f - 0.5), 0, 1).
+struct FivSourceGrid {
+    int azimuth = 0, polar = 0, shells = 0; // 0: none
+    std::vector<float> shellRadii;          // world units, ascending
+    std::vector<float> fraction;            // [row] in [0, 1], row (k * polar + j) * azimuth + i
+    std::vector<uint8_t> valid;             // [row]
+    float sharpen = 2.0f;                   // K, 1..100
+    float power[3] = {0, 0, 0};             // the sources' power [channel]
+    float fiv[9] = {0};                     // FIV_sources [channel][xyz]
+};
+
 // One occluder type's grid (layers fiv, fiv_power, fiv_valid of a FIV bundle).
 struct FivOccluder {
     int azimuth = 0, polar = 0, shells = 0;
@@ -33,6 +47,8 @@ struct FivOccluder {
     // Optional layer fiv_self (`prt fiv --self-vertices`, object 0 only): [vertex][3] the irradiance each vertex of
     // the bundle's own mesh receives with the mesh itself as the only occluder; empty when the bundle has none.
     std::vector<float> selfIrradiance;
+    // Optional: the sources' own grid (sources.azimuth 0 when the bundle has none; then fiv holds the whole map).
+    FivSourceGrid sources;
 };
 
 // The unoccluded environment as the shading needs it (layers difmap and fiv_env).
@@ -49,6 +65,9 @@ struct FivLighting {
 // problem) otherwise.
 // They check every layer through fivLayer, and the params with typed access: a value of the wrong JSON type, or a
 // centre, radius or shell radius whose float is not finite or beyond kFivMaxCoordinate, is refused (kExitInput).
+// fivOccluder reads the optional source grid of object `object` the same way: both layers or neither, its own
+// dimensions and ascending shells, a centre and radius equal to the main grid's, f in [0, 1], valid 0 or 1,
+// sharpen in 1..100, source_power [3] finite and >= 0, source_fiv [3][3] finite with |fiv[c]| <= power[c] (1e-3).
 FivOccluder fivOccluder(const Bundle& bundle, const std::string& source, uint32_t object = 0);
 FivLighting fivLighting(const Bundle& bundle, const std::string& source, uint32_t object = 0);
 
@@ -97,6 +116,12 @@ struct FivInstance {
     const float* selfIrradiance = nullptr;
 };
 
+// The sources' term (occluders with a source grid): per instance in cases A and B (case C hides nothing; the
+// source term needs no partial correction: its rays decide, whatever the tangent plane), g_j from fivSourceLookup
+// (1 when the point is inside the occluder), combined over instances as 1 - prod_j (1 - g_j) (overlap None: the
+// sum, clamped to 1), times max(0, N . FIV_sources), the largest over the instances' types. A `self` grid with a
+// source grid, when no selfIrradiance is given, adds its sources back signed: unoccluded = N . FIV(Env) -
+// N . FIV_self - g_self N . FIV_sources (the grid path of --sources, on the finer grid).
 // Irradiance [count][3] at `count` points (positions and unit normals [count][3], world). `self` (or null) is the
 // receiver's own grid, placed like an instance. Needs instances with occluders, lighting with its DifMap. Results
 // do not depend on how callers split the points.
@@ -112,7 +137,7 @@ struct FivScene {
     FivLighting lighting;
     std::vector<FivInstance> instances; // every placed occluder (instances of objects >= 1 with a grid)
     bool selfShadowing = false;         // object 0 carries its own grid
-    FivInstance self;                   // then: object 0's grid, untranslated
+    FivInstance self;                   // then: object 0's grid, untranslated (with its fiv_self when it has one)
     FivScene() = default;
     FivScene(FivScene&&) = default;
     FivScene& operator=(FivScene&&) = default;
@@ -136,6 +161,10 @@ void fivDifmap(const FivLighting& lighting, const float n[3], float out[3]);
 // further out are used. Beyond the outermost shell the value falls off as (rho_max / rho)^2. Returns false when no
 // usable sample exists along the way out.
 bool fivLookup(const FivOccluder& occluder, const float offset[3], float fiv[9], float power[3]);
+// The source grid's hidden fraction f at `offset` (as fivLookup: trilinear with r_k^2 weights between shells and
+// 1 / rho^2 after, invalid samples dropped and the rest renormalised, stepping outwards when all are inside),
+// clamped to [0, 1]. Returns false when the grid has no usable sample along the way out (or none at all).
+bool fivSourceLookup(const FivSourceGrid& grid, const float offset[3], float* fraction);
 // Area of the lens where discs of radii r1 and r2 with centres s apart overlap (0 when apart).
 double discOverlap(double r1, double r2, double s);
 // Irradiance of a uniform cap of half-angle sigma (sin^2 sigma given) at angle theta (cos given) from the normal,
