@@ -1,6 +1,7 @@
 // The viewer for a `prt fivscene` bundle: the receiver shaded per vertex from the FIV grids on the GPU (fiv_gpu.js,
 // float, the default) or on the CPU (fiv.js, double; `fivOn=cpu`), radiance =
-// albedo / pi x irradiance as `prt fivshade --albedo` (albedo=R,G,B or one grey value; default 1), the occluders
+// albedo / pi x irradiance as `prt fivshade --albedo` (albedo=R,G,B or one grey value; default 1; a scene past
+// the GPU pass's limits is shaded on the CPU, the reason in api.fivNote, the panel and the console), the occluders
 // drawn where their instances sit, each lit unshadowed (albedo / pi x DifMap(n)). Instances move by api.moveInstance,
 // by shift-drag of the selected one in the camera's plane, or on a path (animate: each circles its start position
 // at 1.5 bounding radii, once every 4 s, phases spread). The URL keeps the positions (positions=X,Y,Z,...).

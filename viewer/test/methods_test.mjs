@@ -346,6 +346,11 @@ try {
       }
     }
   }
+  fs.copyFileSync(sunMap, file('sunrise.exr'));
+  // The sunrise scene from the sun's side, where the spheres' shadows fall (a picture for docs/viewer/fiv_sun.png).
+  await page.goto(`${base}/?bundle=data/fivscene_sun.glb&albedo=0.8&camera=22,8,-4,0,4.8,0,0,1,0,35&size=320,240&exposure=-1&sky=data/sunrise.exr`);
+  await page.evaluate(async () => { await window.prtReady; });
+  await page.locator('#view').screenshot({ path: file('viewer_fiv_sun_view.png') });
   results.renderer = await page.evaluate(() => window.prt.renderer);
 
   // 4. Bad inputs are refused with a message naming the file and the problem, never drawn.
