@@ -15,7 +15,8 @@
 //     page (kFivTolerance); a view reloaded from its URL keeps the positions; and the same under sunrise with the
 //     small sources' own grids (`prt fiv --sources --source-grid`) on the spheres and the bunny, the bunny's exact
 //     self-shadowing at its vertices (`--self-vertices`, fiv_self) or through its grid, at three placements that put
-//     the spheres' sun shadows on the bunny; a source grid past the GPU pass's shells falls back to the CPU, saying so.
+//     the spheres' sun shadows on the bunny; a source grid past the GPU pass's shells falls back to the CPU, saying so;
+//     malformed source grids and fiv_self (copies of the sunrise scene with one member changed) are refused.
 // Screenshots and agreement.json land in WORK_DIR.
 // usage: node viewer/test/methods_test.mjs PRT DATA_DIR WORK_DIR
 import { spawnSync } from 'node:child_process';
@@ -148,6 +149,32 @@ for (const self of ['sun', 'sungrid']) // the spheres far away: the bunny's own 
       '--albedo', '0.8', '-o', file(`fiv_${self}_unshadowed.npy`));
 run('fivscene', file('bunny.glb'), ...sunArgs(sunPlacements[0], 'sphere_sun65'), '-o', file('fivscene_sun65.glb'));
 run('fivshade', file('fivscene_sun65.glb'), '--env', sunMap, '--albedo', '0.8', '-o', file('fiv_sun650.npy'));
+// Malformed copies of the sunrise scene for the reader's refusals: `edit` changes the glTF JSON, the BIN chunk is kept.
+const rewriteGlb = (from, to, edit) => {
+  const bytes = fs.readFileSync(file(from)), jsonLength = bytes.readUInt32LE(12);
+  const json = JSON.parse(bytes.subarray(20, 20 + jsonLength).toString('utf8'));
+  edit(json);
+  const text = Buffer.from(JSON.stringify(json)), padded = Buffer.concat([text, Buffer.alloc((4 - text.length % 4) % 4, 0x20)]);
+  const bin = bytes.subarray(20 + jsonLength), header = Buffer.alloc(20);
+  header.writeUInt32LE(0x46546c67, 0);
+  header.writeUInt32LE(2, 4);
+  header.writeUInt32LE(20 + padded.length + bin.length, 8);
+  header.writeUInt32LE(padded.length, 12);
+  header.writeUInt32LE(0x4e4f534a, 16);
+  fs.writeFileSync(file(to), Buffer.concat([header, padded, bin]));
+};
+const sunLayer = (json, name) => json.extensions.PRT_bundle.layers.find((l) => l.name === name);
+const badSunScenes = [
+  ['bad_no_valid', (j) => { j.extensions.PRT_bundle.layers = j.extensions.PRT_bundle.layers.filter((l) => l.name !== 'fiv_source_valid.1'); },
+   /object 1 has fiv_source_grid without fiv_source_valid/],
+  ['bad_sharpen', (j) => { sunLayer(j, 'fiv_source_grid.1').params.sharpen = 0.5; }, /fiv_source_grid\.1 params\.sharpen is outside 1\.\.100/],
+  ['bad_source_fiv', (j) => { const p = sunLayer(j, 'fiv_source_grid.1').params; p.source_fiv[0] = p.source_fiv[0].map((x) => 2 * x); },
+   /source_fiv\[0\] is longer than source_power/],
+  ['bad_radius', (j) => { sunLayer(j, 'fiv_source_grid.1').params.radius *= 1.01; }, /params\.radius is missing or differs from the main grid's/],
+  ['bad_env', (j) => { sunLayer(j, 'fiv_source_grid.1').params.env = 'xxh128:0'; }, /params\.env differs from the main grid's environment/],
+  ['bad_self_shape', (j) => { sunLayer(j, 'fiv_self').shape = [1838, 3]; }, /layer fiv_self has shape \[1838,3\], expected \[1839,3\]/],
+];
+for (const [name, edit] of badSunScenes) rewriteGlb('fivscene_sun.glb', `${name}.glb`, edit);
 const readNpy = (name) => {
   const bytes = fs.readFileSync(file(name)), header = bytes.readUInt16LE(8);
   return Array.from(new Float32Array(bytes.buffer.slice(bytes.byteOffset + 10 + header, bytes.byteOffset + bytes.length)));
@@ -347,6 +374,13 @@ try {
     }
   }
   fs.copyFileSync(sunMap, file('sunrise.exr'));
+  // Malformed source grids and fiv_self are refused with a message naming the layer, never drawn.
+  for (const [name, , expected] of badSunScenes) {
+    await page.goto(`${base}/?bundle=data/${name}.glb&albedo=0.8&size=${size.join(',')}`);
+    const message = await page.evaluate(async () => { try { await window.prtReady; return null; } catch (error) { return error.message; } });
+    check(!!message && expected.test(message), `refused ${name}.glb: ${message}`);
+  }
+
   // The sunrise scene from the sun's side, where the spheres' shadows fall (a picture for docs/viewer/fiv_sun.png).
   await page.goto(`${base}/?bundle=data/fivscene_sun.glb&albedo=0.8&camera=22,8,-4,0,4.8,0,0,1,0,35&size=320,240&exposure=-1&sky=data/sunrise.exr`);
   await page.evaluate(async () => { await window.prtReady; });
