@@ -96,8 +96,10 @@ function sourceGrid(json, bin, extension, k, o, env) {
   if (header.semantic !== 'fiv_source_hidden_fraction' || validLayer.semantic !== 'fiv_valid')
     throw new Error(`FIV scene: ${name} or its fiv_source_valid has another semantic than fiv_source_hidden_fraction, fiv_valid`);
   g.fraction = finite(layerData(json, bin, header), name);
-  for (const f of g.fraction) if (!(f >= 0 && f <= 1)) throw new Error(`FIV scene: ${name} holds a fraction outside 0..1`);
   g.valid = integers(json, bin, validLayer);
+  if (g.fraction.length !== rows || g.valid.length !== rows)
+    throw new Error(`FIV scene: ${name} or its fiv_source_valid holds fewer values than its shape [${rows}] needs`);
+  for (const f of g.fraction) if (!(f >= 0 && f <= 1)) throw new Error(`FIV scene: ${name} holds a fraction outside 0..1`);
   for (const v of g.valid) if (v > 1) throw new Error(`FIV scene: ${validLayer.name} holds a value other than 0 and 1`);
   const p = header.params, place = `${name} params.`;
   if (p.radius === undefined || coordinate(p.radius, `${place}radius`) !== o.radius)
@@ -176,6 +178,7 @@ export function readFivScene(arrayBuffer) {
       layer(extension, 'fiv_self', 0, [receiver.positions.length / 3, 3]);
       if (self.semantic !== 'self_shadowed_irradiance_rgb') throw new Error('FIV scene: fiv_self has another semantic than self_shadowed_irradiance_rgb');
       grid.selfIrradiance = finite(layerData(json, bin, self), 'fiv_self');
+      if (grid.selfIrradiance.length !== receiver.positions.length) throw new Error('FIV scene: fiv_self holds fewer values than its shape needs');
       if (grid.selfIrradiance.some((e) => e < 0)) throw new Error('FIV scene: fiv_self holds a negative irradiance');
     }
     return grid;
