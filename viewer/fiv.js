@@ -3,7 +3,10 @@
 // "cap" and overlap "cap"), on the CPU in JavaScript, per vertex, in double precision: the page recomputes the
 // receiver's radiance whenever an instance moves and uploads it as a vertex attribute. Cases A (bounding sphere
 // above the tangent plane, exact), B (straddling, the cap correction) and C (below, ignored), the self-shadowing
-// grid of object 0, and the overlap correction between instances are all the runtime's.
+// grid of object 0, and the overlap correction between instances are all the runtime's; so are the small sources'
+// own grids (`prt fiv --sources --source-grid`, decision 13: the sharpened fraction g, combined over instances as
+// 1 - prod(1 - g)) and the receiver's exact self-shadowing (`prt fiv --self-vertices`, layer fiv_self, decision 14:
+// I = E_self - sum_j I_occ,j).
 import { layerData, parseGlb } from './bundle.js';
 
 // Cube faces +X -X +Y -Y +Z -Z: axis, right (increasing column), up (decreasing row), as lib/sh's kCubeFaces.
@@ -60,13 +63,94 @@ export function isFivSceneJson(json) {
   return !!objects[0] && objects[0].role === 'receiver' && layers.some((l) => l.name === 'fiv' && !l.object);
 }
 
+// An integer param of layer `l` within lo..hi (intParam).
+function intParam(l, key, lo, hi) {
+  const v = (l.params || {})[key];
+  if (!Number.isInteger(v)) throw new Error(`FIV scene: ${l.name} params.${key} is missing or not an integer`);
+  if (v < lo || v > hi) throw new Error(`FIV scene: ${l.name} params.${key} = ${v} is outside ${lo}..${hi}`);
+  return v;
+}
+
+// A number param as a float32 that is finite (coordinateParam, whose bound +-1e9 is kFivMaxCoordinate).
+function coordinate(value, place) {
+  const f = Math.fround(value);
+  if (typeof value !== 'number' || !Number.isFinite(value) || !Number.isFinite(f) || Math.abs(value) > 1e9)
+    throw new Error(`FIV scene: ${place} is not a finite number within +-1000000000`);
+  return f;
+}
+
+// Layers fiv_source_grid / fiv_source_valid of object k (`prt fiv --sources --source-grid`, decision 13), checked
+// as fiv_shade.cpp's sourceGrid does and against the main grid `o` (same sphere, same map): {azimuth, polar, shells,
+// shellRadii, sharpen, power [3], fiv [9] (N . fiv[3c..] the sources' irradiance in channel c), fraction, valid}.
+function sourceGrid(json, bin, extension, k, o, env) {
+  const header = layer(extension, 'fiv_source_grid', k), validLayer = layer(extension, 'fiv_source_valid', k);
+  if (!header !== !validLayer)
+    throw new Error(`FIV scene: object ${k} has ${header ? 'fiv_source_grid without fiv_source_valid' : 'fiv_source_valid without fiv_source_grid'} (they come together)`);
+  if (!header) return null;
+  const name = header.name;
+  const g = { azimuth: intParam(header, 'azimuth', 3, 4096), polar: intParam(header, 'polar', 2, 2049), shells: intParam(header, 'shells', 1, 1024) };
+  const rows = g.azimuth * g.polar * g.shells;
+  if (rows > 2 ** 26) throw new Error(`FIV scene: ${name} holds more than 2^26 samples`);
+  layer(extension, 'fiv_source_grid', k, [rows]);
+  layer(extension, 'fiv_source_valid', k, [rows]);
+  if (header.semantic !== 'fiv_source_hidden_fraction' || validLayer.semantic !== 'fiv_valid')
+    throw new Error(`FIV scene: ${name} or its fiv_source_valid has another semantic than fiv_source_hidden_fraction, fiv_valid`);
+  g.fraction = finite(layerData(json, bin, header), name);
+  g.valid = integers(json, bin, validLayer);
+  if (g.fraction.length !== rows || g.valid.length !== rows)
+    throw new Error(`FIV scene: ${name} or its fiv_source_valid holds fewer values than its shape [${rows}] needs`);
+  for (const f of g.fraction) if (!(f >= 0 && f <= 1)) throw new Error(`FIV scene: ${name} holds a fraction outside 0..1`);
+  for (const v of g.valid) if (v > 1) throw new Error(`FIV scene: ${validLayer.name} holds a value other than 0 and 1`);
+  const p = header.params, place = `${name} params.`;
+  if (p.radius === undefined || coordinate(p.radius, `${place}radius`) !== o.radius)
+    throw new Error(`FIV scene: ${place}radius is missing or differs from the main grid's (not the same occluder)`);
+  if (!Array.isArray(p.centre) || p.centre.length !== 3) throw new Error(`FIV scene: ${place}centre is not an array of 3 numbers`);
+  p.centre.forEach((x, c) => {
+    if (coordinate(x, `${place}centre[${c}]`) !== o.centre[c])
+      throw new Error(`FIV scene: ${place}centre differs from the main grid's (not the same occluder)`);
+  });
+  if (!Array.isArray(p.shell_radii) || p.shell_radii.length !== g.shells)
+    throw new Error(`FIV scene: ${place}shell_radii is not an array of \`shells\` numbers`);
+  g.shellRadii = [];
+  for (const [i, rho] of p.shell_radii.entries()) {
+    const at = `${place}shell_radii[${i}]`, r = coordinate(coordinate(rho, at) * o.radius, `${at} times params.radius`);
+    if (!(rho > 0) || (g.shellRadii.length && !(r > g.shellRadii[g.shellRadii.length - 1])))
+      throw new Error(`FIV scene: ${at}: shell radii are not positive and ascending`);
+    g.shellRadii.push(r);
+  }
+  if (p.sharpen === undefined) throw new Error(`FIV scene: ${place}sharpen is missing`);
+  g.sharpen = coordinate(p.sharpen, `${place}sharpen`);
+  if (!(g.sharpen >= 1 && g.sharpen <= 100)) throw new Error(`FIV scene: ${place}sharpen is outside 1..100`);
+  if (!Array.isArray(p.source_power) || p.source_power.length !== 3) throw new Error(`FIV scene: ${place}source_power is not an array of 3 numbers`);
+  if (!Array.isArray(p.source_fiv) || p.source_fiv.length !== 3) throw new Error(`FIV scene: ${place}source_fiv is not an array of 3 arrays of 3 numbers`);
+  g.power = [0, 0, 0];
+  g.fiv = new Array(9).fill(0);
+  for (let c = 0; c < 3; ++c) {
+    g.power[c] = coordinate(p.source_power[c], `${place}source_power[${c}]`);
+    if (!(g.power[c] >= 0)) throw new Error(`FIV scene: ${place}source_power[${c}] is negative`);
+    const row = p.source_fiv[c];
+    if (!Array.isArray(row) || row.length !== 3) throw new Error(`FIV scene: ${place}source_fiv[${c}] is not an array of 3 numbers`);
+    let length2 = 0;
+    for (let a = 0; a < 3; ++a) {
+      g.fiv[3 * c + a] = coordinate(row[a], `${place}source_fiv[${c}][${a}]`);
+      length2 += g.fiv[3 * c + a] ** 2;
+    }
+    // A sum of power times unit directions is no longer than the power.
+    if (Math.sqrt(length2) > 1.001 * g.power[c] + 1e-30) throw new Error(`FIV scene: ${place}source_fiv[${c}] is longer than source_power`);
+  }
+  if ((typeof p.env === 'string' ? p.env : '') !== env) throw new Error(`FIV scene: ${place}env differs from the main grid's environment`);
+  return g;
+}
+
 // Reads a `prt fivscene` bundle: {receiver: mesh, grids: [object] (null without a grid), lighting: {size, difmap,
-// fivEnv}, instances: [{object, translation, mesh}], self: grid or null, occluderMeshes: {object: mesh}}.
+// fivEnv}, instances: [{object, translation, mesh}], self: grid or null, occluderMeshes: {object: mesh}}. A grid
+// may carry `sources` (its source grid, or null) and object 0's `selfIrradiance` ([V][3], layer fiv_self, or null).
 // Throws Error naming the layer or member for anything the runtime's fivScene refuses.
 export function readFivScene(arrayBuffer) {
   const { json, bin } = parseGlb(arrayBuffer);
   const extension = json.extensions.PRT_bundle;
   const objects = extension.objects || [{ mesh: 0 }];
+  const receiver = meshOf(json, bin, objects[0].mesh);
   const grids = objects.map((_, k) => {
     const header = layer(extension, 'fiv', k);
     if (!header) return null;
@@ -78,18 +162,26 @@ export function readFivScene(arrayBuffer) {
         p.shell_radii.length !== p.shells)
       throw new Error(`FIV scene: fiv.${k} params radius, centre or shell_radii are missing or malformed`);
     layer(extension, 'fiv', k, [rows, 3, 3]);
-    // `prt fiv --source-grid` (docs/fiv.md decision 13): the grid then holds the map without its sun, whose shadow
-    // is in a grid of its own that the viewer does not shade yet: refused rather than drawn without the sun's shadow.
-    if (layer(extension, 'fiv_source_grid', k))
-      throw new Error(`FIV scene: object ${k} carries fiv_source_grid (prt fiv --source-grid), which the viewer does not shade yet; ` +
-                      'make its FIV bundle without --source-grid');
-    const shellRadii = p.shell_radii.map((rho) => Math.fround(rho * p.radius));
-    return {
+    const shellRadii = p.shell_radii.map((rho) => Math.fround(Math.fround(rho) * Math.fround(p.radius))); // as the runtime's floats
+    const grid = {
       azimuth: p.azimuth, polar: p.polar, shells: p.shells, radius: Math.fround(p.radius), centre: p.centre.map(Math.fround),
       shellRadii, fiv: finite(layerData(json, bin, header), `fiv.${k}`),
       power: finite(layerData(json, bin, layer(extension, 'fiv_power', k, [rows, 3])), `fiv_power.${k}`),
       valid: integers(json, bin, layer(extension, 'fiv_valid', k, [rows])),
     };
+    grid.sources = sourceGrid(json, bin, extension, k, grid, typeof p.env === 'string' ? p.env : '');
+    // The receiver's exact self-shadowed irradiance at its own vertices (`prt fiv --self-vertices`, carried by
+    // `prt fivscene --self`), used instead of its grid's N . FIV(Env) - N . FIV_self.
+    const self = k === 0 ? layer(extension, 'fiv_self', 0) : null;
+    grid.selfIrradiance = null;
+    if (self) {
+      layer(extension, 'fiv_self', 0, [receiver.positions.length / 3, 3]);
+      if (self.semantic !== 'self_shadowed_irradiance_rgb') throw new Error('FIV scene: fiv_self has another semantic than self_shadowed_irradiance_rgb');
+      grid.selfIrradiance = finite(layerData(json, bin, self), 'fiv_self');
+      if (grid.selfIrradiance.length !== receiver.positions.length) throw new Error('FIV scene: fiv_self holds fewer values than its shape needs');
+      if (grid.selfIrradiance.some((e) => e < 0)) throw new Error('FIV scene: fiv_self holds a negative irradiance');
+    }
+    return grid;
   });
   let lighting = null;
   for (let k = 0; k < objects.length && !lighting; ++k) {
@@ -114,7 +206,7 @@ export function readFivScene(arrayBuffer) {
   const occluderMeshes = {};
   for (const instance of instances)
     if (!occluderMeshes[instance.object]) occluderMeshes[instance.object] = meshOf(json, bin, objects[instance.object].mesh);
-  return { receiver: meshOf(json, bin, objects[0].mesh), grids, lighting, instances, self: grids[0], occluderMeshes };
+  return { receiver, grids, lighting, instances, self: grids[0], occluderMeshes };
 }
 
 // DifMap(n), bilinear within a face (fivDifmap).
@@ -136,25 +228,13 @@ export function fivDifmap(lighting, n) {
   });
 }
 
-// The grid's FIV [9] and power [3] at offset = centre - point (fivLookup), or null when no usable sample exists.
-// Allocation-free in its loop (it runs per vertex and occluder): the result lives in scratch arrays that the next
-// call overwrites.
+// The lookup both grids share (gridLookup in fiv_shade.cpp): the eight corners around offset = centre - point
+// (angles bilinear, periodic in azimuth; shells linear in r with r_k^2 weights) go to scratch.rows / weights and
+// `gatherCorners(count)` sums the usable ones and returns their weight; when none is usable, the nearest shells
+// further out, four corners at a time. Returns the factor that renormalises the sum and divides by rho^2, or -1
+// when no usable sample exists along the way out. Allocation-free (it runs per vertex and occluder).
 const scratch = { fiv: new Float64Array(9), power: new Float64Array(3), rows: new Int32Array(8), weights: new Float64Array(8) };
-function gather(o, count) {
-  const { fiv, power, rows, weights } = scratch;
-  fiv.fill(0);
-  power.fill(0);
-  let total = 0;
-  for (let c = 0; c < count; ++c) {
-    const row = rows[c], w = weights[c];
-    if (w <= 0 || !o.valid[row]) continue;
-    for (let e = 0; e < 9; ++e) fiv[e] += w * o.fiv[9 * row + e];
-    for (let e = 0; e < 3; ++e) power[e] += w * o.power[3 * row + e];
-    total += w;
-  }
-  return total;
-}
-export function fivLookup(o, offset) {
+function gridLookup(o, offset, gatherCorners) {
   const length = Math.hypot(offset[0], offset[1], offset[2]);
   const u1 = length > 0 ? offset[1] / length : 1, u0 = length > 0 ? offset[0] / length : 0;
   const u2 = length > 0 ? offset[2] / length : 0;
@@ -185,20 +265,65 @@ export function fivLookup(o, offset) {
   corner(0, k0, j0, i0, w0 * a0); corner(1, k0, j0, i1, w0 * a1); corner(2, k0, j0 + 1, i0, w0 * a2); corner(3, k0, j0 + 1, i1, w0 * a3);
   corner(4, k1, j0, i0, w1 * a0); corner(5, k1, j0, i1, w1 * a1); corner(6, k1, j0 + 1, i0, w1 * a2); corner(7, k1, j0 + 1, i1, w1 * a3);
   let full = w0 + w1;
-  let used = gather(o, 8);
+  let used = gatherCorners(8);
   if (used <= 1e-6 * full) {
     used = 0;
     for (let k = k1 + 1; k < o.shells && used <= 0; ++k) {
       full = r[k] * r[k];
       corner(0, k, j0, i0, full * a0); corner(1, k, j0, i1, full * a1); corner(2, k, j0 + 1, i0, full * a2); corner(3, k, j0 + 1, i1, full * a3);
-      used = gather(o, 4);
+      used = gatherCorners(4);
     }
-    if (used <= 0) return null;
+    if (used <= 0) return -1;
   }
-  const scale = full / used * inverse2;
+  return full / used * inverse2;
+}
+
+// The main grid's FIV [9] and power [3] at offset = centre - point (fivLookup), or null when no usable sample
+// exists. The result lives in scratch arrays that the next call overwrites.
+function gatherGrid(o, count) {
+  const { fiv, power, rows, weights } = scratch;
+  fiv.fill(0);
+  power.fill(0);
+  let total = 0;
+  for (let c = 0; c < count; ++c) {
+    const row = rows[c], w = weights[c];
+    if (w <= 0 || !o.valid[row]) continue;
+    for (let e = 0; e < 9; ++e) fiv[e] += w * o.fiv[9 * row + e];
+    for (let e = 0; e < 3; ++e) power[e] += w * o.power[3 * row + e];
+    total += w;
+  }
+  return total;
+}
+export function fivLookup(o, offset) {
+  const scale = gridLookup(o, offset, (count) => gatherGrid(o, count));
+  if (scale < 0) return null;
   for (let e = 0; e < 9; ++e) scratch.fiv[e] *= scale;
   for (let e = 0; e < 3; ++e) scratch.power[e] *= scale;
   return scratch;
+}
+
+// The source grid's hidden fraction f in 0..1 at offset (fivSourceLookup), or null when no usable sample exists.
+export function fivSourceLookup(g, offset) {
+  let sum = 0;
+  const scale = gridLookup(g, offset, (count) => {
+    const { rows, weights } = scratch;
+    let total = 0;
+    sum = 0;
+    for (let c = 0; c < count; ++c) {
+      if (weights[c] <= 0 || !g.valid[rows[c]]) continue;
+      sum += weights[c] * g.fraction[rows[c]];
+      total += weights[c];
+    }
+    return total;
+  });
+  return scale < 0 ? null : Math.min(Math.max(sum * scale, 0), 1);
+}
+
+// The sharpened fraction g = clamp(0.5 + K (f - 0.5), 0, 1) (sharpened); 1 (all hidden) without a usable sample,
+// as the runtime.
+export function sourceHidden(g, offset) {
+  const f = fivSourceLookup(g, offset);
+  return f === null ? 1 : Math.min(Math.max(0.5 + g.sharpen * (f - 0.5), 0), 1);
 }
 
 // sh::capCosineIntegral (clippedCapIrradiance): integral of max(0, n . w) over a cap at cosine cosTheta from n.
@@ -236,22 +361,40 @@ function occluded(n, fiv, power, d, radius) {
 }
 
 // Irradiance [count][3] at the receiver's vertices (fivIrradiance, partial "cap", overlap "cap"): `instances`
-// [{grid, translation}], `self` a grid or null.
+// [{grid, translation}], `self` a grid or null (its selfIrradiance, when it has one, is the receiver's E_self:
+// positions must be the receiver's own vertices). A grid's source grid hides (1 - prod_j (1 - g_j)) of the
+// largest max(0, N . FIV_sources) over the instances' types, on top of the overlap-corrected sum.
 export function fivIrradiance(lighting, instances, self, positions, normals) {
   const count = positions.length / 3, out = new Float64Array(count * 3);
   for (let v = 0; v < count; ++v) {
     const p = positions.subarray(3 * v, 3 * v + 3), n = normals.subarray(3 * v, 3 * v + 3);
     const total = fivDifmap(lighting, n);
     let unoccluded = total.slice();
-    if (self) {
-      const hit = fivLookup(self, [self.centre[0] - p[0], self.centre[1] - p[1], self.centre[2] - p[2]]);
-      if (hit) unoccluded = [0, 1, 2].map((c) => dot(n, lighting.fivEnv, 0, 3 * c) - dot(n, hit.fiv, 0, 3 * c));
+    if (self && self.selfIrradiance) {
+      unoccluded = Array.from(self.selfIrradiance.subarray(3 * v, 3 * v + 3)); // E_self, exact at the vertex
+    } else if (self) {
+      const offset = [self.centre[0] - p[0], self.centre[1] - p[1], self.centre[2] - p[2]];
+      const hit = fivLookup(self, offset);
+      if (hit) {
+        unoccluded = [0, 1, 2].map((c) => dot(n, lighting.fivEnv, 0, 3 * c) - dot(n, hit.fiv, 0, 3 * c));
+        // The grid holds the rest of the map: its sources come back signed, as FIV_self held them.
+        if (self.sources) {
+          const g = sourceHidden(self.sources, offset);
+          for (let c = 0; c < 3; ++c) unoccluded[c] -= g * dot(n, self.sources.fiv, 0, 3 * c);
+        }
+      }
     }
+    let visible = 1;
+    const sourceIrradiance = [0, 0, 0]; // the sources' term: the largest max(0, N . FIV_sources) over the types
     const hidden = [];
     for (const { grid: o, translation } of instances) {
       const offset = [0, 1, 2].map((c) => o.centre[c] + translation[c] - p[c]);
       const d = dot(n, offset);
       if (d <= -o.radius) continue; // case C
+      if (o.sources) { // rays decided it: no partial correction
+        visible *= 1 - sourceHidden(o.sources, offset);
+        for (let c = 0; c < 3; ++c) sourceIrradiance[c] = Math.max(sourceIrradiance[c], dot(n, o.sources.fiv, 0, 3 * c));
+      }
       const hit = fivLookup(o, offset);
       const value = hit ? occluded(n, hit.fiv, hit.power, d, o.radius) : total.slice(); // inside: all of it
       if (value.every((x) => x <= 0)) continue;
@@ -279,7 +422,8 @@ export function fivIrradiance(lighting, instances, self, positions, normals) {
         for (let c = 0; c < 3; ++c) hiddenTotal[c] -= share * (ha.value[c] + hb.value[c]);
       }
     for (let c = 0; c < 3; ++c)
-      out[3 * v + c] = Math.min(Math.max(unoccluded[c] - Math.max(hiddenTotal[c], largest[c]), 0), Math.max(total[c], 0));
+      out[3 * v + c] = Math.min(Math.max(unoccluded[c] - (Math.max(hiddenTotal[c], largest[c]) + (1 - visible) * sourceIrradiance[c]), 0),
+                                Math.max(total[c], 0));
   }
   return out;
 }

@@ -1,11 +1,22 @@
 // Moving occluders on the GPU: fiv.js's shading (lib/runtime/fiv_shade.cpp fivIrradiance, partial and overlap
 // "cap") as a fragment shader that writes every receiver vertex's irradiance into a float render target, one texel
 // per vertex (vertex v at (v % 1024, v / 1024)); the receiver's vertex shader then fetches its texel. In float, as
-// the runtime is. Grids, the DifMap and the receiver's points live in RGBA32F textures read by texelFetch.
+// the runtime is. Grids, the DifMap and the receiver's points live in RGBA32F textures read by texelFetch. A grid's
+// source grid (`prt fiv --sources --source-grid`) lives in a texture of its own, one texel per sample after a short
+// header, and shares the main grid's lookup; the receiver's fiv_self rides with its points.
 import * as THREE from 'three';
 
 const kWidth = 1024;
-export const kMaxGrids = 8, kMaxShells = 16, kMaxInstances = 16;
+export const kMaxGrids = 8, kMaxShells = 16, kMaxInstances = 16, kMaxSourceShells = 64;
+const kLoopShells = Math.max(kMaxShells, kMaxSourceShells);
+const kSourceHeader = 4; // texels before a source grid's shell radii: sharpen, then N . FIV_sources of r, g, b
+
+// A limit of the GPU shading: fiv_view.js shades such a scene on the CPU (fiv.js) instead, saying why.
+function limit(message) {
+  const error = new Error(message);
+  error.gpuLimit = true;
+  return error;
+}
 
 function floatTexture(values, texels) {
   const lines = Math.max(1, Math.ceil(texels / kWidth));
@@ -24,7 +35,11 @@ precision highp int;
 precision highp sampler2D;
 uniform sampler2D grids;    // per grid g from gridBase[g]: row r at 4 r + (fiv r xyz + valid, fiv g, fiv b, power)
 uniform sampler2D difmap;   // 6 size^2 texels, cube strip order
-uniform sampler2D points;   // vertex v: 2 v position, 2 v + 1 unit normal
+uniform sampler2D points;   // vertex v: 3 v position, 3 v + 1 unit normal, 3 v + 2 E_self (fiv_self)
+uniform sampler2D sources;  // source grid s from sourceDims[s].x: sharpen, the sources' FIV r, g, b, shell radii, then
+                            // row r at base + ${kSourceHeader} + shells + r (fraction, valid)
+uniform ivec4 sourceDims[${kMaxGrids}]; // base, azimuth (0: the grid has no source grid), polar, shells
+uniform bool selfExact;     // the receiver's E_self replaces its grid's N . FIV(Env) - N . FIV_self
 uniform int gridBase[${kMaxGrids}], gridAzimuth[${kMaxGrids}], gridPolar[${kMaxGrids}], gridShells[${kMaxGrids}];
 uniform float gridRadius[${kMaxGrids}];
 uniform vec3 gridCentre[${kMaxGrids}];
@@ -65,10 +80,25 @@ int cornerRow[8];
 float cornerWeight[8];
 mat3 F;   // columns: the FIV of channel r, g, b
 vec3 P;   // power
+float fraction; // a source grid's hidden fraction
+bool sourceKind; // lookup reads the source grid of slot g, not its main grid
 float gatherCorners(int g, int count) {
+  float total = 0.0;
+  if (sourceKind) {
+    fraction = 0.0;
+    int rows = sourceDims[g].x + ${kSourceHeader} + sourceDims[g].w;
+    for (int c = 0; c < 8; ++c) {
+      if (c >= count) break;
+      float w = cornerWeight[c];
+      vec4 r = fetch(sources, rows + cornerRow[c]);
+      if (w <= 0.0 || r.y < 0.5) continue;
+      fraction += w * r.x;
+      total += w;
+    }
+    return total;
+  }
   F = mat3(0.0);
   P = vec3(0.0);
-  float total = 0.0;
   for (int c = 0; c < 8; ++c) {
     if (c >= count) break;
     float w = cornerWeight[c];
@@ -83,15 +113,19 @@ float gatherCorners(int g, int count) {
   }
   return total;
 }
-float shellRadius(int g, int k) { return shellRadii[g * ${kMaxShells} + k]; }
-// fivLookup: F and P at offset = centre - point; false when no usable sample exists.
+float shellRadius(int g, int k) {
+  return sourceKind ? fetch(sources, sourceDims[g].x + ${kSourceHeader} + k).x : shellRadii[g * ${kMaxShells} + k];
+}
+// The lookup both grids share (gridLookup): fivLookup, F and P at offset = centre - point, or with sourceKind
+// fivSourceLookup's unclamped fraction; false when no usable sample exists.
 bool lookup(int g, vec3 offset) {
   float len = length(offset);
   vec3 u = len > 0.0 ? offset / len : vec3(0.0, 1.0, 0.0);
   float theta = acos(clamp(u.y, -1.0, 1.0));
   float phi = atan(u.x, -u.z);
   if (phi < 0.0) phi += 2.0 * pi;
-  int polar = gridPolar[g], azimuth = gridAzimuth[g], shells = gridShells[g];
+  int polar = sourceKind ? sourceDims[g].z : gridPolar[g], azimuth = sourceKind ? sourceDims[g].y : gridAzimuth[g];
+  int shells = sourceKind ? sourceDims[g].w : gridShells[g];
   float fj = theta / pi * float(polar - 1);
   int j0 = clamp(int(floor(fj)), 0, polar - 2);
   float tj = clamp(fj - float(j0), 0.0, 1.0);
@@ -104,7 +138,7 @@ bool lookup(int g, vec3 offset) {
   float tk = 0.0;
   if (len >= shellRadius(g, shells - 1)) { k0 = k1 = shells - 1; }
   else if (len > shellRadius(g, 0)) {
-    for (int k = 1; k < ${kMaxShells}; ++k) if (k < shells && shellRadius(g, k) > len) { k1 = k; break; }
+    for (int k = 1; k < ${kLoopShells}; ++k) if (k < shells && shellRadius(g, k) > len) { k1 = k; break; }
     k0 = k1 - 1;
     tk = (len - shellRadius(g, k0)) / (shellRadius(g, k1) - shellRadius(g, k0));
   }
@@ -123,8 +157,9 @@ bool lookup(int g, vec3 offset) {
   float used = gatherCorners(g, 8);
   if (used <= 1e-6 * full) {
     used = 0.0;
-    for (int k = 0; k < ${kMaxShells}; ++k) {
-      if (k <= k1 || k >= shells || used > 0.0) continue;
+    for (int k = 0; k < ${kLoopShells}; ++k) {
+      if (k >= shells || used > 0.0) break;
+      if (k <= k1) continue;
       full = shellRadius(g, k) * shellRadius(g, k);
       for (int c = 0; c < 4; ++c) {
         cornerRow[c] = (k * polar + (c < 2 ? j0 : j0 + 1)) * azimuth + (c % 2 == 1 ? i1 : i0);
@@ -135,9 +170,27 @@ bool lookup(int g, vec3 offset) {
     if (used <= 0.0) return false;
   }
   float scale = full / used * inverse2;
+  if (sourceKind) {
+    fraction *= scale;
+    return true;
+  }
   F *= scale;
   P *= scale;
   return true;
+}
+// The source grid's sharpened fraction g = clamp(0.5 + K (f - 0.5), 0, 1) at offset; 1 without a usable sample.
+float sourceHidden(int g, vec3 offset) {
+  sourceKind = true;
+  bool hit = lookup(g, offset);
+  sourceKind = false;
+  if (!hit) return 1.0;
+  float f = clamp(fraction, 0.0, 1.0);
+  return clamp(0.5 + fetch(sources, sourceDims[g].x).x * (f - 0.5), 0.0, 1.0);
+}
+// N . FIV_sources per channel, the sources' own irradiance.
+vec3 sourceIrradianceAt(int g, vec3 n) {
+  int b = sourceDims[g].x;
+  return vec3(dot(n, fetch(sources, b + 1).xyz), dot(n, fetch(sources, b + 2).xyz), dot(n, fetch(sources, b + 3).xyz));
 }
 float capCosineIntegral(float cosTheta, float sinSigmaSquared) {
   cosTheta = clamp(cosTheta, -1.0, 1.0);
@@ -162,10 +215,19 @@ float hiddenRadius[${kMaxInstances}], hiddenDisc[${kMaxInstances}];
 void main() {
   int v = int(gl_FragCoord.y) * ${kWidth} + int(gl_FragCoord.x);
   if (v >= pointCount) { irradiance = vec4(0.0); return; }
-  vec3 p = fetch(points, 2 * v).xyz, n = fetch(points, 2 * v + 1).xyz;
+  vec3 p = fetch(points, 3 * v).xyz, n = fetch(points, 3 * v + 1).xyz;
   vec3 total = difmapAt(n), unoccluded = total;
-  if (selfGrid >= 0 && lookup(selfGrid, gridCentre[selfGrid] - p))
+  sourceKind = false;
+  if (selfGrid >= 0 && selfExact) {
+    unoccluded = fetch(points, 3 * v + 2).rgb;
+  } else if (selfGrid >= 0 && lookup(selfGrid, gridCentre[selfGrid] - p)) {
     unoccluded = vec3(dot(n, fivEnv[0]), dot(n, fivEnv[1]), dot(n, fivEnv[2])) - vec3(dot(n, F[0]), dot(n, F[1]), dot(n, F[2]));
+    // The grid holds the rest of the map: its sources come back signed, as FIV_self held them.
+    if (sourceDims[selfGrid].y > 0)
+      unoccluded -= sourceHidden(selfGrid, gridCentre[selfGrid] - p) * sourceIrradianceAt(selfGrid, n);
+  }
+  float visible = 1.0;
+  vec3 sourceIrradiance = vec3(0.0); // the largest max(0, N . FIV_sources) over the instances' types
   int used = 0;
   for (int j = 0; j < ${kMaxInstances}; ++j) {
     if (j >= instanceCount) break;
@@ -174,6 +236,10 @@ void main() {
     vec3 offset = gridCentre[g] + instanceTranslation[j] - p;
     float d = dot(n, offset);
     if (d <= -radius) continue; // case C
+    if (sourceDims[g].y > 0) { // rays decided it: no partial correction
+      visible *= 1.0 - sourceHidden(g, offset);
+      sourceIrradiance = max(sourceIrradiance, sourceIrradianceAt(g, n));
+    }
     bool hit = lookup(g, offset);
     vec3 value = total; // inside the occluder: all of it
     if (hit) {
@@ -220,7 +286,7 @@ void main() {
                     (hiddenDisc[a] + hiddenDisc[b]);
       occluded -= share * (hiddenValue[a] + hiddenValue[b]);
     }
-  occluded = max(occluded, largest);
+  occluded = max(occluded, largest) + (1.0 - visible) * sourceIrradiance;
   irradiance = vec4(clamp(unoccluded - occluded, vec3(0.0), max(total, vec3(0.0))), 1.0);
 }`;
 
@@ -231,18 +297,21 @@ void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }`;
 // The GPU shading pass for readFivScene's `fiv`, the receiver's points and unit normals ([V][3]). Returns
 // {texture (the target's: vertex v's irradiance at (v % 1024, v / 1024)), shade(instances), read()}: shade
 // draws the pass, finished (a 1-texel read), for [{grid: object index, translation}], read() returns the irradiance [V][3] as floats.
-// Throws Error for more grids, shells or instances than the shader holds.
+// Throws Error with gpuLimit set for more grids, shells, source-grid shells or instances than the shader holds, or
+// a texture taller than the renderer's maximum.
 export function fivGpu(renderer, fiv, positions, normals) {
   const count = positions.length / 3;
   const gridObjects = fiv.grids.map((g, k) => (g ? k : -1)).filter((k) => k >= 0);
-  if (gridObjects.length > kMaxGrids) throw new Error(`FIV scene: ${gridObjects.length} grids (the GPU shading takes ${kMaxGrids})`);
-  if (fiv.instances.length > kMaxInstances) throw new Error(`FIV scene: ${fiv.instances.length} instances (the GPU shading takes ${kMaxInstances})`);
+  if (gridObjects.length > kMaxGrids) throw limit(`FIV scene: ${gridObjects.length} grids (the GPU shading takes ${kMaxGrids})`);
+  if (fiv.instances.length > kMaxInstances) throw limit(`FIV scene: ${fiv.instances.length} instances (the GPU shading takes ${kMaxInstances})`);
   const slot = {}; // object -> grid slot
   let texels = 0;
   const base = [], values = [];
   gridObjects.forEach((object, s) => {
     const g = fiv.grids[object];
-    if (g.shells > kMaxShells) throw new Error(`FIV scene: grid of object ${object} has ${g.shells} shells (the GPU shading takes ${kMaxShells})`);
+    if (g.shells > kMaxShells) throw limit(`FIV scene: grid of object ${object} has ${g.shells} shells (the GPU shading takes ${kMaxShells})`);
+    if (g.sources && g.sources.shells > kMaxSourceShells)
+      throw limit(`FIV scene: source grid of object ${object} has ${g.sources.shells} shells (the GPU shading takes ${kMaxSourceShells})`);
     slot[object] = s;
     base.push(texels);
     const rows = g.azimuth * g.polar * g.shells;
@@ -252,21 +321,54 @@ export function fivGpu(renderer, fiv, positions, normals) {
     }
     texels += 4 * rows;
   });
+  // The source grids: per slot a header (sharpen; N . FIV_sources's rows), the shell radii, then (fraction, valid).
+  const sourceDims = new Array(4 * kMaxGrids).fill(0);
+  let sourceTexels = 0;
+  const sourceSlots = gridObjects.map((object, s) => {
+    const g = fiv.grids[object].sources;
+    if (!g) return null;
+    sourceDims.splice(4 * s, 4, sourceTexels, g.azimuth, g.polar, g.shells);
+    const start = sourceTexels;
+    sourceTexels += kSourceHeader + g.shells + g.azimuth * g.polar * g.shells;
+    return { g, start };
+  });
+  const sourceValues = new Float32Array(Math.max(1, sourceTexels) * 4);
+  for (const slot of sourceSlots) {
+    if (!slot) continue;
+    const { g, start } = slot;
+    sourceValues[4 * start] = g.sharpen;
+    for (let c = 0; c < 3; ++c) sourceValues.set(g.fiv.slice(3 * c, 3 * c + 3), 4 * (start + 1 + c));
+    g.shellRadii.forEach((r, k) => { sourceValues[4 * (start + kSourceHeader + k)] = r; });
+    const rows = start + kSourceHeader + g.shells;
+    for (let r = 0; r < g.fraction.length; ++r) {
+      sourceValues[4 * (rows + r)] = g.fraction[r];
+      sourceValues[4 * (rows + r) + 1] = g.valid[r];
+    }
+  }
+  const maxLines = renderer.capabilities.maxTextureSize;
+  for (const [what, n] of [['grids', texels], ['source grids', sourceTexels], ['points', 3 * count]])
+    if (Math.ceil(n / kWidth) > maxLines)
+      throw limit(`FIV scene: the ${what} need a ${kWidth} x ${Math.ceil(n / kWidth)} texture, beyond this GPU's ${maxLines}`);
   const pad = (array, length, fill = 0) => [...array, ...Array(Math.max(0, length - array.length)).fill(fill)];
   const grids = gridObjects.map((object) => fiv.grids[object]);
   const shellRadii = new Array(kMaxGrids * kMaxShells).fill(0);
   grids.forEach((g, s) => g.shellRadii.forEach((r, k) => { shellRadii[s * kMaxShells + k] = r; }));
   const difmapValues = new Float32Array(fiv.lighting.difmap.length / 3 * 4);
   for (let t = 0; t < fiv.lighting.difmap.length / 3; ++t) difmapValues.set(fiv.lighting.difmap.subarray(3 * t, 3 * t + 3), 4 * t);
-  const pointValues = new Float32Array(count * 8);
+  const selfIrradiance = fiv.self ? fiv.self.selfIrradiance : null;
+  const pointValues = new Float32Array(count * 12);
   for (let v = 0; v < count; ++v) {
-    for (let c = 0; c < 3; ++c) pointValues[8 * v + c] = positions[3 * v + c];
-    for (let c = 0; c < 3; ++c) pointValues[8 * v + 4 + c] = normals[3 * v + c];
+    for (let c = 0; c < 3; ++c) pointValues[12 * v + c] = positions[3 * v + c];
+    for (let c = 0; c < 3; ++c) pointValues[12 * v + 4 + c] = normals[3 * v + c];
+    if (selfIrradiance) for (let c = 0; c < 3; ++c) pointValues[12 * v + 8 + c] = selfIrradiance[3 * v + c];
   }
   const uniforms = {
     grids: { value: floatTexture(values, texels) },
     difmap: { value: floatTexture(difmapValues, difmapValues.length / 4) },
-    points: { value: floatTexture(pointValues, 2 * count) },
+    points: { value: floatTexture(pointValues, 3 * count) },
+    sources: { value: floatTexture(sourceValues, Math.max(1, sourceTexels)) },
+    sourceDims: { value: Int32Array.from(sourceDims) }, // flat: three.js hands an ivec4 array to uniform4iv as is
+    selfExact: { value: !!selfIrradiance },
     gridBase: { value: pad(base, kMaxGrids) },
     gridAzimuth: { value: pad(grids.map((g) => g.azimuth), kMaxGrids, 3) },
     gridPolar: { value: pad(grids.map((g) => g.polar), kMaxGrids, 2) },

@@ -1,6 +1,7 @@
 // The viewer for a `prt fivscene` bundle: the receiver shaded per vertex from the FIV grids on the GPU (fiv_gpu.js,
 // float, the default) or on the CPU (fiv.js, double; `fivOn=cpu`), radiance =
-// albedo / pi x irradiance as `prt fivshade --albedo` (albedo=R,G,B or one grey value; default 1), the occluders
+// albedo / pi x irradiance as `prt fivshade --albedo` (albedo=R,G,B or one grey value; default 1; a scene past
+// the GPU pass's limits is shaded on the CPU, the reason in api.fivNote, the panel and the console), the occluders
 // drawn where their instances sit, each lit unshadowed (albedo / pi x DifMap(n)). Instances move by api.moveInstance,
 // by shift-drag of the selected one in the camera's plane, or on a path (animate: each circles its start position
 // at 1.5 bounding radii, once every 4 s, phases spread). The URL keeps the positions (positions=X,Y,Z,...).
@@ -97,8 +98,17 @@ export async function startFivViewer(canvas, panel, params, bytes) {
   const skyMap = params.get('sky') ? await loadSky(params.get('sky').split(',')[0]) : null;
 
   const radiance = new Float32Array(positions.length);
-  const onGpu = params.get('fivOn') !== 'cpu';
-  const gpu = onGpu ? fivGpu(renderer, fiv, positions, Float32Array.from(normals)) : null;
+  // The GPU pass unless fivOn=cpu, or the scene exceeds its limits (fiv_gpu.js): then fiv.js, saying why.
+  let gpu = null, fivNote = null;
+  if (params.get('fivOn') !== 'cpu')
+    try {
+      gpu = fivGpu(renderer, fiv, positions, Float32Array.from(normals));
+    } catch (error) {
+      if (!error.gpuLimit) throw error;
+      fivNote = `${error.message}: shaded on the CPU instead`;
+      console.warn(fivNote);
+    }
+  const onGpu = !!gpu;
   const receiverMaterial = onGpu ? new THREE.RawShaderMaterial({
     vertexShader: gpuVertexShader, fragmentShader, glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
     uniforms: { ...uniforms, shaded: { value: gpu.texture }, shadedWidth: { value: gpu.width },
@@ -154,7 +164,9 @@ export async function startFivViewer(canvas, panel, params, bytes) {
     if (panel) panel.update({ ...state, rotate: 0 }, null, { kind: 'fiv', vertexCount: positions.length / 3, receivers: 1,
                                                               renderer: api.renderer, frameMs, shadeMs, instances: fiv.instances.length,
                                                               fivOn: onGpu ? 'gpu' : 'cpu',
-                                                              selfShadowing: !!fiv.self, lights: 0 });
+                                                              selfShadowing: !!fiv.self, lights: 0, fivNote,
+                                                              fivSources: fiv.grids.some((g) => g && g.sources),
+                                                              fivSelfExact: !!(fiv.self && fiv.self.selfIrradiance) });
   }
   function query() {
     const q = new URLSearchParams(params);
@@ -169,7 +181,7 @@ export async function startFivViewer(canvas, panel, params, bytes) {
   let animation = null;
 
   const api = {
-    lightings: [], transferOrder: 0, kind: 'fiv', fivOn: onGpu ? 'gpu' : 'cpu', vertexCount: positions.length / 3, receivers: 1, lights: 0,
+    lightings: [], transferOrder: 0, kind: 'fiv', fivOn: onGpu ? 'gpu' : 'cpu', fivNote, vertexCount: positions.length / 3, receivers: 1, lights: 0,
     turnLocked: false, hasReferenceImage: false,
     instances: fiv.instances.map((i) => i.name),
     renderer: (() => {

@@ -12,7 +12,11 @@
 //   - moving occluders (fiv_gpu.js on the GPU, and fiv.js on the CPU): a `prt fivscene` bundle of the bunny under three sphere instances, with and
 //     without the bunny's own grid (self-shadowing); the viewer's per-vertex radiance must be `prt fivshade`'s of the
 //     same placements at every vertex, for three sets of instance positions reached by moving the instances in the
-//     page (kFivTolerance); a view reloaded from its URL keeps the positions.
+//     page (kFivTolerance); a view reloaded from its URL keeps the positions; and the same under sunrise with the
+//     small sources' own grids (`prt fiv --sources --source-grid`) on the spheres and the bunny, the bunny's exact
+//     self-shadowing at its vertices (`--self-vertices`, fiv_self) or through its grid, at three placements that put
+//     the spheres' sun shadows on the bunny; a source grid past the GPU pass's shells falls back to the CPU, saying so;
+//     malformed source grids and fiv_self (copies of the sunrise scene with one member changed) are refused.
 // Screenshots and agreement.json land in WORK_DIR.
 // usage: node viewer/test/methods_test.mjs PRT DATA_DIR WORK_DIR
 import fs from 'node:fs';
@@ -42,7 +46,12 @@ const kErrorPanelShare = 0.97;
 // FIV radiance per vertex, |a - b| <= abs + rel |b|. CPU (fiv.js, double) against the runtime's float: rounding.
 // GPU (fiv_gpu.js, float in another order): with self-shadowing the receiver's unoccluded light is N . FIV(Env) -
 // N . FIV_self, two terms several times the result, so float cancellation reaches about 2e-4 (0.1% of the mean).
+// Under sunrise the GPU's largest differences (6e-4, 0.65 of the tolerance) lie in the spheres' sun penumbrae, where
+// the sharpened source fraction is steep in angle and the GPU's acos / atan round otherwise (3.5e-5 elsewhere).
 const kFivTolerance = { cpu: { abs: 1e-5, rel: 1e-4 }, gpu: { abs: 5e-4, rel: 1e-3 } };
+// The sunrise scenes must show the spheres' sun shadows: at each placement at least this many vertices are darker
+// by 20% than with the spheres far away (measured: about 100 of 1839).
+const kSunShadowVertices = 50;
 
 const { prt, data, work, file, run } = testWorkspace('methods_test.mjs');
 const map = path.join(data, 'env/studio.exr'); // three cone lights of 2.5 to 3.1 degrees
@@ -99,6 +108,62 @@ for (const [k, at] of placements.entries()) {
   run('fivshade', file('bunny.glb'), '--env', fivMap, '--self', file('bunny.fiv.glb'), ...fivArgs(at), '--albedo', '0.8',
       '-o', file(`fiv_self${k}.npy`));
 }
+// Under sunrise (one small source, 59% of the map's power): the sources' own grid 32x17x12 on each (twice the main
+// grid's 16x9x6), the bunny's E_self at its vertices in one scene and its grid alone in the other.
+const sunMap = path.join(data, 'env/sunrise.exr');
+const sunFiv = ['--env', sunMap, '--grid', '16,9,6', '--cube', '8', '--sources', '--source-grid', '32,17,12'];
+run('fiv', file('sphere.glb'), ...sunFiv, '-o', file('sphere_sun.fiv.glb'));
+run('fiv', file('bunny.glb'), ...sunFiv, '--self-vertices', '-o', file('bunny_sun.fiv.glb'));
+run('fiv', file('bunny.glb'), ...sunFiv, '-o', file('bunny_sungrid.fiv.glb'));
+// A source grid of 65 shells, past fiv_gpu.js's kMaxSourceShells: the GPU view falls back to fiv.js.
+run('fiv', file('sphere.glb'), '--env', sunMap, '--grid', '16,9,6', '--cube', '8', '--sources', '--source-grid', '8,5,65',
+    '-o', file('sphere_sun65.fiv.glb'));
+// Spheres between the low sun (direction about (0.58, 0.14, -0.80)) and the bunny.
+const sunPlacements = [
+  [[2.9, 5.7, -4], [-1, 9, -4.5], [3, 2, -3.5]],
+  [[1.5, 7, -3.5], [4, 4, -2], [-2, 4, -4]],
+  [[0, 8.2, -1.5], [3.5, 3, -4], [-3, 6, 3]],
+];
+const sunArgs = (at, sphere = 'sphere_sun') => at.flatMap((p) => ['--occluder', file(`${sphere}.fiv.glb`), '--at', p.join(',')]);
+for (const self of ['sun', 'sungrid']) {
+  run('fivscene', file('bunny.glb'), '--self', file(`bunny_${self}.fiv.glb`), ...sunArgs(sunPlacements[0]), '-o', file(`fivscene_${self}.glb`));
+  // Placement 0 from the scene itself (fivscene's layers as fivshade reads them), the others from the FIV files.
+  run('fivshade', file(`fivscene_${self}.glb`), '--env', sunMap, '--albedo', '0.8', '-o', file(`fiv_${self}0.npy`));
+  for (const [k, at] of sunPlacements.entries())
+    if (k > 0) run('fivshade', file('bunny.glb'), '--env', sunMap, '--self', file(`bunny_${self}.fiv.glb`), ...sunArgs(at),
+                   '--albedo', '0.8', '-o', file(`fiv_${self}${k}.npy`));
+}
+for (const self of ['sun', 'sungrid']) // the spheres far away: the bunny's own shadows only
+  run('fivshade', file('bunny.glb'), '--env', sunMap, '--self', file(`bunny_${self}.fiv.glb`), ...sunArgs([[1e3, 1e3, 1e3]]),
+      '--albedo', '0.8', '-o', file(`fiv_${self}_unshadowed.npy`));
+run('fivscene', file('bunny.glb'), ...sunArgs(sunPlacements[0], 'sphere_sun65'), '-o', file('fivscene_sun65.glb'));
+run('fivshade', file('fivscene_sun65.glb'), '--env', sunMap, '--albedo', '0.8', '-o', file('fiv_sun650.npy'));
+// Malformed copies of the sunrise scene for the reader's refusals: `edit` changes the glTF JSON, the BIN chunk is kept.
+const rewriteGlb = (from, to, edit) => {
+  const bytes = fs.readFileSync(file(from)), jsonLength = bytes.readUInt32LE(12);
+  const json = JSON.parse(bytes.subarray(20, 20 + jsonLength).toString('utf8'));
+  edit(json);
+  const text = Buffer.from(JSON.stringify(json)), padded = Buffer.concat([text, Buffer.alloc((4 - text.length % 4) % 4, 0x20)]);
+  const bin = bytes.subarray(20 + jsonLength), header = Buffer.alloc(20);
+  header.writeUInt32LE(0x46546c67, 0);
+  header.writeUInt32LE(2, 4);
+  header.writeUInt32LE(20 + padded.length + bin.length, 8);
+  header.writeUInt32LE(padded.length, 12);
+  header.writeUInt32LE(0x4e4f534a, 16);
+  fs.writeFileSync(file(to), Buffer.concat([header, padded, bin]));
+};
+const sunLayer = (json, name) => json.extensions.PRT_bundle.layers.find((l) => l.name === name);
+const badSunScenes = [
+  ['bad_no_valid', (j) => { j.extensions.PRT_bundle.layers = j.extensions.PRT_bundle.layers.filter((l) => l.name !== 'fiv_source_valid.1'); },
+   /object 1 has fiv_source_grid without fiv_source_valid/],
+  ['bad_sharpen', (j) => { sunLayer(j, 'fiv_source_grid.1').params.sharpen = 0.5; }, /fiv_source_grid\.1 params\.sharpen is outside 1\.\.100/],
+  ['bad_source_fiv', (j) => { const p = sunLayer(j, 'fiv_source_grid.1').params; p.source_fiv[0] = p.source_fiv[0].map((x) => 2 * x); },
+   /source_fiv\[0\] is longer than source_power/],
+  ['bad_radius', (j) => { sunLayer(j, 'fiv_source_grid.1').params.radius *= 1.01; }, /params\.radius is missing or differs from the main grid's/],
+  ['bad_env', (j) => { sunLayer(j, 'fiv_source_grid.1').params.env = 'xxh128:0'; }, /params\.env differs from the main grid's environment/],
+  ['bad_self_shape', (j) => { sunLayer(j, 'fiv_self').shape = [1838, 3]; }, /layer fiv_self has shape \[1838,3\], expected \[1839,3\]/],
+];
+for (const [name, edit] of badSunScenes) rewriteGlb('fivscene_sun.glb', `${name}.glb`, edit);
 const readNpy = (name) => {
   const bytes = fs.readFileSync(file(name)), header = bytes.readUInt16LE(8);
   return Array.from(new Float32Array(bytes.buffer.slice(bytes.byteOffset + 10 + header, bytes.byteOffset + bytes.length)));
@@ -218,33 +283,56 @@ try {
 
   // 3. Moving occluders against prt fivshade, the instances moved in the page.
   results.fiv = [];
+  const luminance = (a, v) => (a[3 * v] + a[3 * v + 1] + a[3 * v + 2]) / 3;
+  const fivScenes = [
+    { bundle: 'fivscene', expected: 'fiv', label: '', self: false, at: placements },
+    { bundle: 'fivscene_self', expected: 'fiv_self', label: ' + self', self: true, at: placements },
+    { bundle: 'fivscene_sun', expected: 'fiv_sun', label: ' sunrise, source grids + fiv_self', self: true, sun: true, at: sunPlacements },
+    { bundle: 'fivscene_sungrid', expected: 'fiv_sungrid', label: ' sunrise, source grids + self grid', self: true, sun: true, at: sunPlacements },
+    { bundle: 'fivscene_sun65', expected: 'fiv_sun65', label: ' sunrise, 65-shell source grids', self: false, sun: true,
+      at: sunPlacements.slice(0, 1), fallback: true },
+  ];
   for (const device of ['gpu', 'cpu'])
-  for (const self of [false, true]) {
-    const tolerance = kFivTolerance[device];
-    await page.goto(`${base}/?bundle=data/${self ? 'fivscene_self' : 'fivscene'}.glb&albedo=0.8&camera=${camera}` +
+  for (const scene of fivScenes) {
+    const { self } = scene;
+    if (scene.fallback && device === 'cpu') continue;
+    const on = scene.fallback ? 'cpu' : device, tolerance = kFivTolerance[on];
+    await page.goto(`${base}/?bundle=data/${scene.bundle}.glb&albedo=0.8&camera=${camera}` +
                     `&size=${size.join(',')}&fivOn=${device}`);
-    const info = await page.evaluate(async () => { const api = await window.prtReady; return { kind: api.kind, instances: api.instances.length, on: api.fivOn }; });
-    check(info.kind === 'fiv' && info.instances === 3 && info.on === device,
-          `FIV scene${self ? ' with self-shadowing' : ''} read as ${info.kind} with ${info.instances} instances, shaded on the ${info.on}`);
-    for (const [k, at] of placements.entries()) {
+    const info = await page.evaluate(async () => { const api = await window.prtReady; return { kind: api.kind, instances: api.instances.length, on: api.fivOn, note: api.fivNote }; });
+    check(info.kind === 'fiv' && info.instances === 3 && info.on === on,
+          `FIV scene${scene.label} read as ${info.kind} with ${info.instances} instances, shaded on the ${info.on}` +
+          (info.note ? ` (${info.note})` : ''));
+    if (scene.fallback)
+      check(/source grid of object 1 has 65 shells .*shaded on the CPU instead/.test(info.note || ''),
+            `a source grid past the GPU pass's shells falls back to the CPU with a message`);
+    for (const [k, at] of scene.at.entries()) {
       const shaded = await page.evaluate((at) => {
         at.forEach((p, j) => window.prt.moveInstance(j, p));
         return { radiance: window.prt.fivRadiance(), shadeMs: window.prt.shadeMs(), query: window.prt.query() };
       }, at);
-      const expected = readNpy(`fiv${self ? '_self' : ''}${k}.npy`);
+      const expected = readNpy(`${scene.expected}${k}.npy`);
+      if (scene.sun && device === 'gpu' && !scene.fallback) {
+        const unshadowed = readNpy(`${scene.expected}_unshadowed.npy`);
+        let darker = 0;
+        for (let v = 0; v < expected.length / 3; ++v) darker += luminance(expected, v) < 0.8 * luminance(unshadowed, v);
+        check(darker >= kSunShadowVertices, `FIV${scene.label} placement ${k}: the spheres darken ${darker} vertices by over 20% ` +
+                                            `(at least ${kSunShadowVertices})`);
+      }
       let worst = 0, maxAbs = 0;
       expected.forEach((b, i) => {
         const d = Math.abs(shaded.radiance[i] - b);
         maxAbs = Math.max(maxAbs, d);
         worst = Math.max(worst, d / (tolerance.abs + tolerance.rel * Math.abs(b)));
       });
-      await page.locator('#view').screenshot({ path: file(`viewer_fiv_${device}${self ? '_self' : ''}${k}.png`) });
+      await page.locator('#view').screenshot({ path: file(`viewer_${scene.expected}_${device}${k}.png`) });
       check(expected.length === shaded.radiance.length && worst <= 1,
-            `FIV ${device}${self ? ' + self' : ''} placement ${k}: ${expected.length / 3} vertices, max |viewer - prt fivshade| ` +
+            `FIV ${on}${scene.label} placement ${k}: ${expected.length / 3} vertices, max |viewer - prt fivshade| ` +
             `${maxAbs.toExponential(2)} (${worst.toFixed(3)} of the tolerance ${tolerance.abs} + ${tolerance.rel} x value); shading ` +
             `${shaded.shadeMs.toFixed(1)} ms`);
-      results.fiv.push({ device, self, placement: k, vertices: expected.length / 3, maxAbs, ofTolerance: worst, shadeMs: shaded.shadeMs });
-      if (k === 1 && !self && device === 'cpu') {
+      results.fiv.push({ device: on, scene: scene.bundle, self, placement: k, vertices: expected.length / 3, maxAbs, ofTolerance: worst,
+                         shadeMs: shaded.shadeMs });
+      if (k === 1 && scene.bundle === 'fivscene' && device === 'cpu') {
         await page.goto(`${base}/?${shaded.query}`);
         const reloaded = await page.evaluate(async () => { await window.prtReady; return window.prt.translations(); });
         const off = Math.max(...reloaded.flat().map((v, i) => Math.abs(v - at.flat()[i])));
@@ -252,6 +340,18 @@ try {
       }
     }
   }
+  fs.copyFileSync(sunMap, file('sunrise.exr'));
+  // Malformed source grids and fiv_self are refused with a message naming the layer, never drawn.
+  for (const [name, , expected] of badSunScenes) {
+    await page.goto(`${base}/?bundle=data/${name}.glb&albedo=0.8&size=${size.join(',')}`);
+    const message = await page.evaluate(async () => { try { await window.prtReady; return null; } catch (error) { return error.message; } });
+    check(!!message && expected.test(message), `refused ${name}.glb: ${message}`);
+  }
+
+  // The sunrise scene from the sun's side, where the spheres' shadows fall (a picture for docs/viewer/fiv_sun.png).
+  await page.goto(`${base}/?bundle=data/fivscene_sun.glb&albedo=0.8&camera=22,8,-4,0,4.8,0,0,1,0,35&size=320,240&exposure=-1&sky=data/sunrise.exr`);
+  await page.evaluate(async () => { await window.prtReady; });
+  await page.locator('#view').screenshot({ path: file('viewer_fiv_sun_view.png') });
   results.renderer = await page.evaluate(() => window.prt.renderer);
 
   // 4. Bad inputs are refused with a message naming the file and the problem, never drawn.
