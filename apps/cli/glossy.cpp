@@ -36,6 +36,7 @@ struct GlossyArgs {
     bool noCoherence = false;
     bool warmStart = false;
     bool nested = false;
+    int heldOutGrid = 0;
     int threads = 0;
     int iterations = 100;
     std::string stats;
@@ -127,6 +128,7 @@ void runGlossy(const GlossyArgs& args) {
     options.weights = args.noCoherence ? glossy::FitWeights{} : glossy::FitWeights{args.beta, args.gamma, args.delta};
     options.warmStart = args.warmStart;
     options.nested = args.nested;
+    options.heldOutResolution = args.heldOutGrid;
     if (args.nested && args.warmStart)
         throw Error("", "--nested", "already starts each stage from the previous one: drop --warm-start", kExitUsage);
     options.solverOptions.threads = resolveThreads(args.threads);
@@ -265,6 +267,8 @@ void addGlossyCommand(CLI::App& app) {
     command->add_flag("--nested", args->nested,
                       "Fit 1, 2, ..., N lobes in turn, each from the previous plus one lobe; a view keeps a lobe only "
                       "where it lowers the error on held-out directions (so more lobes never fit worse there)");
+    command->add_option("--held-out-grid", args->heldOutGrid,
+                        "With --nested: cube face resolution of the held-out directions (default 0: twice --grid)");
     command->add_option("--iterations", args->iterations, "LM iteration limit per fit (default 100)");
     command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
     command->add_option("--stats", args->stats, "Also write the fit statistics as JSON to this file");

@@ -20,6 +20,10 @@
 
 namespace prt::glossy {
 
+int heldOutResolution(const GlossyOptions& options) {
+    return options.heldOutResolution > 0 ? options.heldOutResolution : std::min(64, 2 * options.gridResolution);
+}
+
 Solver parseSolver(const std::string& name) {
     if (name == "pocl" || name == "opencl") return Solver::OpenCl;
     if (name == "ceres") return Solver::Ceres;
@@ -38,6 +42,8 @@ void checkOptions(const TriMesh& mesh, const GlossyOptions& options) {
                                        std::to_string(options.lobes), kExitUsage);
     if (options.gridResolution < 2 || options.gridResolution > 64)
         throw Error("", "--grid", "cube resolution must lie in 2..64", kExitUsage);
+    if (options.heldOutResolution != 0 && (options.heldOutResolution < 2 || options.heldOutResolution > 64))
+        throw Error("", "--held-out-grid", "cube resolution must lie in 2..64 (0: twice --grid)", kExitUsage);
     if (options.chunkVertices < 1) throw Error("", "chunk", "must be >= 1", kExitUsage);
     if (mesh.normals.size() != mesh.positions.size())
         throw Error("", "mesh", "has no vertex normals (prt meshprep adds them)");
@@ -434,7 +440,7 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
     result.values.assign(vertices * kViewCount * width, 0.0f);
     result.vertexStats.assign(vertices * kVertexStatColumns, 0.0f);
     const bool coherence = options.weights.beta > 0 || options.weights.gamma > 0 || options.weights.delta > 0;
-    const DirectionGrid heldGrid = options.nested ? heldOutGrid(options.gridResolution) : DirectionGrid();
+    const DirectionGrid heldGrid = options.nested ? heldOutGrid(heldOutResolution(options)) : DirectionGrid();
     if (options.nested) result.heldOutError.assign(vertices * kViewCount, -1.0f), result.keptStage.assign(size_t(lobes), 0);
 
     tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
@@ -585,7 +591,8 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
                                {"delta", options.weights.delta}};
     layer.params["lambda_bounds"] = {options.bounds.lambdaMin, options.bounds.lambdaMax};
     if (options.warmStart) layer.params["warm_start"] = true; // absent when off, so other bundles keep their bytes
-    if (options.nested) layer.params["nested"] = {{"held_out", "cube grid turned 0.5 rad about (1, 2, 3)"}};
+    if (options.nested) layer.params["nested"] = {{"held_out", "cube grid turned 0.5 rad about (1, 2, 3)"},
+                                                     {"resolution", heldOutResolution(options)}};
     if (!options.indirectTransfer.empty()) // absent when off, so bundles without it keep their bytes
         layer.params["indirect"] = {{"bounce", "one diffuse bounce off the mesh (shadowed SH transfer at the hit)"},
                                     {"order", options.indirectOrder}, {"samples", options.indirectSamples}};

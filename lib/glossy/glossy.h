@@ -188,6 +188,7 @@ struct GlossyOptions {
     // (heldOutGrid: the kernel tabulated there too, one more ray per direction), else stage k - 1's with a zero
     // lobe. So each view's held-out error never rises with the lobe count, and stage 1 is the plain 1-lobe fit.
     bool nested = false;
+    int heldOutResolution = 0; // nested: the held-out grid is heldOutGrid(this), 0: twice gridResolution (max 64)
     size_t vertexBegin = 0, vertexEnd = SIZE_MAX;
     bool progress = true;
     std::string lobeType = "float16"; // the bundle layer's componentType: "float16" or "float32"
@@ -197,6 +198,9 @@ struct GlossyOptions {
     int indirectOrder = 0;
     int indirectSamples = 0; // recorded in the layer's params
 };
+
+// The held-out grid's resolution a nested stage uses: options.heldOutResolution, or 0: min(64, 2 x gridResolution).
+int heldOutResolution(const GlossyOptions& options);
 
 struct GlossyStats {
     uint64_t rays = 0;

@@ -8,7 +8,8 @@
 //   held-out  the same on the held-out directions
 //   lit       relative RMSE over problems of sum dw L (F - T) against sum dw L T (RGB), the relight of a distant eye
 //             exactly along the view with the map's own lighting: the error the relight sees, without the blend
-// and, for every bundle after the first, the share of problems whose held-out or lit error is above the first's.
+// the count of lobes with a > 0 and the share of them sharper than 4x the Phong exponent (narrower than half the
+// Phong lobe, below the 6x8x8 grid's spacing), and, for every bundle after the first, the share of problems whose held-out or lit error is above the first's.
 #include "bundle.h"
 #include "core.h"
 #include "glossy.h"
@@ -151,15 +152,18 @@ int main(int argc, char** argv) {
                 for (int c = 0; c < 3; ++c) e.litFit.push_back(litFit[c]), e.litTrue.push_back(litTrue[c]);
             }
         }
+        size_t lit = 0, sharp = 0; // lobes with a > 0, and of those the ones sharper than 4x the Phong exponent
+        for (size_t i = 0; i + 4 < model.values.size(); i += 5)
+            if (model.values[i] > 0.0f) ++lit, sharp += model.values[i + 4] > 4.0 * model.exponent;
         errors.push_back(std::move(e));
         const Errors& r = errors.back();
         double grid0 = 0, held0 = 0, se = 0, st = 0;
         for (size_t p = 0; p < r.grid.size(); ++p) grid0 += r.grid[p], held0 += r.heldOut[p];
         for (size_t i = 0; i < r.litFit.size(); ++i)
             se += (r.litFit[i] - r.litTrue[i]) * (r.litFit[i] - r.litTrue[i]), st += r.litTrue[i] * r.litTrue[i];
-        std::printf("%s: lobes %d, problems %zu, grid %.2f%%, held-out %.2f%%, lit %.2f%%", argv[b], model.lobes,
-                    r.grid.size(), 100 * grid0 / double(r.grid.size()), 100 * held0 / double(r.grid.size()),
-                    100 * std::sqrt(se / st));
+        std::printf("%s: lobes %d, problems %zu, grid %.2f%%, held-out %.2f%%, lit %.2f%%, lobes with a > 0 %zu, "
+                    "sharper than 4 n %.1f%%", argv[b], model.lobes, r.grid.size(), 100 * grid0 / double(r.grid.size()),
+                    100 * held0 / double(r.grid.size()), 100 * std::sqrt(se / st), lit, 100.0 * double(sharp) / double(lit));
         if (errors.size() > 1 && errors.front().grid.size() == r.grid.size()) {
             const Errors& first = errors.front();
             size_t heldWorse = 0, litWorse = 0;

@@ -62,6 +62,12 @@ TEST_F(GlossyCli, BadInputsFailWithoutOutput) {
     PrtRun colour = prt(base + "--brdf phong:8,0.5 --indirect-glossy --albedo 0.5,0.4,0.3", dir);
     EXPECT_EQ(colour.exitCode, 2);
     EXPECT_NE(colour.text.find("grey"), std::string::npos) << colour.text;
+    PrtRun nestedWarm = prt(base + "--brdf phong:8,0.5 --lobes 2 --nested --warm-start", dir);
+    EXPECT_EQ(nestedWarm.exitCode, 2);
+    EXPECT_NE(nestedWarm.text.find("--nested"), std::string::npos) << nestedWarm.text;
+    PrtRun heldOut = prt(base + "--brdf phong:8,0.5 --lobes 2 --nested --held-out-grid 1", dir);
+    EXPECT_EQ(heldOut.exitCode, 2);
+    EXPECT_NE(heldOut.text.find("--held-out-grid"), std::string::npos) << heldOut.text;
     // No OpenCL platform: an empty ICD vendor folder.
     fs::create_directories(dir / "no_vendors");
     PrtRun platform = prt(base + "--brdf phong:8,0.5", dir, "OCL_ICD_VENDORS=" + path("no_vendors"));

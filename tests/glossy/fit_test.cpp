@@ -231,7 +231,7 @@ TEST(GlossyNested, HeldOutGridLiesMostlyBetweenTheFitGrid) {
 // kernel is known without rays), recomputed here from the output lobes; -1 where the view has no fit.
 std::vector<double> sphereHeldOutCosts(const prt::TriMesh& sphere, const GlossyOptions& options,
                                        const GlossyLobes& lobes) {
-    const DirectionGrid held = heldOutGrid(options.gridResolution);
+    const DirectionGrid held = heldOutGrid(heldOutResolution(options));
     const ViewSet& views = viewSet();
     const int width = lobes.lobes * kLobeParams;
     std::vector<double> costs;
