@@ -53,7 +53,8 @@ struct DirectionGrid {
 DirectionGrid cubeGrid(int resolution);
 
 // The held-out directions of the nested fit (GlossyOptions::nested): cubeGrid(resolution) turned by a fixed
-// generic rotation (0.5 rad about (1, 2, 3)), so its directions lie between the fit grid's; same solid angles.
+// generic rotation (0.5 rad about (1, 2, 3)), so its directions lie mostly between the fit grid's (at the same
+// resolution; the stage uses twice it: heldOutResolution); same solid angles.
 DirectionGrid heldOutGrid(int resolution);
 
 // ---- the kernel --------------------------------------------------------------------------------------------
@@ -185,7 +186,7 @@ struct GlossyOptions {
     // Nested fit (issue 19): stages 1, 2, ..., lobes, each started from the previous stage's result plus one greedy
     // lobe on its residual and fitted as the plain fit is (pass 1, then the coherence pass when it is on); a
     // (vertex, view) keeps stage k's fit only where it lowers the data error on held-out directions
-    // (heldOutGrid: the kernel tabulated there too, one more ray per direction), else stage k - 1's with a zero
+    // (heldOutGrid: the kernel tabulated there too, one ray per held-out direction), else stage k - 1's with a zero
     // lobe. So each view's held-out error never rises with the lobe count, and stage 1 is the plain 1-lobe fit.
     bool nested = false;
     int heldOutResolution = 0; // nested: the held-out grid is heldOutGrid(this), 0: twice gridResolution (max 64)
