@@ -108,6 +108,32 @@ TEST_F(GlossyCli, FitRelightsAndRefusesATamperedViewSet) {
     EXPECT_LT(metrics["relative_rmse"].get<double>(), 0.25) << metrics.dump();
 }
 
+// `prt glossy --nested` (one shard of the sphere's vertices, for time): the layer records it with its held-out grid,
+// the stats count the views that kept each stage's lobe, and a view that dropped its second lobe holds it with
+// amplitude 0 (no format change).
+TEST_F(GlossyCli, NestedFitRecordsItsHeldOutGridAndZeroLobes) {
+    PrtRun fit = prt("glossy " + path("sphere.glb") + " -o " + path("n.glb") + " --brdf phong:64,0.5 --lobes 2 --grid 4 " +
+                         "--samples 16 --nested --shard 0/40 --stats " + path("n.json") + " --quiet",
+                     dir);
+    ASSERT_EQ(fit.exitCode, 0) << fit.text;
+    prt::Bundle bundle = prt::readBundle(path("n.glb"));
+    const prt::Layer* lobes = prt::findLayer(bundle, "glossy_lobes");
+    ASSERT_NE(lobes, nullptr);
+    EXPECT_EQ(lobes->params["nested"]["resolution"].get<int>(), 8);
+    nlohmann::json stats = nlohmann::json::parse(std::ifstream(path("n.json")));
+    ASSERT_EQ(stats["nested_kept_stage"].size(), 2u);
+    const uint64_t problems = stats["problems"].get<uint64_t>(), kept = stats["nested_kept_stage"][1].get<uint64_t>();
+    EXPECT_EQ(stats["nested_kept_stage"][0].get<uint64_t>(), problems);
+    EXPECT_LE(kept, problems);
+    // Views with a fitted first lobe and a zero second lobe: every dropped stage-2 lobe (and kept fits whose second
+    // amplitude ended on its bound of 0).
+    uint64_t dropped = 0;
+    for (size_t row = 0; row + 10 <= lobes->data.size(); row += 10)
+        dropped += lobes->data[row] > 0.0f && lobes->data[row + 5] == 0.0f;
+    EXPECT_GE(dropped, problems - kept);
+    EXPECT_GT(dropped, 0u);
+}
+
 // `prt relight --image`: the glossy bundle's radiance toward the camera's eye, per vertex, drawn by the renderer of
 // `prt render` (so pixel for pixel what renderVertexRadiance makes of `relight --eye EYE`), and close to the
 // path-traced `prt reference --image` of the same camera.
