@@ -34,6 +34,7 @@ def main():
     ap.add_argument("--solver", default="pocl")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--light-samples", type=int, default=64)
+    ap.add_argument("--fit", default="base", help="the glossy_lobes.py variant whose bundles are relit (e.g. nested)")
     ap.add_argument("--decomposed", default="", help="maps whose decomposed lighting also gets the oracle")
     ap.add_argument("--strip", action="store_true", help="only the sunrise strips (after a run with sunrise)")
     opts = ap.parse_args()
@@ -65,6 +66,7 @@ def main():
         return out
 
     results = {}
+    fit = "" if opts.fit == "base" else opts.fit + "_"  # prefix of the relights and result keys
     for env in envs:
         lights = o(f"lights_{env}_o6.json")
         run(["envlight", env_path(env), "--order", 6, "-o", lights], lights)
@@ -74,16 +76,17 @@ def main():
         exact = oracle(env)
         decomposed = oracle(env, lights) if env in opts.decomposed.split(",") else None
         for n in map(int, opts.lobes.split(",")):
-            bundle = o(f"base_n{n}.glb")
+            bundle = o(f"{opts.fit}_n{n}.glb")
             run(["glossy", mesh, "-o", bundle, "--brdf", brdf, "--albedo", gl.ALBEDO, "--lobes", n, "--grid", opts.grid,
-                 "--solver", opts.solver, *threads, "--stats", o(f"base_n{n}.json")], bundle)
+                 "--solver", opts.solver, *threads, "--stats", o(f"{opts.fit}_n{n}.json")] + gl.VARIANTS[opts.fit][0],
+                bundle)
             for variant, negatives in VARIANTS.items():
                 for eye in gl.EYES:
                     row = {}
                     parts = {}
                     for part in ("total", "glossy"):
                         tag = "" if opts.light_samples == 64 or not negatives else f"_s{opts.light_samples}"
-                        path = o(f"{variant}{tag}_n{n}_{env}_{eye}_{part}.npy")
+                        path = o(f"{fit}{variant}{tag}_n{n}_{env}_{eye}_{part}.npy")
                         extra = ([] if not negatives else
                                  ["--lights", lights, "--light-samples", opts.light_samples, "--residual-negatives",
                                   negatives[0]])
@@ -105,7 +108,7 @@ def main():
                         row["decomposed_oracle_vs_exact_total"] = gl.rmse(d_total, total)
                         row["decomposed_oracle_vs_exact_glossy"] = gl.rmse(d_glossy, glossy)
                         row["total_vs_decomposed_oracle"] = gl.rmse(parts["total"], d_total)
-                    key = f"{env}/{eye}/n{n}/{variant}" + ("" if opts.light_samples == 64 or not negatives
+                    key = f"{fit}{env}/{eye}/n{n}/{variant}" + ("" if opts.light_samples == 64 or not negatives
                                                            else f"/s{opts.light_samples}")
                     results[key] = row
     old = json.load(open(o("lights.json"))) if os.path.exists(o("lights.json")) else {}
@@ -119,7 +122,7 @@ def main():
             for eye in gl.EYES:
                 cells = []
                 for variant in VARIANTS:
-                    r = results[f"{env}/{eye}/n{n}/{variant}" + ("" if opts.light_samples == 64 or variant == "plain"
+                    r = results[f"{fit}{env}/{eye}/n{n}/{variant}" + ("" if opts.light_samples == 64 or variant == "plain"
                                                                    else f"/s{opts.light_samples}")]
                     cells.append(f"{100 * r['total']:.1f} / {100 * r['glossy']:.1f} / {100 * r['diffuse']:.1f}; "
                                  f"{r['negative_vertices']}")

@@ -26,6 +26,10 @@ VARIANTS = {
     "grid16": (["--grid", 16], None, {}),                # the finer kernel grid
     "warm": (["--warm-start"], None, {}),                # N lobes started from the N-1 fit
     "warm_nocoh": (["--warm-start", "--no-coherence"], None, {}),
+    # Nested: each lobe count from the previous plus one lobe, kept per (vertex, view) only where it lowers the
+    # error on held-out directions (docs/glossy.md, "More lobes were worse").
+    "nested": (["--nested"], None, {}),
+    "nested_nocoh": (["--nested", "--no-coherence"], None, {}),
     # The same bundles relit without blending lobe parameters across the 3 views around the eye: the radiance of
     # each view's own lobes, blended (radiance), or the nearest view's alone (nearest).
     "base_radiance": ([], "base", {"PRT_GLOSSY_BLEND": "radiance"}),

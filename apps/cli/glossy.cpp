@@ -35,6 +35,8 @@ struct GlossyArgs {
     double beta = 0.001, gamma = 0.001, delta = 0.001; // chosen by measurement (docs/results.md)
     bool noCoherence = false;
     bool warmStart = false;
+    bool nested = false;
+    int heldOutGrid = 0;
     int threads = 0;
     int iterations = 100;
     std::string stats;
@@ -125,6 +127,10 @@ void runGlossy(const GlossyArgs& args) {
     options.gridResolution = args.grid;
     options.weights = args.noCoherence ? glossy::FitWeights{} : glossy::FitWeights{args.beta, args.gamma, args.delta};
     options.warmStart = args.warmStart;
+    options.nested = args.nested;
+    options.heldOutResolution = args.heldOutGrid;
+    if (args.nested && args.warmStart)
+        throw Error("", "--nested", "already starts each stage from the previous one: drop --warm-start", kExitUsage);
     options.solverOptions.threads = resolveThreads(args.threads);
     options.solverOptions.maxIterations = args.iterations;
     options.progress = !logOptions().quiet;
@@ -213,6 +219,14 @@ void runGlossy(const GlossyArgs& args) {
                              {"lobe_layer_bytes_per_vertex",
                               double(output.layers[0].shape[1] * output.layers[0].shape[2] * output.layers[0].shape[3]) *
                                   (args.lobeType == "float16" ? 2.0 : 4.0)}};
+    if (args.nested) {
+        double sum = 0.0;
+        size_t fitted = 0;
+        for (float e : lobes.heldOutError)
+            if (e >= 0.0f) sum += std::sqrt(double(e)), ++fitted;
+        record["nested_kept_stage"] = lobes.keptStage;
+        record["held_out_mean_relative_error"] = fitted ? sum / double(fitted) : 0.0;
+    }
     if (!args.vertexStats.empty())
         writeNpy(args.vertexStats, lobes.vertexStats, {lobes.vertexEnd - lobes.vertexBegin, size_t(glossy::kVertexStatColumns)});
     logEvent("glossy_stats", record.dump());
@@ -250,6 +264,11 @@ void addGlossyCommand(CLI::App& app) {
     command->add_flag("--no-coherence", args->noCoherence, "Independent fits only, no coherence pass");
     command->add_flag("--warm-start", args->warmStart,
                       "Fit 1, 2, ..., N lobes in turn, each from the previous fit plus one lobe (never a higher cost)");
+    command->add_flag("--nested", args->nested,
+                      "Fit 1, 2, ..., N lobes in turn, each from the previous plus one lobe; a view keeps a lobe only "
+                      "where it lowers the error on held-out directions (so more lobes never fit worse there)");
+    command->add_option("--held-out-grid", args->heldOutGrid,
+                        "With --nested: cube face resolution of the held-out directions (default 0: twice --grid)");
     command->add_option("--iterations", args->iterations, "LM iteration limit per fit (default 100)");
     command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
     command->add_option("--stats", args->stats, "Also write the fit statistics as JSON to this file");

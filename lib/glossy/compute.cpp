@@ -20,6 +20,10 @@
 
 namespace prt::glossy {
 
+int heldOutResolution(const GlossyOptions& options) {
+    return options.heldOutResolution > 0 ? options.heldOutResolution : std::min(64, 2 * options.gridResolution);
+}
+
 Solver parseSolver(const std::string& name) {
     if (name == "pocl" || name == "opencl") return Solver::OpenCl;
     if (name == "ceres") return Solver::Ceres;
@@ -38,6 +42,8 @@ void checkOptions(const TriMesh& mesh, const GlossyOptions& options) {
                                        std::to_string(options.lobes), kExitUsage);
     if (options.gridResolution < 2 || options.gridResolution > 64)
         throw Error("", "--grid", "cube resolution must lie in 2..64", kExitUsage);
+    if (options.heldOutResolution != 0 && (options.heldOutResolution < 2 || options.heldOutResolution > 64))
+        throw Error("", "--held-out-grid", "cube resolution must lie in 2..64 (0: twice --grid)", kExitUsage);
     if (options.chunkVertices < 1) throw Error("", "chunk", "must be >= 1", kExitUsage);
     if (mesh.normals.size() != mesh.positions.size())
         throw Error("", "mesh", "has no vertex normals (prt meshprep adds them)");
@@ -149,14 +155,17 @@ struct Chunk {
     std::vector<size_t> first; // [chunk + 1]: vertex i's problems are first[i] .. first[i + 1]
     std::vector<std::array<float, 3>> normals;
     std::vector<float> visibleShare; // [chunk]: visible solid angle over the upper hemisphere's
+    std::vector<float> heldKernel;   // [problems][heldOut.count()] in batch order, nested fits only
 };
 
-Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const GlossyOptions& options,
-                const EmbreeScene& embree, float offset, const std::vector<float>& spawnNormal, size_t chunkBegin, size_t chunkEnd,
-                tbb::task_arena& arena, std::atomic<uint64_t>& rays) {
+Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const DirectionGrid* heldOut,
+                    const GlossyOptions& options, const EmbreeScene& embree, float offset,
+                    const std::vector<float>& spawnNormal, size_t chunkBegin, size_t chunkEnd, tbb::task_arena& arena,
+                    std::atomic<uint64_t>& rays) {
     const ViewSet& views = viewSet();
     const int lobes = options.lobes, width = lobes * kLobeParams;
     const size_t count = grid.count(), chunk = chunkEnd - chunkBegin;
+    const size_t heldCount = heldOut ? heldOut->count() : 0;
     const EmbreeScene* scene = &embree;
     Chunk result;
     auto& slot = result.slot;
@@ -172,26 +181,29 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
         for (int c = 0; c < 3; ++c) normals[i][c] = float(n[c] / length);
     }
     // Kernels for every view above the horizon, visibility shared by the views of a vertex.
-    std::vector<std::vector<float>> kernels(chunk);
+    std::vector<std::vector<float>> kernels(chunk), heldKernels(chunk);
     const bool indirect = !options.indirectTransfer.empty();
     const size_t coefficients = size_t(options.indirectOrder) * options.indirectOrder;
     const std::vector<float> basis = indirect ? gridBasis(grid, options.indirectOrder) : std::vector<float>();
+    const std::vector<float> heldBasis =
+        indirect && heldOut ? gridBasis(*heldOut, options.indirectOrder) : std::vector<float>();
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, chunk, 1), [&](const tbb::blocked_range<size_t>& r) {
             RTCIntersectContext context;
             rtcInitIntersectContext(&context);
-            std::vector<uint8_t> visible(count, 0);
-            std::vector<float> hits(indirect ? count * coefficients : 0, 0.0f); // per blocked direction: its hit's transfer
             uint64_t cast = 0;
-            for (size_t i = r.begin(); i < r.end(); ++i) {
-                const float* p = &mesh.positions[(chunkBegin + i) * 3];
-                const float* n = normals[i].data();
-                for (size_t t = 0; t < count; ++t) {
-                    const float* d = &grid.directions[t * 3];
+            // Visibility of every direction of `g` above the tangent plane and, with indirect glossy, each blocked
+            // direction's hit transfer.
+            auto castGrid = [&](const DirectionGrid& g, const float* p, const float* n, size_t vertex,
+                                std::vector<uint8_t>& visible, std::vector<float>& hits) {
+                visible.assign(g.count(), 0);
+                hits.assign(indirect ? g.count() * coefficients : 0, 0.0f);
+                for (size_t t = 0; t < g.count(); ++t) {
+                    const float* d = &g.directions[t * 3];
                     if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] <= 0.0f) { visible[t] = 0; continue; }
                     // The shared spawn rule (lib/raycast), so glossy visibility leaks at creases no more than transfer's.
                     float origin[3];
-                    spawnOrigin(p, &spawnNormal[(chunkBegin + i) * 3], offset, origin);
+                    spawnOrigin(p, &spawnNormal[vertex * 3], offset, origin);
                     ++cast;
                     if (!indirect) {
                         RTCRay ray;
@@ -206,12 +218,19 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
                     rtcIntersect1(scene->scene, &context, &rayHit);
                     visible[t] = rayHit.hit.geomID == RTC_INVALID_GEOMETRY_ID;
                     float* row = &hits[t * coefficients];
-                    std::fill(row, row + coefficients, 0.0f);
                     // Embree's Ng is (v1 - v0) x (v2 - v0): a back face (facing > 0) reflects nothing, as in transfer.
                     const RTCHit& hit = rayHit.hit;
                     if (!visible[t] && hit.Ng_x * d[0] + hit.Ng_y * d[1] + hit.Ng_z * d[2] < 0.0f)
                         hitTransfer(mesh, options.indirectTransfer, options.indirectOrder, hit.primID, hit.u, hit.v, row);
                 }
+            };
+            std::vector<uint8_t> visible, heldVisible;
+            std::vector<float> hits, heldHits;
+            for (size_t i = r.begin(); i < r.end(); ++i) {
+                const float* p = &mesh.positions[(chunkBegin + i) * 3];
+                const float* n = normals[i].data();
+                castGrid(grid, p, n, chunkBegin + i, visible, hits);
+                if (heldOut) castGrid(*heldOut, p, n, chunkBegin + i, heldVisible, heldHits);
                 double upper = 0.0, seen = 0.0;
                 for (size_t t = 0; t < count; ++t) {
                     const float* d = &grid.directions[t * 3];
@@ -220,7 +239,7 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
                     seen += visible[t] ? grid.solidAngle[t] : 0.0f;
                 }
                 result.visibleShare[i] = upper > 0.0 ? float(seen / upper) : 0.0f;
-                std::vector<float> table(count);
+                std::vector<float> table(count), heldTable(heldCount);
                 for (int v = 0; v < kViewCount; ++v) {
                     const float* view = views.directions[v].data();
                     if (n[0] * view[0] + n[1] * view[1] + n[2] * view[2] <= 0.0f) continue;
@@ -231,11 +250,19 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Glossy
                     if (*std::max_element(table.begin(), table.end()) <= 0.0f) continue;
                     slot[i][v] = int(kernels[i].size() / count);
                     kernels[i].insert(kernels[i].end(), table.begin(), table.end());
+                    if (!heldOut) continue;
+                    tabulateKernel(*heldOut, n, view, options.phong, heldVisible.data(), heldTable.data());
+                    if (indirect)
+                        addIndirectKernel(*heldOut, heldBasis.data(), options.indirectOrder, n, view, options.phong,
+                                          heldVisible.data(), heldHits.data(), heldTable.data());
+                    heldKernels[i].insert(heldKernels[i].end(), heldTable.begin(), heldTable.end());
                 }
             }
             rays += cast;
         });
     });
+    for (auto& k : heldKernels)
+        result.heldKernel.insert(result.heldKernel.end(), k.begin(), k.end()), std::vector<float>().swap(k);
     // One batch in (vertex, view) order.
     batch.lobes = lobes;
     first.assign(chunk + 1, 0);
@@ -288,6 +315,115 @@ void countFlips(const TriMesh& mesh, GlossyLobes& result) {
         }
 }
 
+// The fit after pass 1 (batch.params hold its result, solver form): with `coherence`, lobe order aligned across
+// each vertex's views, priors from the aligned neighbours, and pass 2 from there. Returns the output form
+// [problems][batch.lobes * kLobeParams]; batch.params, cost and iterations hold the final fit.
+std::vector<float> coherencePass(const DirectionGrid& grid, Chunk& tabulated, const GlossyOptions& options,
+                                 bool coherence) {
+    const ViewSet& views = viewSet();
+    FitBatch& batch = tabulated.batch;
+    const auto& slot = tabulated.slot;
+    const auto& first = tabulated.first;
+    const auto& normals = tabulated.normals;
+    const size_t chunk = slot.size();
+    const int lobes = batch.lobes, width = lobes * kLobeParams;
+    std::vector<float> fitted(batch.problems * width);
+    for (size_t p = 0; p < batch.problems; ++p) toOutput(&batch.params[p * width], &fitted[p * width], lobes);
+    if (coherence) {
+        // Align lobe order across each vertex's views, then refit with priors from the aligned neighbours.
+        batch.prior.assign(batch.problems * lobes * 4, 0.0f);
+        batch.hasPrior.assign(batch.problems, 0);
+        for (size_t i = 0; i < chunk; ++i) {
+            auto problem = [&](int v) { return first[i] + size_t(slot[i][v]); };
+            for (auto [v, parent] : viewOrder(slot[i], normals[i].data()))
+                if (parent >= 0 && lobes > 1)
+                    alignLobes(&fitted[problem(parent) * width], &fitted[problem(v) * width], lobes);
+            for (int v = 0; v < kViewCount; ++v) {
+                if (slot[i][v] < 0) continue;
+                size_t p = problem(v);
+                double sum[kMaxLobes][4] = {};
+                int neighbours = 0;
+                for (uint32_t n : views.neighbours[v]) {
+                    if (slot[i][n] < 0) continue;
+                    const float* q = &fitted[problem(int(n)) * width];
+                    ++neighbours;
+                    for (int k = 0; k < lobes; ++k) {
+                        for (int c = 0; c < 3; ++c) sum[k][c] += q[k * kLobeParams + 1 + c];
+                        sum[k][3] += std::log(double(q[k * kLobeParams + 4]));
+                    }
+                }
+                if (neighbours == 0) continue;
+                batch.hasPrior[p] = 1;
+                for (int k = 0; k < lobes; ++k) {
+                    double length = std::sqrt(sum[k][0] * sum[k][0] + sum[k][1] * sum[k][1] + sum[k][2] * sum[k][2]);
+                    float* prior = &batch.prior[(p * lobes + k) * 4];
+                    for (int c = 0; c < 3; ++c)
+                        prior[c] = length > 0 ? float(sum[k][c] / length) : fitted[p * width + k * kLobeParams + 1 + c];
+                    prior[3] = float(sum[k][3] / neighbours);
+                }
+            }
+        }
+        for (size_t p = 0; p < batch.problems; ++p) toSolver(&fitted[p * width], &batch.params[p * width], lobes);
+        solve(grid, batch, options.weights, options);
+        for (size_t p = 0; p < batch.problems; ++p) toOutput(&batch.params[p * width], &fitted[p * width], lobes);
+    }
+    return fitted;
+}
+
+// The nested fit of one chunk (GlossyOptions::nested): stages 1..lobes, stage k from stage k - 1's kept fit plus
+// one greedy lobe on its residual (initialiseFrom), pass 1 and the coherence pass as the plain fit; a problem keeps
+// stage k where its held-out data cost (dataCost on `heldOut`, tabulated.heldKernel) is below stage k - 1's, else
+// stage k - 1's lobes and a zero lobe (amplitude 0, along the first lobe, the exponent's sharpness). Returns the
+// output form as coherencePass; heldCost[p] is the kept fit's held-out data cost; keptStage[k - 1] counts the
+// problems that kept stage k.
+std::vector<float> nestedFit(const DirectionGrid& grid, const DirectionGrid& heldOut, Chunk& tabulated,
+                             const GlossyOptions& options, bool coherence, std::vector<double>& heldCost,
+                             std::vector<uint64_t>& keptStage) {
+    FitBatch& batch = tabulated.batch;
+    const int lobes = batch.lobes;
+    const size_t problems = batch.problems, heldCount = heldOut.count();
+    std::vector<float> kept, keptCost; // output form [problems][(k - 1) * kLobeParams], and its costs
+    std::vector<int> keptIterations;
+    heldCost.assign(problems, 0.0);
+    if (keptStage.size() < size_t(lobes)) keptStage.resize(size_t(lobes), 0);
+    const float zeroSharpness = float(std::clamp(options.phong.exponent, options.bounds.lambdaMin, options.bounds.lambdaMax));
+    for (int k = 1; k <= lobes; ++k) {
+        const size_t width = size_t(k) * kLobeParams, before = width - kLobeParams;
+        batch.lobes = k;
+        batch.prior.clear();
+        batch.hasPrior.clear();
+        batch.params.assign(problems * width, 0.0f);
+        for (size_t p = 0; p < problems; ++p) {
+            float* x = &batch.params[p * width];
+            toSolver(&kept[p * before], x, k - 1);
+            initialiseFrom(grid, &batch.kernel[p * grid.count()], k - 1, k, options.phong.exponent, options.bounds, x);
+        }
+        solve(grid, batch, FitWeights{}, options);
+        std::vector<float> fitted = coherencePass(grid, tabulated, options, coherence);
+        for (size_t p = 0; p < problems; ++p) {
+            double held = dataCost(heldOut, &tabulated.heldKernel[p * heldCount], k, &batch.params[p * width]);
+            if (k == 1 || held < heldCost[p]) {
+                heldCost[p] = held;
+                ++keptStage[size_t(k) - 1];
+                continue;
+            }
+            float* row = &fitted[p * width];
+            std::copy_n(&kept[p * before], before, row);
+            float* extra = row + before;
+            extra[0] = 0.0f;
+            std::copy_n(row + 1, 3, extra + 1);
+            extra[4] = zeroSharpness;
+            toSolver(row, &batch.params[p * width], k);
+            batch.cost[p] = keptCost[p];
+            batch.iterations[p] = keptIterations[p];
+        }
+        kept = std::move(fitted);
+        keptCost = batch.cost;
+        keptIterations = batch.iterations;
+    }
+    return kept;
+}
+
 } // namespace
 
 GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options) {
@@ -304,6 +440,8 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
     result.values.assign(vertices * kViewCount * width, 0.0f);
     result.vertexStats.assign(vertices * kVertexStatColumns, 0.0f);
     const bool coherence = options.weights.beta > 0 || options.weights.gamma > 0 || options.weights.delta > 0;
+    const DirectionGrid heldGrid = options.nested ? heldOutGrid(heldOutResolution(options)) : DirectionGrid();
+    if (options.nested) result.heldOutError.assign(vertices * kViewCount, -1.0f), result.keptStage.assign(size_t(lobes), 0);
 
     tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
                                                             : int(tbb::task_arena::automatic));
@@ -320,7 +458,7 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
         const size_t chunkEnd = std::min(result.vertexEnd, chunkBegin + options.chunkVertices);
         const size_t chunk = chunkEnd - chunkBegin;
         double tabulateStart = nowSeconds();
-        Chunk tabulated = tabulateChunk(mesh, grid, options, *scene, offset, spawn, chunkBegin, chunkEnd, arena, rays);
+        Chunk tabulated = tabulateChunk(mesh, grid, options.nested ? &heldGrid : nullptr, options, *scene, offset, spawn, chunkBegin, chunkEnd, arena, rays);
         auto& slot = tabulated.slot;
         auto& normals = tabulated.normals;
         auto& first = tabulated.first;
@@ -328,49 +466,24 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
         result.stats.tabulateSeconds += nowSeconds() - tabulateStart;
 
         double fitStart = nowSeconds();
-        if (options.warmStart && lobes > 1)
-            warmStartFit(grid, batch, options);
-        else
-            solve(grid, batch, FitWeights{}, options);
-        std::vector<float> fitted(batch.problems * width);
-        for (size_t p = 0; p < batch.problems; ++p) toOutput(&batch.params[p * width], &fitted[p * width], lobes);
-        if (coherence) {
-            // Align lobe order across each vertex's views, then refit with priors from the aligned neighbours.
-            batch.prior.assign(batch.problems * lobes * 4, 0.0f);
-            batch.hasPrior.assign(batch.problems, 0);
-            for (size_t i = 0; i < chunk; ++i) {
-                auto problem = [&](int v) { return first[i] + size_t(slot[i][v]); };
-                for (auto [v, parent] : viewOrder(slot[i], normals[i].data()))
-                    if (parent >= 0 && lobes > 1)
-                        alignLobes(&fitted[problem(parent) * width], &fitted[problem(v) * width], lobes);
+        std::vector<float> fitted;
+        if (options.nested) {
+            std::vector<double> heldCost;
+            fitted = nestedFit(grid, heldGrid, tabulated, options, coherence, heldCost, result.keptStage);
+            for (size_t i = 0; i < chunk; ++i)
                 for (int v = 0; v < kViewCount; ++v) {
                     if (slot[i][v] < 0) continue;
-                    size_t p = problem(v);
-                    double sum[kMaxLobes][4] = {};
-                    int neighbours = 0;
-                    for (uint32_t n : views.neighbours[v]) {
-                        if (slot[i][n] < 0) continue;
-                        const float* q = &fitted[problem(int(n)) * width];
-                        ++neighbours;
-                        for (int k = 0; k < lobes; ++k) {
-                            for (int c = 0; c < 3; ++c) sum[k][c] += q[k * kLobeParams + 1 + c];
-                            sum[k][3] += std::log(double(q[k * kLobeParams + 4]));
-                        }
-                    }
-                    if (neighbours == 0) continue;
-                    batch.hasPrior[p] = 1;
-                    for (int k = 0; k < lobes; ++k) {
-                        double length = std::sqrt(sum[k][0] * sum[k][0] + sum[k][1] * sum[k][1] + sum[k][2] * sum[k][2]);
-                        float* prior = &batch.prior[(p * lobes + k) * 4];
-                        for (int c = 0; c < 3; ++c)
-                            prior[c] = length > 0 ? float(sum[k][c] / length) : fitted[p * width + k * kLobeParams + 1 + c];
-                        prior[3] = float(sum[k][3] / neighbours);
-                    }
+                    size_t p = first[i] + size_t(slot[i][v]);
+                    double energy = dataEnergy(heldGrid, &tabulated.heldKernel[p * heldGrid.count()]);
+                    result.heldOutError[(chunkBegin - result.vertexBegin + i) * kViewCount + size_t(v)] =
+                        float(energy > 0 ? heldCost[p] / energy : 0.0);
                 }
-            }
-            for (size_t p = 0; p < batch.problems; ++p) toSolver(&fitted[p * width], &batch.params[p * width], lobes);
-            solve(grid, batch, options.weights, options);
-            for (size_t p = 0; p < batch.problems; ++p) toOutput(&batch.params[p * width], &fitted[p * width], lobes);
+        } else {
+            if (options.warmStart && lobes > 1)
+                warmStartFit(grid, batch, options);
+            else
+                solve(grid, batch, FitWeights{}, options);
+            fitted = coherencePass(grid, tabulated, options, coherence);
         }
         result.stats.fitSeconds += nowSeconds() - fitStart;
         for (size_t i = 0; i < chunk; ++i) {
@@ -435,7 +548,7 @@ FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t
     all.lobes = options.lobes;
     for (size_t begin = 0; begin < mesh.vertexCount() && all.problems < problems; begin += options.chunkVertices) {
         size_t end = std::min(mesh.vertexCount(), begin + options.chunkVertices);
-        Chunk chunk = tabulateChunk(mesh, grid, options, *scene, rayOffset(mesh), spawn, begin, end, arena, rays);
+        Chunk chunk = tabulateChunk(mesh, grid, nullptr, options, *scene, rayOffset(mesh), spawn, begin, end, arena, rays);
         size_t take = std::min(chunk.batch.problems, problems - all.problems);
         all.kernel.insert(all.kernel.end(), chunk.batch.kernel.begin(), chunk.batch.kernel.begin() + take * grid.count());
         all.params.insert(all.params.end(), chunk.batch.params.begin(), chunk.batch.params.begin() + take * width);
@@ -444,45 +557,6 @@ FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t
         all.problems += take;
     }
     return all;
-}
-
-Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t vertexCount, int shardIndex,
-                int shardCount) {
-    Layer layer;
-    layer.name = "glossy_lobes";
-    bool whole = lobes.vertexBegin == 0 && lobes.vertexEnd == vertexCount;
-    if (!whole && shardCount <= 1)
-        throw Error("", "glossy_lobes", "rows [" + std::to_string(lobes.vertexBegin) + ", " +
-                                            std::to_string(lobes.vertexEnd) + ") are not every vertex, but no shard",
-                    kExitFailure);
-    layer.semantic = "sg_lobes";
-    if (options.lobeType != "float16" && options.lobeType != "float32")
-        throw Error("", "--lobe-type", "must be float16 or float32", kExitUsage);
-    layer.componentType = options.lobeType;
-    layer.shape = {uint64_t(lobes.vertexEnd - lobes.vertexBegin), uint64_t(kViewCount), uint64_t(lobes.lobes),
-                   uint64_t(kLobeParams)};
-    layer.data = lobes.values;
-    nlohmann::json directions = nlohmann::json::array();
-    for (const auto& d : viewSet().directions) directions.push_back({d[0], d[1], d[2]});
-    layer.params["views"] = directions;
-    nlohmann::json triangles = nlohmann::json::array();
-    for (const auto& t : viewSet().triangles) triangles.push_back({t[0], t[1], t[2]});
-    layer.params["view_triangles"] = triangles;
-    layer.params["view_set"] = "geodesic-icosahedron-frequency-3";
-    layer.params["lobes"] = lobes.lobes;
-    layer.params["record"] = "a, mu_x, mu_y, mu_z, lambda: a exp(lambda (mu . w - 1)), radiance per steradian";
-    layer.params["brdf"] = {{"model", "phong"}, {"exponent", options.phong.exponent}, {"ks", options.phong.ks}};
-    layer.params["grid"] = {{"kind", "cube"}, {"resolution", options.gridResolution}};
-    layer.params["solver"] = options.solver == Solver::OpenCl ? "pocl" : "ceres";
-    layer.params["weights"] = {{"beta", options.weights.beta}, {"gamma", options.weights.gamma},
-                               {"delta", options.weights.delta}};
-    layer.params["lambda_bounds"] = {options.bounds.lambdaMin, options.bounds.lambdaMax};
-    if (options.warmStart) layer.params["warm_start"] = true; // absent when off, so other bundles keep their bytes
-    if (!options.indirectTransfer.empty()) // absent when off, so bundles without it keep their bytes
-        layer.params["indirect"] = {{"bounce", "one diffuse bounce off the mesh (shadowed SH transfer at the hit)"},
-                                    {"order", options.indirectOrder}, {"samples", options.indirectSamples}};
-    markVertexShard(layer, lobes.vertexBegin, lobes.vertexEnd, vertexCount, shardIndex, shardCount);
-    return layer;
 }
 
 } // namespace prt::glossy

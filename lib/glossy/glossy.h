@@ -52,6 +52,11 @@ struct DirectionGrid {
 };
 DirectionGrid cubeGrid(int resolution);
 
+// The held-out directions of the nested fit (GlossyOptions::nested): cubeGrid(resolution) turned by a fixed
+// generic rotation (0.5 rad about (1, 2, 3)), so its directions lie mostly between the fit grid's (at the same
+// resolution; the stage uses twice it: heldOutResolution); same solid angles.
+DirectionGrid heldOutGrid(int resolution);
+
 // ---- the kernel --------------------------------------------------------------------------------------------
 struct Phong {
     double exponent = 32.0; // > 0
@@ -116,6 +121,10 @@ struct SolverOptions {
 // Data energy E = sum_i dw_i T_i^2 of problem p.
 double dataEnergy(const DirectionGrid& grid, const float* kernel);
 
+// The data term alone, sum_i dw_i (F(w_i) - T_i)^2, of `lobes` lobes in solver form (a, m, log lambda) on any
+// direction set with `kernel` tabulated on it (the held-out error of the nested fit), in double.
+double dataCost(const DirectionGrid& grid, const float* kernel, int lobes, const float* params);
+
 // The objective above at `params` for problem p of `batch`, in double. Both solvers minimise exactly this.
 double objective(const DirectionGrid& grid, const FitBatch& batch, size_t p, const FitWeights& weights,
                  const FitBounds& bounds, const float* params);
@@ -174,6 +183,13 @@ struct GlossyOptions {
     // plus one greedy lobe, and keeps the previous fit (with a zero lobe) where the new one is not better, so the
     // k + 1 lobe fit's cost is never above the k lobe fit's.
     bool warmStart = false;
+    // Nested fit (issue 19): stages 1, 2, ..., lobes, each started from the previous stage's result plus one greedy
+    // lobe on its residual and fitted as the plain fit is (pass 1, then the coherence pass when it is on); a
+    // (vertex, view) keeps stage k's fit only where it lowers the data error on held-out directions
+    // (heldOutGrid: the kernel tabulated there too, one ray per held-out direction), else stage k - 1's with a zero
+    // lobe. So each view's held-out error never rises with the lobe count, and stage 1 is the plain 1-lobe fit.
+    bool nested = false;
+    int heldOutResolution = 0; // nested: the held-out grid is heldOutGrid(this), 0: twice gridResolution (max 64)
     size_t vertexBegin = 0, vertexEnd = SIZE_MAX;
     bool progress = true;
     std::string lobeType = "float16"; // the bundle layer's componentType: "float16" or "float32"
@@ -183,6 +199,9 @@ struct GlossyOptions {
     int indirectOrder = 0;
     int indirectSamples = 0; // recorded in the layer's params
 };
+
+// The held-out grid's resolution a nested stage uses: options.heldOutResolution, or 0: min(64, 2 x gridResolution).
+int heldOutResolution(const GlossyOptions& options);
 
 struct GlossyStats {
     uint64_t rays = 0;
@@ -210,6 +229,11 @@ struct GlossyLobes {
     std::vector<float> values;
     GlossyStats stats;
     std::vector<float> vertexStats; // [rows][kVertexStatColumns]
+    // Nested fits only: [rows][kViewCount] sum dw (F - T)^2 / E on the held-out grid (E the held-out energy) of the
+    // kept fit, -1 where no view was fitted; and the count of (vertex, view) fits that kept each stage's lobe
+    // (keptStage[k - 1] for stage k; stage 1 keeps every fit).
+    std::vector<float> heldOutError;
+    std::vector<uint64_t> keptStage;
 };
 
 // Needs normals per vertex and options in range (throws prt::Error kExitUsage / kExitInput otherwise).

@@ -17,6 +17,28 @@ double dataEnergy(const DirectionGrid& grid, const float* kernel) {
     return energy;
 }
 
+double dataCost(const DirectionGrid& grid, const float* kernel, int lobes, const float* params) {
+    double mean[kMaxLobes][3], sharpness[kMaxLobes];
+    for (int k = 0; k < lobes; ++k) {
+        const float* p = params + k * kLobeParams;
+        double length = std::sqrt(double(p[1]) * p[1] + double(p[2]) * p[2] + double(p[3]) * p[3]);
+        for (int c = 0; c < 3; ++c) mean[k][c] = length > 0.0 ? p[1 + c] / length : 0.0;
+        sharpness[k] = std::exp(double(p[4]));
+    }
+    double cost = 0.0;
+    for (size_t i = 0; i < grid.count(); ++i) {
+        const float* w = &grid.directions[i * 3];
+        double model = 0.0;
+        for (int k = 0; k < lobes; ++k) {
+            double cosine = mean[k][0] * w[0] + mean[k][1] * w[1] + mean[k][2] * w[2];
+            model += double(params[k * kLobeParams]) * std::exp(sharpness[k] * (cosine - 1.0));
+        }
+        double residual = model - double(kernel[i]);
+        cost += double(grid.solidAngle[i]) * residual * residual;
+    }
+    return cost;
+}
+
 int residualCount(size_t gridCount, int lobes) {
     return int(gridCount) + lobes + 4 * lobes + lobes * (lobes - 1) / 2;
 }

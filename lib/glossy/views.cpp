@@ -103,6 +103,24 @@ DirectionGrid cubeGrid(int resolution) {
     return grid;
 }
 
+DirectionGrid heldOutGrid(int resolution) {
+    DirectionGrid grid = cubeGrid(resolution);
+    // Rodrigues' rotation about the unit axis (1, 2, 3) / sqrt(14) by 0.5 rad: a generic turn, so no direction of
+    // the turned grid lands on the unturned one (the nearest pair is tested) and no face is aligned with the axes.
+    const double angle = 0.5, c = std::cos(angle), s = std::sin(angle), n = std::sqrt(14.0);
+    const double k[3] = {1.0 / n, 2.0 / n, 3.0 / n};
+    for (size_t i = 0; i < grid.count(); ++i) {
+        float* d = &grid.directions[i * 3];
+        const double v[3] = {d[0], d[1], d[2]};
+        const double along = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+        const double cross[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]};
+        double r[3], length = 0.0;
+        for (int a = 0; a < 3; ++a) r[a] = v[a] * c + cross[a] * s + k[a] * along * (1.0 - c), length += r[a] * r[a];
+        for (int a = 0; a < 3; ++a) d[a] = float(r[a] / std::sqrt(length));
+    }
+    return grid;
+}
+
 void tabulateKernel(const DirectionGrid& grid, const float normal[3], const float outgoing[3], const Phong& phong,
                     const uint8_t* visibility, float* kernel) {
     double cosOut = double(normal[0]) * outgoing[0] + double(normal[1]) * outgoing[1] + double(normal[2]) * outgoing[2];

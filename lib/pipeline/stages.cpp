@@ -173,7 +173,9 @@ std::vector<StageSpec> makeCatalogue() {
                      {"iterations", ParamType::Integer, 1.0, 100000.0},
                      {"lobe-type", ParamType::String, 0.0, 0.0, {"float16", "float32"}},
                      {"indirect-glossy", ParamType::Boolean},
-                     {"warm-start", ParamType::Boolean}};
+                     {"warm-start", ParamType::Boolean},
+                     {"nested", ParamType::Boolean},
+                     {"held-out-grid", ParamType::Integer, 0.0, 64.0}};
     glossy.takesThreads = true;
     glossy.shardable = true;
     glossy.shardRefusal = glossyShardRefusal;

@@ -62,6 +62,12 @@ TEST_F(GlossyCli, BadInputsFailWithoutOutput) {
     PrtRun colour = prt(base + "--brdf phong:8,0.5 --indirect-glossy --albedo 0.5,0.4,0.3", dir);
     EXPECT_EQ(colour.exitCode, 2);
     EXPECT_NE(colour.text.find("grey"), std::string::npos) << colour.text;
+    PrtRun nestedWarm = prt(base + "--brdf phong:8,0.5 --lobes 2 --nested --warm-start", dir);
+    EXPECT_EQ(nestedWarm.exitCode, 2);
+    EXPECT_NE(nestedWarm.text.find("--nested"), std::string::npos) << nestedWarm.text;
+    PrtRun heldOut = prt(base + "--brdf phong:8,0.5 --lobes 2 --nested --held-out-grid 1", dir);
+    EXPECT_EQ(heldOut.exitCode, 2);
+    EXPECT_NE(heldOut.text.find("--held-out-grid"), std::string::npos) << heldOut.text;
     // No OpenCL platform: an empty ICD vendor folder.
     fs::create_directories(dir / "no_vendors");
     PrtRun platform = prt(base + "--brdf phong:8,0.5", dir, "OCL_ICD_VENDORS=" + path("no_vendors"));
@@ -100,6 +106,32 @@ TEST_F(GlossyCli, FitRelightsAndRefusesATamperedViewSet) {
     ASSERT_EQ(compare.exitCode, 0);
     nlohmann::json metrics = nlohmann::json::parse(std::ifstream(path("c.json")));
     EXPECT_LT(metrics["relative_rmse"].get<double>(), 0.25) << metrics.dump();
+}
+
+// `prt glossy --nested` (one shard of the sphere's vertices, for time): the layer records it with its held-out grid,
+// the stats count the views that kept each stage's lobe, and a view that dropped its second lobe holds it with
+// amplitude 0 (no format change).
+TEST_F(GlossyCli, NestedFitRecordsItsHeldOutGridAndZeroLobes) {
+    PrtRun fit = prt("glossy " + path("sphere.glb") + " -o " + path("n.glb") + " --brdf phong:64,0.5 --lobes 2 --grid 4 " +
+                         "--samples 16 --nested --shard 0/40 --stats " + path("n.json") + " --quiet",
+                     dir);
+    ASSERT_EQ(fit.exitCode, 0) << fit.text;
+    prt::Bundle bundle = prt::readBundle(path("n.glb"));
+    const prt::Layer* lobes = prt::findLayer(bundle, "glossy_lobes");
+    ASSERT_NE(lobes, nullptr);
+    EXPECT_EQ(lobes->params["nested"]["resolution"].get<int>(), 8);
+    nlohmann::json stats = nlohmann::json::parse(std::ifstream(path("n.json")));
+    ASSERT_EQ(stats["nested_kept_stage"].size(), 2u);
+    const uint64_t problems = stats["problems"].get<uint64_t>(), kept = stats["nested_kept_stage"][1].get<uint64_t>();
+    EXPECT_EQ(stats["nested_kept_stage"][0].get<uint64_t>(), problems);
+    EXPECT_LE(kept, problems);
+    // Views with a fitted first lobe and a zero second lobe: every dropped stage-2 lobe (and kept fits whose second
+    // amplitude ended on its bound of 0).
+    uint64_t dropped = 0;
+    for (size_t row = 0; row + 10 <= lobes->data.size(); row += 10)
+        dropped += lobes->data[row] > 0.0f && lobes->data[row + 5] == 0.0f;
+    EXPECT_GE(dropped, problems - kept);
+    EXPECT_GT(dropped, 0u);
 }
 
 // `prt relight --image`: the glossy bundle's radiance toward the camera's eye, per vertex, drawn by the renderer of
