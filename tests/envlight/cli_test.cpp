@@ -252,7 +252,7 @@ TEST_F(EnvlightCli, VisibilityTurnsTableEqualsRotateYCasts) {
     EXPECT_GT(differing, 0u); // the shadows move with the turn
 
     std::string bad = (dir / "bad.npy").string();
-    for (const std::string& flags : {" --visibility-turns 0", " --visibility-turns 721", " --visibility-turns 4 --rotate-y 10"}) {
+    for (const std::string flags : {" --visibility-turns 0", " --visibility-turns 721", " --visibility-turns 4 --rotate-y 10"}) {
         r = run("relight " + bundle + " --lights " + lights + " --visibility-out " + bad + flags + " -o " + out + ".x.npy");
         EXPECT_EQ(r.exitCode, 2) << flags;
         EXPECT_NE(r.stderrText.find("--visibility-turns"), std::string::npos) << r.stderrText;

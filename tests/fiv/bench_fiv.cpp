@@ -30,8 +30,10 @@ const Setup& setup() {
         fiv::CubeEnvironment env = fivtest::cubeFrom(16, [](const double* d) {
             return std::array<double, 3>{1.0 + d[1], 1.0, 0.5 + 0.5 * d[0]};
         });
+        fiv::FivBundleOptions bundleOptions;
+        bundleOptions.difmapSize = 16;
         s.bundle = fiv::fivBundle(sphere, fiv::reduceVisibility(vis, env), fiv::difMap(env, 16),
-                                  fiv::environmentFiv(env), {true, 16, ""}, {});
+                                  fiv::environmentFiv(env), bundleOptions, {});
         s.occluder = fivOccluder(s.bundle, "sphere");
         s.lighting = fivLighting(s.bundle, "sphere");
         TriMesh plane = makePlane(8.0f, 64); // 65 x 65 points
