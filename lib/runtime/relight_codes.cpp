@@ -51,14 +51,22 @@ namespace codes_base {
 } // namespace codes_base
 
 #if PRT_HAVE_AVX2_CLONE
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
+#else
 #pragma GCC push_options
 #pragma GCC target("avx2")
+#endif
 namespace codes_avx2 {
 #define PRT_CODES_AVX2 1
 #include "relight_codes_kernel.inc"
 #undef PRT_CODES_AVX2
 } // namespace codes_avx2
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#endif
 #endif
 
 #if PRT_HAVE_AVX2_CLONE

@@ -11,8 +11,9 @@
 
 // Vectors pass only between inlined functions, never across an ABI boundary.
 #pragma GCC diagnostic ignored "-Wpsabi"
-// GCC 12 flags its own AVX-512 headers (_mm512_undefined_*) when they inline here.
+#if !defined(__clang__) // GCC 12 flags its own AVX-512 headers (_mm512_undefined_*) when they inline here.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 
 #if PRT_HAVE_AVX2_CLONE
 #include <immintrin.h>
