@@ -83,7 +83,7 @@ void prepare(const float* lighting, CodeLighting& prepared) {
         const auto& p = Layout::places[j];
         const int l = Layout::band(j / 3), g = 3 * l + j % 3;
         const long weight = std::lround(std::ldexp(double(lighting[j]), exponent[g]));
-        prepared.weights[p.slice][p.slot] = int16_t(weight);
+        prepared.weights[p.slice][p.slot] = prepared.rowWeights[j] = int16_t(weight);
         prepared.centring[p.lane] += kCodeCentre * int32_t(weight);
     }
     prepared.usable = true;
@@ -119,19 +119,23 @@ PRT_ALWAYS_INLINE inline const float* scalesOf(const RelightModel& model, size_t
                                        : model.bandScales.data() + size_t(model.scaleCluster[v]) * model.order;
 }
 
-// The portable path: S_lc = sum (q - C) w in int32 (exact: |q - C| <= 128, |w| <= 2^14, at most 15 terms).
+// The portable path: S_lc = sum_m (q_j - C) w_j over the group's values j = 3 (l^2 + m) + c, in a register per group
+// (exact in int32: |q - C| <= 128, |w| <= 2^14, at most 15 terms).
 template <int kN>
 void relightU8Base(const RelightModel& model, size_t first, size_t last, size_t band, const CodeLighting& prepared,
                    float* radiance) {
     using Layout = U8Layout<kN>;
     const uint8_t* q = model.codes8.data() + size_t(model.offsets[first]) * 3;
+    const int16_t* w = prepared.rowWeights;
     for (size_t v = first; v < last; ++v, band += kN, q += Layout::kValues) {
         __builtin_prefetch(reinterpret_cast<const char*>(uintptr_t(q) + kPrefetchRows * Layout::kValues));
         int32_t sums[32] = {};
-        for (int j = 0; j < Layout::kValues; ++j) {
-            const auto& p = Layout::places[j];
-            sums[p.lane] += (int32_t(q[j]) - kCodeCentre) * prepared.weights[p.slice][p.slot];
-        }
+        for (int l = 0; l < kN; ++l)
+            for (int c = 0; c < 3; ++c) {
+                int32_t sum = 0;
+                for (int j = 3 * l * l + c; j < 3 * (l + 1) * (l + 1); j += 3) sum += (int32_t(q[j]) - kCodeCentre) * w[j];
+                sums[l >= 5 ? 16 + 3 * (l - 5) + c : 3 * l + c] = sum;
+            }
         scaleAndSum<kN>(sums, scalesOf(model, v, band), prepared, radiance + (v - first) * 3);
     }
 }
@@ -216,9 +220,10 @@ bool hasVbmi() {
                             __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512vbmi");
     return yes;
 }
-#define PRT_U8(N) (hasVbmi() ? relightU8Vbmi<N> : relightU8Base<N>)
+#define PRT_U8(N) relightU8Vbmi<N>
 #else
-#define PRT_U8(N) relightU8Base<N>
+bool hasVbmi() { return false; }
+#define PRT_U8(N) relightU8Base<N> // never taken: relightU8Codes declines without VBMI
 #endif
 
 template <int kN>
@@ -255,9 +260,13 @@ bool relightU8CodesPortable(const RelightModel& model, int n, size_t first, size
     return true;
 }
 
+bool u8IntegerKernel() { return hasVbmi(); }
+
 bool relightU8Codes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                     CodeLightingCache& cache, float* out) {
-    if (model.storage != TransferStorage::Uint8 || n < 4 || n > 8) return false;
+    // Without VBMI the portable loop measured 17 M vertices/s at order 5 against the fused float kernel's 40-50
+    // (tests/runtime/bench_runtime), so those processors take the float kernel.
+    if (!u8IntegerKernel() || model.storage != TransferStorage::Uint8 || n < 4 || n > 8) return false;
     CodeLighting& prepared = cache.byBands[n - 4];
     switch (n) {
     case 4: return relightU8Bands<4>(model, first, last, band, lighting, prepared, out);

@@ -71,6 +71,7 @@ bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, s
 struct CodeLighting {
     bool ready = false, usable = false; // usable: the lighting is finite
     alignas(64) int16_t weights[13][32] = {}; // per slice, per 16-bit slot (U8Layout)
+    int16_t rowWeights[192] = {};             // the same in row order, for the portable loop
     alignas(64) int32_t centring[32] = {};    // per lane, 127 sum w
     alignas(64) double scale[32] = {};         // per flat lane, 2^-e_g (0 where no group)
 };
@@ -84,11 +85,15 @@ struct CodeLightingCache {
 //   |r - E| <= u |E| + (1 + u) (2^-14 sum_j |x_j| M_g(j) + g_d sum_j |x_j| (|L_j| + 2^-14 M_g(j))),
 // since |L_j - w_j 2^-e| <= 2^(-e-1) <= 2^-14 M_g (M_g 2^e >= 2^13), the integer sums and the terms are exact, the
 // double sum is within g_d sum |terms| and the conversion to float within u of its value.
-// The same integers and the same double operations on every processor (AVX-512 VBMI or the portable loop), so the
-// same bits. False, with nothing written, for other storages, n outside 4..8, or non-finite lighting.
+// Taken on processors with AVX-512 VBMI (u8IntegerKernel()); elsewhere it declines and u8 codes go through the
+// fused float kernel (relightCodes, within its own tighter bound), so u8 results differ between those two kinds of
+// processor, though never with the thread count. False, with nothing written, for other storages, n outside 4..8,
+// non-finite lighting or no VBMI.
 bool relightU8Codes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                     CodeLightingCache& cache, float* out);
-// The same always through the portable loop, whatever the processor (for tests: the same bits as relightU8Codes).
+bool u8IntegerKernel();
+// The same integers and double operations through a portable loop, whatever the processor: for tests, the bits
+// relightU8Codes gives where it is taken.
 bool relightU8CodesPortable(const RelightModel& model, int n, size_t first, size_t last, size_t band,
                             const float* lighting, float* out);
 
