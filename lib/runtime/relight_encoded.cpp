@@ -1,5 +1,5 @@
-// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes are relit by a
-// fused kernel that reads each code once (no decoded row); half rows (and codes past order 8) are decoded a few
+// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes of 4..8 bands are
+// relit by a fused kernel that reads each code once (relight_codes.cpp, no decoded row); half rows (and codes past order 8) are decoded a few
 // vertices at a time into a tile that stays in the L1 cache and relit there by the float kernel, so memory
 // carries only the compressed bytes; clustered PCA is relit in its own basis (Sloan et al. 2003).
 #include "runtime.h"
@@ -115,7 +115,6 @@ void relightRaggedRange(const RelightModel& model, const float* lighting, size_t
     const bool coded = model.storage == TransferStorage::Uint8 || model.storage == TransferStorage::Uint16;
     size_t band = coded && model.scaleCluster.empty() ? bandStart(model, first) : 0;
     float tile[kTileValues];
-    CodeLightingCache u8Lighting;
     for (size_t v = first; v < last;) {
         const uint32_t count = offsets[v + 1] - offsets[v];
         size_t run = v + 1;
@@ -126,8 +125,7 @@ void relightRaggedRange(const RelightModel& model, const float* lighting, size_t
             v = run;
             continue;
         }
-        if (relightU8Codes(model, n, v, run, band, lighting, u8Lighting, out + (v - first) * 3) ||
-            relightCodes(model, n, v, run, band, lighting, out + (v - first) * 3)) { // codes of 4..8 bands
+        if (relightCodes(model, n, v, run, band, lighting, out + (v - first) * 3)) { // codes of 4..8 bands
             band += (run - v) * size_t(n);
             v = run;
             continue;

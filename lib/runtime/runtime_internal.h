@@ -65,36 +65,5 @@ void relightCpcaRange(const RelightModel& model, const float* projections, size_
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                   float* out);
 
-// The u8 kernel's fixed-point lighting for one band count n (relight_codes_u8.cpp), made from the lighting alone on
-// first use in a task: per group g = (band l, channel c), e_g = 13 - ilogb(M_g) with M_g = max |L_j| over the
-// group (e_g = 0 when M_g = 0), weights w_j = round(L_j 2^e_g) (|w| <= 2^14), scale[g] = 2^-e_g.
-struct CodeLighting {
-    bool ready = false, usable = false; // usable: the lighting is finite
-    alignas(64) int16_t weights[13][32] = {}; // per slice, per 16-bit slot (U8Layout)
-    int16_t rowWeights[192] = {};             // the same in row order, for the portable loop
-    alignas(64) int32_t centring[32] = {};    // per lane, 127 sum w
-    alignas(64) double scale[32] = {};         // per flat lane, 2^-e_g (0 where no group)
-};
-struct CodeLightingCache {
-    CodeLighting byBands[5]; // n = 4..8
-};
-// Vertices [first, last) of a u8 model, all of n bands (4..8), relit from their codes into out. Per channel c:
-// S_lc = sum_{j in band l, channel c} (q_j - 127) w_j exactly in int32, then r_c = float(sum_l S_lc sigma_l 2^-e_lc)
-// with each term exact in double and the sum in double by a fixed tree of depth 4. Bound, with x_j = (q_j - 127)
-// sigma_l the value the code stands for, E = sum_j x_j L_j (exact), u = 2^-24, g_d = 4 2^-53 / (1 - 4 2^-53):
-//   |r - E| <= u |E| + (1 + u) (2^-14 sum_j |x_j| M_g(j) + g_d sum_j |x_j| (|L_j| + 2^-14 M_g(j))),
-// since |L_j - w_j 2^-e| <= 2^(-e-1) <= 2^-14 M_g (M_g 2^e >= 2^13), the integer sums and the terms are exact, the
-// double sum is within g_d sum |terms| and the conversion to float within u of its value.
-// Taken on processors with AVX-512 VBMI (u8IntegerKernel()); elsewhere it declines and u8 codes go through the
-// fused float kernel (relightCodes, within its own tighter bound), so u8 results differ between those two kinds of
-// processor, though never with the thread count. False, with nothing written, for other storages, n outside 4..8,
-// non-finite lighting or no VBMI.
-bool relightU8Codes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
-                    CodeLightingCache& cache, float* out);
-bool u8IntegerKernel();
-// The same integers and double operations through a portable loop, whatever the processor: for tests, the bits
-// relightU8Codes gives where it is taken.
-bool relightU8CodesPortable(const RelightModel& model, int n, size_t first, size_t last, size_t band,
-                            const float* lighting, float* out);
 
 } // namespace prt

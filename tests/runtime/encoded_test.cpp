@@ -4,7 +4,6 @@
 #include "core.h"
 #include "prt/nothrow.h"
 #include "prt/runtime.h"
-#include "runtime_internal.h"
 
 #include <gtest/gtest.h>
 
@@ -153,47 +152,6 @@ size_t outsideCodeKernelBound(const float* radiance, const float* viaDecode, con
     return failures;
 }
 
-// The u8 kernel's bound (runtime_internal.h, relightU8Codes) against E = sum_j x_j L_j for one channel of a row of
-// `count` coefficients: u |E| + (1 + u) (2^-14 sum |x| M + g_d sum |x| (|L| + 2^-14 M)), with M_g the largest |L|
-// of the value's (band, channel) group; |E| <= sum |x L| stands in for |E|. `magnitude(j)` is |x_j| (or a bound).
-template <class Magnitude>
-double u8KernelBound(size_t count, int c, const std::vector<float>& lighting, Magnitude magnitude) {
-    const double u = std::ldexp(1.0, -24), ud = std::ldexp(1.0, -53), tail = std::ldexp(1.0, -14);
-    const int n = int(std::lround(std::sqrt(double(count))));
-    const double gd = n * ud / (1 - n * ud);
-    double xl = 0, xm = 0;
-    for (int l = 0; l < n; ++l) {
-        double most = 0;
-        for (int k = l * l; k < (l + 1) * (l + 1); ++k) most = std::max(most, std::fabs(double(lighting[k * 3 + c])));
-        for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
-            xl += magnitude(k) * std::fabs(double(lighting[k * 3 + c]));
-            xm += magnitude(k) * most;
-        }
-    }
-    return u * xl + (1 + u) * (tail * xm + gd * (xl + tail * xm));
-}
-
-// Channels of vertices [begin, end) where the u8 kernel and the float kernel on the decoded rows differ by more
-// than the u8 bound plus the float kernel's gamma_{n+1} sum |x L| (|x_j| <= |decoded_j| (1 + gamma_1)).
-size_t outsideU8KernelBound(const float* radiance, const float* viaDecode, const std::vector<float>& decoded,
-                            const std::vector<uint32_t>& offsets, const std::vector<float>& lighting, size_t begin,
-                            size_t end) {
-    size_t failures = 0;
-    for (size_t v = begin; v < end; ++v) {
-        const size_t n = offsets[v + 1] - offsets[v];
-        for (int c = 0; c < 3; ++c) {
-            auto magnitude = [&](int k) { return std::fabs(double(decoded[(offsets[v] + k) * 3 + c])) * (1 + roundingGamma(1)); };
-            double xl = 0;
-            for (size_t k = 0; k < n; ++k) xl += magnitude(int(k)) * std::fabs(double(lighting[k * 3 + c]));
-            const double bound = n >= 16 ? u8KernelBound(n, c, lighting, magnitude) + roundingGamma(double(n + 1)) * xl
-                                         : (roundingGamma(double(n + 2)) + roundingGamma(double(n + 1))) * xl; // the tile
-            const size_t i = (v - begin) * 3 + c;
-            if (std::fabs(double(radiance[i]) - viaDecode[i]) > bound) ++failures;
-        }
-    }
-    return failures;
-}
-
 } // namespace
 
 TEST(EncodedRelight, CodesRelightLikeTheirDecodeAndWithinTheQuantisationBound) {
@@ -219,9 +177,7 @@ TEST(EncodedRelight, CodesRelightLikeTheirDecodeAndWithinTheQuantisationBound) {
                 relight(decoded.data() + size_t(q.offsets[v]) * 3, 1, count, lighting.data(), &viaDecode[v * 3]);
                 relight(q.original.data() + size_t(q.offsets[v]) * 3, 1, count, lighting.data(), &viaOriginal[v * 3]);
             }
-            EXPECT_EQ((bits == 8 ? outsideU8KernelBound : outsideCodeKernelBound)(radiance.data(), viaDecode.data(), decoded,
-                                                                                q.offsets, lighting, 0, V),
-                      0u);
+            EXPECT_EQ(outsideCodeKernelBound(radiance.data(), viaDecode.data(), decoded, q.offsets, lighting, 0, V), 0u);
 
             // 2. Within the analytic bound of the float relight of the values the codes stand for: per value
             // |t - x| <= s / 2C (x = (q - C) s / C, exact; the test's rounding in double adds at most 2^-50
@@ -241,11 +197,7 @@ TEST(EncodedRelight, CodesRelightLikeTheirDecodeAndWithinTheQuantisationBound) {
                         dotOriginal += std::fabs(q.original[i]) * L;
                         quantisation += L * (s / (2 * C) * (1 + std::ldexp(1.0, -50)) + roundingGamma(2) * std::fabs(x));
                     }
-                    double bound = roundingGamma(double(n)) * (dotDecoded + dotOriginal) + quantisation;
-                    if (bits == 8 && n >= 16) // the u8 kernel's fixed-point lighting (relightU8Codes)
-                        bound += u8KernelBound(n, c, lighting, [&](int k) {
-                            return std::fabs(double(decoded[(q.offsets[v] + k) * 3 + c])) * (1 + roundingGamma(1));
-                        });
+                    const double bound = roundingGamma(double(n)) * (dotDecoded + dotOriginal) + quantisation;
                     if (std::fabs(double(radiance[v * 3 + c]) - viaOriginal[v * 3 + c]) > bound) ++failures;
                 }
             }
@@ -392,9 +344,7 @@ TEST(EncodedRelight, CodesAtEveryOrderOddCountsAndMidBufferRangesWithinBoundOfTh
                             lighting.data(), &viaDecode[(v - begin) * 3]);
                 std::vector<float> range((end - begin) * 3), hooked((end - begin) * 3);
                 relight(model, lighting.data(), begin, end, range.data());
-                EXPECT_EQ((bits == 8 ? outsideU8KernelBound : outsideCodeKernelBound)(range.data(), viaDecode.data(), decoded,
-                                                                                    q.offsets, lighting, begin, end),
-                          0u);
+                EXPECT_EQ(outsideCodeKernelBound(range.data(), viaDecode.data(), decoded, q.offsets, lighting, begin, end), 0u);
                 relight(model, lighting.data(), begin, end, hooked.data(), jobs);
                 EXPECT_TRUE(sameBits(range, hooked)) << "job hook";
                 std::vector<float> whole = relightAll(model, lighting.data());
@@ -407,67 +357,63 @@ TEST(EncodedRelight, CodesAtEveryOrderOddCountsAndMidBufferRangesWithinBoundOfTh
             }
 }
 
-// Uniform orders 4..8 built directly (long runs, so the kernel's vertex loop and the last row of the buffer are
-// exercised), under lighting whose groups span many magnitudes: bands falling by 16x each, one (band, channel)
-// group all zero, one at 1e-30. Each channel is within the u8 bound of the exact sum E = sum (q - 127) sigma L
-// (in double: q - 127 and sigma are exact there, and the products and their sum of at most 192 terms are within
-// 2^-45 relatively, which the check allows), and every processor path gives the bits of the portable loop.
-TEST(EncodedRelight, U8CodesWithinTheFixedPointBoundOfTheExactSumAndTheSameOnEveryPath) {
-    const size_t V = 4099; // a block and 3 vertices: a run ends at the buffer's end
+// Uniform orders 4..8 built directly, so the fused kernel runs long runs of vertices and a run ends at the codes'
+// last row (read through its zero-padded copy), under lighting spanning many magnitudes (bands falling 16x each,
+// one (band, channel) all zero, one at 1e-30). Each channel is within gamma_{n+2} sum_j |x_j L_j| of the exact
+// E = sum_j x_j L_j, x_j = (q_j - C) sigma_l (in double: q - C and sigma are exact there; the products and their
+// sum of at most 64 terms per channel stay within 2^-45 sum |x L| of it, which the check allows).
+TEST(EncodedRelight, FusedCodesOfLongRunsWithinRoundingOfTheExactSum) {
+    const size_t V = 4099; // a block and 3 vertices
     for (int n = 4; n <= 8; ++n)
-        for (bool perCluster : {false, true}) {
-            SCOPED_TRACE(std::to_string(n) + " bands" + (perCluster ? ", per-cluster" : ""));
-            std::mt19937 random(uint32_t(n * 7 + perCluster));
-            RelightModel model;
-            model.vertexCount = uint32_t(V);
-            model.order = n;
-            model.storage = TransferStorage::Uint8;
-            const size_t values = size_t(n) * n * 3;
-            for (size_t v = 0; v <= V; ++v) model.offsets.push_back(uint32_t(v * n * n));
-            model.codes8.resize(V * values);
-            for (uint8_t& q : model.codes8) q = uint8_t(random() % 255);
-            model.codes8[7] = 0, model.codes8[8] = 254; // the extreme codes
-            const size_t scaleRows = perCluster ? 5 : V;
-            for (size_t i = 0; i < scaleRows * n; ++i)
-                model.bandScales.push_back(std::ldexp(1.0f + float(random() % 1000) / 1000.0f, int(random() % 9) - 12));
-            if (perCluster)
-                for (size_t v = 0; v < V; ++v) model.scaleCluster.push_back(uint32_t(random() % 5));
-            for (size_t v = 0; v <= V; v += kRelightBlock) model.bandBlockStarts.push_back(uint32_t(v * n));
-            std::vector<float> lighting = randomLighting(n, uint32_t(n));
-            for (int k = 0; k < n * n; ++k)
-                for (int c = 0; c < 3; ++c) {
-                    const int l = int(std::sqrt(double(k)));
-                    lighting[k * 3 + c] *= std::ldexp(1.0f, -4 * l);
-                    if (l == 2 && c == 1) lighting[k * 3 + c] = 0;
-                    if (l == 3 && c == 2) lighting[k * 3 + c] *= 1e-30f;
-                }
-            std::vector<float> radiance = relightAll(model, lighting.data()), portable(V * 3);
-            ASSERT_TRUE(relightU8CodesPortable(model, n, 0, V, 0, lighting.data(), portable.data()));
-            if (u8IntegerKernel()) // AVX-512 VBMI: the integer kernel, whose bits the portable loop must give
-                EXPECT_TRUE(sameBits(radiance, portable)) << "the dispatched path gives the portable loop's bits";
-            else // the fused float kernel, whose tighter bound implies this one
-                radiance = portable;
-            size_t failures = 0, exact = 0;
-            for (size_t v = 0; v < V; ++v) {
-                const float* sigma = model.bandScales.data() + (perCluster ? model.scaleCluster[v] * n : v * n);
-                for (int c = 0; c < 3; ++c) {
-                    double E = 0;
-                    std::vector<double> x(size_t(n) * n);
-                    for (int k = 0; k < n * n; ++k) {
-                        x[k] = (double(model.codes8[v * values + k * 3 + c]) - 127) * double(sigma[int(std::sqrt(double(k)))]);
-                        E += x[k] * double(lighting[k * 3 + c]);
+        for (int bits : {8, 16})
+            for (bool perCluster : {false, true}) {
+                SCOPED_TRACE(std::to_string(n) + " bands, " + std::to_string(bits) + " bits" + (perCluster ? ", per-cluster" : ""));
+                std::mt19937 random(uint32_t(n * 7 + bits + perCluster));
+                const uint32_t C = bits == 8 ? 127 : 32767;
+                RelightModel model;
+                model.vertexCount = uint32_t(V);
+                model.order = n;
+                model.storage = bits == 8 ? TransferStorage::Uint8 : TransferStorage::Uint16;
+                const size_t values = size_t(n) * n * 3;
+                for (size_t v = 0; v <= V; ++v) model.offsets.push_back(uint32_t(v * n * n));
+                std::vector<uint32_t> codes(V * values);
+                for (uint32_t& q : codes) q = random() % (2 * C + 1);
+                codes[7] = 0, codes[8] = 2 * C, codes.back() = 2 * C; // the extreme codes, one in the last row
+                if (bits == 8) model.codes8.assign(codes.begin(), codes.end());
+                else model.codes16.assign(codes.begin(), codes.end());
+                const size_t scaleRows = perCluster ? 5 : V;
+                for (size_t i = 0; i < scaleRows * n; ++i)
+                    model.bandScales.push_back(std::ldexp(1.0f + float(random() % 1000) / 1000.0f, int(random() % 9) - 12));
+                if (perCluster)
+                    for (size_t v = 0; v < V; ++v) model.scaleCluster.push_back(uint32_t(random() % 5));
+                for (size_t v = 0; v <= V; v += kRelightBlock) model.bandBlockStarts.push_back(uint32_t(v * n));
+                std::vector<float> lighting = randomLighting(n, uint32_t(n));
+                for (int k = 0; k < n * n; ++k)
+                    for (int c = 0; c < 3; ++c) {
+                        const int l = int(std::sqrt(double(k)));
+                        lighting[k * 3 + c] *= std::ldexp(1.0f, -4 * l);
+                        if (l == 2 && c == 1) lighting[k * 3 + c] = 0;
+                        if (l == 3 && c == 2) lighting[k * 3 + c] *= 1e-30f;
                     }
-                    const double bound = u8KernelBound(size_t(n) * n, c, lighting, [&](int k) { return std::fabs(x[k]); });
-                    double xl = 0;
-                    for (int k = 0; k < n * n; ++k) xl += std::fabs(x[k] * lighting[k * 3 + c]);
-                    const double error = std::fabs(double(radiance[v * 3 + c]) - E);
-                    if (error > bound + std::ldexp(xl, -45)) ++failures;
-                    if (error == 0) ++exact;
+                std::vector<float> radiance = relightAll(model, lighting.data());
+                size_t failures = 0, exact = 0;
+                for (size_t v = 0; v < V; ++v) {
+                    const float* sigma = model.bandScales.data() + (perCluster ? model.scaleCluster[v] * n : v * n);
+                    for (int c = 0; c < 3; ++c) {
+                        double E = 0, magnitude = 0;
+                        for (int k = 0; k < n * n; ++k) {
+                            const double x = (double(codes[v * values + k * 3 + c]) - C) * double(sigma[int(std::sqrt(double(k)))]);
+                            E += x * double(lighting[k * 3 + c]);
+                            magnitude += std::fabs(x * double(lighting[k * 3 + c]));
+                        }
+                        const double error = std::fabs(double(radiance[v * 3 + c]) - E);
+                        if (error > (roundingGamma(double(n * n + 2)) + std::ldexp(1.0, -45)) * magnitude) ++failures;
+                        if (error == 0) ++exact;
+                    }
                 }
+                EXPECT_EQ(failures, 0u);
+                EXPECT_LT(exact, V * 3) << "float rounding shows: the check is not vacuous";
             }
-            EXPECT_EQ(failures, 0u);
-            EXPECT_LT(exact, V * 3) << "the lighting's rounding shows: the check is not vacuous";
-        }
 }
 
 TEST(NoThrow, StatusForMissingCorruptAndGoodFilesAndBadRanges) {

@@ -86,14 +86,9 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 
 // Relights vertices [begin, end) of `model`, whatever its storage, times model.albedo per vertex when that is not
 // empty, in tasks of kRelightBlock vertices run through `jobs` (default: in order on the calling thread).
-// Float32 and Float16 rows are bit-identical to the kernel on decodedTransfer(model). Codes of 4..8 bands are relit
-// straight from the codes: u16 by a fused float kernel (q - C times sigma_l L_j), within (gamma_{n+2} +
-// gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows; u8 by exact integer sums of
-// q - C against a per-call 16-bit fixed-point copy of the lighting, one per (band, channel), each scaled by its band
-// scale in double: within u |E| + (1 + u)(2^-14 sum_j |x_j| M_j + g sum_j |x_j| (|L_j| + 2^-14 M_j)) of the exact
-// E = sum_j x_j L_j over the values the codes stand for (x_j = (q_j - C) sigma_l; M_j the largest |L| of j's band
-// and channel; u = 2^-24, g = 4 2^-53 / (1 - 4 2^-53)) on processors with AVX-512 VBMI, and by the u16 kernel
-// elsewhere (so u8 bits differ between those two kinds of processor; tests/runtime); Cpca projects each
+// Float32 and Float16 rows are bit-identical to the kernel on decodedTransfer(model); u8 / u16 codes of 4..8
+// bands are relit by a fused kernel straight from the codes (q - C times sigma_l L_j), within (gamma_{n+2} +
+// gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows (tests/runtime); Cpca projects each
 // cluster's mean and directions on the lighting once per call, then sums M weights per vertex, which agrees
 // with the kernel on the decoded rows within float rounding (tests/runtime). Bit-identical for every job system.
 // Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
