@@ -65,5 +65,4 @@ void relightCpcaRange(const RelightModel& model, const float* projections, size_
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                   float* out);
 
-
 } // namespace prt
