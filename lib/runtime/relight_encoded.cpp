@@ -1,7 +1,7 @@
-// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes are relit by a
-// fused kernel that reads each code once (no decoded row); half rows (and codes past order 8) are decoded a few
-// vertices at a time into a tile that stays in the L1 cache and relit there by the float kernel, so memory
-// carries only the compressed bytes; clustered PCA is relit in its own basis (Sloan et al. 2003).
+// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes of 4..8 bands are
+// relit by a fused kernel that reads each code once (relight_codes.cpp, no decoded row); half rows and other codes
+// are decoded a few vertices at a time into a tile that stays in the L1 cache and relit there by the float kernel,
+// so memory carries only the compressed bytes; clustered PCA is relit in its own basis (Sloan et al. 2003).
 #include "runtime.h"
 
 #include "runtime_internal.h"
@@ -108,78 +108,6 @@ void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t fir
     }
 }
 
-// The fused code kernel: radiance_c = sum_l sum_{j in band l} float(int(q_j) - C) * (sigma_l * L_jc), straight
-// from the codes, with no decoded row in memory. Per vertex the band scales are folded into a copy of the
-// lighting (w_j = sigma_l L_j, one multiply per value, from L1), then one contiguous loop converts each code and
-// adds its product in the float kernel's 12 lanes (lane i always channel i % 3), folded 12 -> 6 -> 3 as there.
-// Every term is q' (exact) times a rounded product, so each channel is within gamma_{n+2} sum_j |x_j L_j| of the
-// exact sum_j x_j L_j (x_j = q'_j sigma_l, the value the code stands for), like the decode-then-relight path but
-// not bit for bit the same rounding. Each vertex's sum depends only on that vertex, so the result does not depend
-// on how the range is split. kN = n (4..8) known at compile time, so every band loop is unrolled.
-template <class Code, int kN>
-PRT_ALWAYS_INLINE inline void relightCodesBody(const RelightModel& model, const Code* __restrict codes, size_t first,
-                                               size_t last, size_t band, const float* __restrict lighting,
-                                               float* __restrict radiance) {
-    constexpr int C = sizeof(Code) == 1 ? 127 : 32767, kValues = kN * kN * 3, kLanes = 12;
-    const Code* __restrict q = codes + size_t(model.offsets[first]) * 3;
-    const bool perCluster = !model.scaleCluster.empty();
-    for (size_t v = first; v < last; ++v, band += kN, q += kValues) {
-        const float* __restrict sigma = perCluster ? model.bandScales.data() + size_t(model.scaleCluster[v]) * model.order
-                                                   : model.bandScales.data() + band;
-        alignas(32) float w[kValues];
-        for (int l = 0; l < kN; ++l) {
-            const float s = sigma[l];
-            for (int i = l * l * 3; i < (l + 1) * (l + 1) * 3; ++i) w[i] = s * lighting[i];
-        }
-        alignas(32) float x[kValues]; // the centred codes, one contiguous conversion loop
-        for (int i = 0; i < kValues; ++i) x[i] = float(int(q[i]) - C);
-        float sum[kLanes] = {};
-        int k = 0;
-        for (; k + kLanes <= kValues; k += kLanes)
-            for (int i = 0; i < kLanes; ++i) sum[i] += x[k + i] * w[k + i];
-        for (int i = 0; k + i < kValues; ++i) sum[i] += x[k + i] * w[k + i];
-        for (int i = 0; i < 6; ++i) sum[i] += sum[i + 6];
-        float* out = radiance + (v - first) * 3;
-        for (int c = 0; c < 3; ++c) out[c] = sum[c] + sum[c + 3];
-    }
-}
-
-// Compiled for the baseline and, where the processor has it, for AVX2: the same operations per lane in the same
-// order and no FMA, so both give the same bits.
-template <class Code, int kN>
-void relightCodesBase(const RelightModel& model, const Code* codes, size_t first, size_t last, size_t band,
-                      const float* lighting, float* radiance) {
-    relightCodesBody<Code, kN>(model, codes, first, last, band, lighting, radiance);
-}
-#if PRT_HAVE_AVX2_CLONE
-template <class Code, int kN>
-__attribute__((target("avx2"))) void relightCodesAvx2(const RelightModel& model, const Code* codes, size_t first,
-                                                      size_t last, size_t band, const float* lighting,
-                                                      float* radiance) {
-    relightCodesBody<Code, kN>(model, codes, first, last, band, lighting, radiance);
-}
-#define PRT_CODES(N) (hasAvx2() ? relightCodesAvx2<Code, N> : relightCodesBase<Code, N>)
-#else
-#define PRT_CODES(N) relightCodesBase<Code, N>
-#endif
-
-// Relights vertices [first, last) of n bands each (n = 4..8) from their codes; `band` is `first`'s band-0 scale
-// index. False (nothing written) for other n, which take the decode tile: at order 3 the per-vertex fold of the
-// scales into 27 lighting values (three short band loops) cost more than the tile's whole-tile conversion
-// (tests/runtime/bench_runtime: u8 0.75x float fused against 1.13x tiled; fused 1.16x at order 5, 1.31x at 8).
-template <class Code>
-bool relightCodes(const RelightModel& model, const Code* codes, int n, size_t first, size_t last, size_t band,
-                  const float* lighting, float* radiance) {
-    switch (n) {
-    case 4: PRT_CODES(4)(model, codes, first, last, band, lighting, radiance); return true;
-    case 5: PRT_CODES(5)(model, codes, first, last, band, lighting, radiance); return true;
-    case 6: PRT_CODES(6)(model, codes, first, last, band, lighting, radiance); return true;
-    case 7: PRT_CODES(7)(model, codes, first, last, band, lighting, radiance); return true;
-    case 8: PRT_CODES(8)(model, codes, first, last, band, lighting, radiance); return true;
-    default: return false;
-    }
-}
-
 } // namespace
 
 void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out) {
@@ -197,12 +125,7 @@ void relightRaggedRange(const RelightModel& model, const float* lighting, size_t
             v = run;
             continue;
         }
-        const bool fused = model.storage == TransferStorage::Uint8
-                               ? relightCodes(model, model.codes8.data(), n, v, run, band, lighting, out + (v - first) * 3)
-                           : model.storage == TransferStorage::Uint16
-                               ? relightCodes(model, model.codes16.data(), n, v, run, band, lighting, out + (v - first) * 3)
-                               : false;
-        if (fused) {
+        if (relightCodes(model, n, v, run, band, lighting, out + (v - first) * 3)) { // codes of 4..8 bands
             band += (run - v) * size_t(n);
             v = run;
             continue;

@@ -59,5 +59,10 @@ void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::
 void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out);
 std::vector<float> cpcaProjections(const RelightModel& model, const float* lighting);
 void relightCpcaRange(const RelightModel& model, const float* projections, size_t first, size_t last, float* out);
+// The fused code kernel (relight_codes.cpp): vertices [first, last) of a u8 / u16 model, all of n bands, relit from
+// their codes into out; `band` is `first`'s band-0 scale index (per-vertex scales). False, with nothing written,
+// for other storages or n outside 4..8 (those take the decode tile).
+bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
+                  float* out);
 
 } // namespace prt

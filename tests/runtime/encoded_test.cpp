@@ -357,6 +357,65 @@ TEST(EncodedRelight, CodesAtEveryOrderOddCountsAndMidBufferRangesWithinBoundOfTh
             }
 }
 
+// Uniform orders 4..8 built directly, so the fused kernel runs long runs of vertices and a run ends at the codes'
+// last row (read through its zero-padded copy), under lighting spanning many magnitudes (bands falling 16x each,
+// one (band, channel) all zero, one at 1e-30). Each channel is within gamma_{n+2} sum_j |x_j L_j| of the exact
+// E = sum_j x_j L_j, x_j = (q_j - C) sigma_l (in double: q - C and sigma are exact there; the products and their
+// sum of at most 64 terms per channel stay within 2^-45 sum |x L| of it, which the check allows).
+TEST(EncodedRelight, FusedCodesOfLongRunsWithinRoundingOfTheExactSum) {
+    const size_t V = 4099; // a block and 3 vertices
+    for (int n = 4; n <= 8; ++n)
+        for (int bits : {8, 16})
+            for (bool perCluster : {false, true}) {
+                SCOPED_TRACE(std::to_string(n) + " bands, " + std::to_string(bits) + " bits" + (perCluster ? ", per-cluster" : ""));
+                std::mt19937 random(uint32_t(n * 7 + bits + perCluster));
+                const uint32_t C = bits == 8 ? 127 : 32767;
+                RelightModel model;
+                model.vertexCount = uint32_t(V);
+                model.order = n;
+                model.storage = bits == 8 ? TransferStorage::Uint8 : TransferStorage::Uint16;
+                const size_t values = size_t(n) * n * 3;
+                for (size_t v = 0; v <= V; ++v) model.offsets.push_back(uint32_t(v * n * n));
+                std::vector<uint32_t> codes(V * values);
+                for (uint32_t& q : codes) q = random() % (2 * C + 1);
+                codes[7] = 0, codes[8] = 2 * C, codes.back() = 2 * C; // the extreme codes, one in the last row
+                if (bits == 8) model.codes8.assign(codes.begin(), codes.end());
+                else model.codes16.assign(codes.begin(), codes.end());
+                const size_t scaleRows = perCluster ? 5 : V;
+                for (size_t i = 0; i < scaleRows * n; ++i)
+                    model.bandScales.push_back(std::ldexp(1.0f + float(random() % 1000) / 1000.0f, int(random() % 9) - 12));
+                if (perCluster)
+                    for (size_t v = 0; v < V; ++v) model.scaleCluster.push_back(uint32_t(random() % 5));
+                for (size_t v = 0; v <= V; v += kRelightBlock) model.bandBlockStarts.push_back(uint32_t(v * n));
+                std::vector<float> lighting = randomLighting(n, uint32_t(n));
+                for (int k = 0; k < n * n; ++k)
+                    for (int c = 0; c < 3; ++c) {
+                        const int l = int(std::sqrt(double(k)));
+                        lighting[k * 3 + c] *= std::ldexp(1.0f, -4 * l);
+                        if (l == 2 && c == 1) lighting[k * 3 + c] = 0;
+                        if (l == 3 && c == 2) lighting[k * 3 + c] *= 1e-30f;
+                    }
+                std::vector<float> radiance = relightAll(model, lighting.data());
+                size_t failures = 0, exact = 0;
+                for (size_t v = 0; v < V; ++v) {
+                    const float* sigma = model.bandScales.data() + (perCluster ? model.scaleCluster[v] * n : v * n);
+                    for (int c = 0; c < 3; ++c) {
+                        double E = 0, magnitude = 0;
+                        for (int k = 0; k < n * n; ++k) {
+                            const double x = (double(codes[v * values + k * 3 + c]) - C) * double(sigma[int(std::sqrt(double(k)))]);
+                            E += x * double(lighting[k * 3 + c]);
+                            magnitude += std::fabs(x * double(lighting[k * 3 + c]));
+                        }
+                        const double error = std::fabs(double(radiance[v * 3 + c]) - E);
+                        if (error > (roundingGamma(double(n * n + 2)) + std::ldexp(1.0, -45)) * magnitude) ++failures;
+                        if (error == 0) ++exact;
+                    }
+                }
+                EXPECT_EQ(failures, 0u);
+                EXPECT_LT(exact, V * 3) << "float rounding shows: the check is not vacuous";
+            }
+}
+
 TEST(NoThrow, StatusForMissingCorruptAndGoodFilesAndBadRanges) {
     fs::path dir = fs::temp_directory_path() / ("prt_nothrow_test_" + std::to_string(getpid()));
     fs::create_directories(dir);
