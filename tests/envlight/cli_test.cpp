@@ -234,14 +234,17 @@ TEST_F(EnvlightCli, VisibilityTurnsTableEqualsRotateYCasts) {
     size_t tableSize = bytes.size() - 10 - headerLength;
     size_t differing = 0;
     for (int t = 0; t < turns; ++t) {
-        std::string single = (dir / ("v" + std::to_string(t) + ".npy")).string();
+        std::string name = "v"; // appended, not "v" + ...: GCC 12's -Wrestrict misfires on literal + string here
+        name += std::to_string(t) + ".npy";
+        std::string single = (dir / name).string();
         r = run("relight " + bundle + " --lights " + lights + " --light-samples 16 --rotate-y " +
                 std::to_string(t * 360 / turns) + " --visibility-out " + single + " -o " + out);
         ASSERT_EQ(r.exitCode, 0) << r.stderrText;
         std::vector<size_t> shape;
         std::vector<float> visible = prt::readNpy(single, &shape);
-        ASSERT_EQ(header.find("(" + std::to_string(turns) + "," + std::to_string(shape[0]) + "," +
-                              std::to_string(shape[1]) + ")") != std::string::npos, true) << header;
+        std::string tableShape = "(";
+        tableShape += std::to_string(turns) + "," + std::to_string(shape[0]) + "," + std::to_string(shape[1]) + ")";
+        ASSERT_EQ(header.find(tableShape) != std::string::npos, true) << header;
         ASSERT_EQ(tableSize, turns * visible.size());
         for (size_t i = 0; i < visible.size(); ++i) {
             uint8_t expected = uint8_t(std::lround(255.0f * std::clamp(visible[i], 0.0f, 1.0f)));
