@@ -20,30 +20,22 @@ Run from the repository root after the build and `make -f Makefile.data`:  scrip
 """
 import argparse
 import csv
-import hashlib
 import json
 import os
 import re
-import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DATA = os.path.join(ROOT, ".cache", "data")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from prt_commands import DATA, ROOT, file_hash, run_logged  # noqa: E402
+
 ENVS = ["city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset"]
 
 
 def run(args):
-    result = subprocess.run(args, check=False, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if result.returncode != 0:
-        sys.exit(f"adapt_figures: {' '.join(args)} failed ({result.returncode}):\n{result.stderr}")
-    events = []
-    for line in result.stderr.splitlines():
-        try:
-            events.append(json.loads(line))
-        except ValueError:
-            pass
-    return result.stdout, events
+    """Runs a prt command; returns (stdout, [JSON events of its --log-json stderr])."""
+    _, stdout, events = run_logged(args, "adapt_figures")
+    return stdout, events
 
 
 def event(events, name):
@@ -51,10 +43,6 @@ def event(events, name):
         if e.get("event") == name:
             return e
     raise SystemExit(f"adapt_figures: no {name} event")
-
-
-def file_hash(path):
-    return hashlib.sha256(open(path, "rb").read()).hexdigest()
 
 
 def main():

@@ -18,20 +18,17 @@ import argparse
 import csv
 import json
 import os
-import subprocess
 import sys
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DATA = os.path.join(ROOT, ".cache", "data")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from prt_commands import DATA, ROOT, run_logged  # noqa: E402
 
 
 def run(args):
-    result = subprocess.run(args, check=False, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if result.returncode != 0:
-        sys.exit(f"adapt_size_goal: {' '.join(args)} failed ({result.returncode}):\n{result.stderr}")
-    return [json.loads(line) for line in result.stderr.splitlines() if line.startswith("{")]
+    """Runs a prt command; returns the JSON events of its --log-json stderr."""
+    return run_logged(args, "adapt_size_goal")[2]
 
 
 def main():

@@ -10,6 +10,7 @@
 // writes it (lib/render/glossy_stack.cpp, "prt-sg-stack"). The mesh is drawn without an index buffer (corner c of
 // triangle c / 3, gl_VertexID), so every fragment knows its triangle's three vertices and its barycentrics.
 import * as THREE from 'three';
+import { rgbFloatNearest } from './textures.js';
 import { layerData, parseGlb } from './bundle.js';
 import { relightRowGlsl, toneMapGlsl } from './glsl.js';
 
@@ -104,12 +105,7 @@ export function stackAtlas(stack) {
     for (let row = 0; row < h; ++row) data.set(level.rgb.subarray(row * w * 3, (row + 1) * w * 3), ((y0 + row) * width + x0) * 3);
   });
   const texture = new THREE.DataTexture(data, width, height);
-  texture.format = THREE.RGBFormat;
-  texture.type = THREE.FloatType;
-  texture.internalFormat = 'RGB32F';
-  texture.minFilter = texture.magFilter = THREE.NearestFilter;
-  texture.generateMipmaps = false;
-  texture.needsUpdate = true;
+  rgbFloatNearest(texture);
   return { texture, rects, count: stack.levels.length, first: stack.first, levelsPerOctave: stack.levelsPerOctave };
 }
 

@@ -10,6 +10,7 @@
 // turn is free: at a turn theta the visibility is blended linearly between the two nearest table turns
 // (visibilityTurnBlend); without a file the cones are unshadowed (V = 1, as `--light-samples 0`).
 import * as THREE from 'three';
+import { rgbFloatNearest } from './textures.js';
 import { layerData, parseGlb } from './bundle.js';
 import { readExr } from './exr.js';
 import { relightRowGlsl } from './glsl.js';
@@ -217,12 +218,7 @@ export async function readTexelHybridLayers(bytes, bundleUrl, transfer) {
 // The texel surface (readTexelHybridLayers: normals, then albedo) as a 2-layer RGB32F array texture of the atlas.
 export function texelSurfaceTexture(surface, width, height) {
   const texture = new THREE.DataArrayTexture(surface, width, height, 2);
-  texture.format = THREE.RGBFormat;
-  texture.type = THREE.FloatType;
-  texture.internalFormat = 'RGB32F';
-  texture.minFilter = texture.magFilter = THREE.NearestFilter;
-  texture.generateMipmaps = false;
-  texture.needsUpdate = true;
+  rgbFloatNearest(texture);
   return texture;
 }
 

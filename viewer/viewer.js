@@ -2,6 +2,7 @@
 // lets the user turn the environment and change the order. Shading agrees with `prt relight` (the same sum) and
 // pictures with `prt render` (the same pinhole camera and tone map, compare.h toneMap).
 import * as THREE from 'three';
+import { rgbFloatNearest } from './textures.js';
 import { isSceneBundle, loadBundle, parseGlb, readSceneTransfer, syntheticBundle } from './bundle.js';
 import { relightRowGlsl, toneMapGlsl } from './glsl.js';
 import { hybridGlsl, hybridUniforms, loadLights, parseVisibilityNpy, readHybridLayers, readSceneBounce,
@@ -116,12 +117,7 @@ function transferTexture(transfer, rowsPerLine, lines) {
       data[to + 2] = source[from + 2];
     }
   const texture = new THREE.DataArrayTexture(data, rowsPerLine, lines, C);
-  texture.format = THREE.RGBFormat;
-  texture.type = THREE.FloatType;
-  texture.internalFormat = 'RGB32F';
-  texture.minFilter = texture.magFilter = THREE.NearestFilter;
-  texture.generateMipmaps = false;
-  texture.needsUpdate = true;
+  rgbFloatNearest(texture);
   return texture;
 }
 
