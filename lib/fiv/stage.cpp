@@ -7,8 +7,10 @@
 
 namespace prt::fiv {
 
-void runFiv(const FivStageOptions& options) {
-    double start = nowSeconds();
+namespace {
+
+// The flag checks that need no input read: usage errors (kExitUsage) for what cannot go together.
+void checkFivOptions(const FivStageOptions& options) {
     if (options.inputs.empty()) throw Error("", "fiv", "needs an occluder mesh or visibility bundles", kExitUsage);
     if (fileExtension(options.output) != "glb") throw Error(options.output, "-o", "needs a .glb file", kExitUsage);
     bool sharded = options.visibility.shardCount > 1;
@@ -19,8 +21,7 @@ void runFiv(const FivStageOptions& options) {
     if (options.difmapSize < 1 || options.difmapSize > kMaxCube)
         throw Error("", "--difmap", "must lie in 1.." + std::to_string(kMaxCube), kExitUsage);
 
-    const bool withSourceGrid = options.sourceGrid.azimuth > 0;
-    if (withSourceGrid) {
+    if (options.sourceGrid.azimuth > 0) {
         if (!options.sources) throw Error("", "--source-grid", "needs --sources (it is the sources' own grid)", kExitUsage);
         if (options.visibilityOnly)
             throw Error("", "--source-grid", "belongs to the reduction (the sources come from --env), not --visibility-only",
@@ -30,28 +31,14 @@ void runFiv(const FivStageOptions& options) {
             throw Error("", "--source-sharpen", "must lie in " + std::to_string(int(kMinSourceSharpen)) + ".." +
                                                     std::to_string(int(kMaxSourceSharpen)), kExitUsage);
     }
+}
 
-    if (!options.merge.empty()) {
-        if (!options.visibilityOnly) throw Error("", "--merge", "joins visibility shards only", kExitUsage);
-        std::vector<Visibility> parts;
-        Bundle shard = readBundle(options.merge[0]);
-        for (size_t i = 0; i < options.merge.size(); ++i) {
-            if (i > 0) shard = readBundle(options.merge[i]);
-            parts.push_back(readVisibility(shard, options.merge[i]));
-        }
-        Visibility joined = joinShards(std::move(parts), options.merge);
-        Bundle firstShard = readBundle(options.merge[0]);
-        writeBundle(options.output, visibilityBundle(firstShard.mesh, joined, firstShard.inputs));
-        logInfo("fiv: joined " + std::to_string(options.merge.size()) + " visibility shards into " + options.output);
-        return;
-    }
+// The occluder's visibility: joined from visibility bundles (options.inputs, as their shards), or sampled from one occluder
+// mesh. Gives the occluder mesh and the bundle inputs to record.
+Visibility occluderVisibility(const FivStageOptions& options, TriMesh& occluder, nlohmann::json& inputs) {
     Bundle first = readBundle(options.inputs[0]);
     bool fromVisibility = findLayer(first, "fiv_mask_offsets") != nullptr;
     Visibility vis;
-    TriMesh occluder;
-    nlohmann::json inputs;
-    double visibilitySeconds = 0.0;
-    uint64_t extraRays = 0; // the source grid's rays
     if (fromVisibility) {
         if (options.visibilityOnly) throw Error(options.inputs[0], "--visibility-only", "input is visibility already", kExitUsage);
         std::vector<Visibility> parts;
@@ -80,13 +67,42 @@ void runFiv(const FivStageOptions& options) {
                 std::to_string(options.visibility.cube) + "^2, supersample " + std::to_string(options.visibility.supersample));
         double t0 = nowSeconds();
         vis = sampleVisibility(occluder, options.visibility, options.inputs[0]);
-        visibilitySeconds = nowSeconds() - t0;
+        const double visibilitySeconds = nowSeconds() - t0;
         char line[200];
         std::snprintf(line, sizeof line, "fiv: visibility in %.2f s, %llu rays (%.2f%% of the naive %llu)",
                       visibilitySeconds, (unsigned long long)vis.rays, 100.0 * double(vis.rays) / double(std::max<uint64_t>(vis.naiveRays, 1)),
                       (unsigned long long)vis.naiveRays);
         logInfo(line);
     }
+
+    return vis;
+}
+
+} // namespace
+
+void runFiv(const FivStageOptions& options) {
+    double start = nowSeconds();
+    checkFivOptions(options);
+    const bool withSourceGrid = options.sourceGrid.azimuth > 0;
+
+    if (!options.merge.empty()) {
+        if (!options.visibilityOnly) throw Error("", "--merge", "joins visibility shards only", kExitUsage);
+        std::vector<Visibility> parts;
+        Bundle shard = readBundle(options.merge[0]);
+        for (size_t i = 0; i < options.merge.size(); ++i) {
+            if (i > 0) shard = readBundle(options.merge[i]);
+            parts.push_back(readVisibility(shard, options.merge[i]));
+        }
+        Visibility joined = joinShards(std::move(parts), options.merge);
+        Bundle firstShard = readBundle(options.merge[0]);
+        writeBundle(options.output, visibilityBundle(firstShard.mesh, joined, firstShard.inputs));
+        logInfo("fiv: joined " + std::to_string(options.merge.size()) + " visibility shards into " + options.output);
+        return;
+    }
+    TriMesh occluder;
+    nlohmann::json inputs;
+    uint64_t extraRays = 0; // the source grid's rays
+    Visibility vis = occluderVisibility(options, occluder, inputs);
 
     if (options.visibilityOnly) {
         writeBundle(options.output, visibilityBundle(occluder, vis, inputs));
