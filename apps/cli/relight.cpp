@@ -356,18 +356,13 @@ void addGlossyTowardEye(const GlossyModel& glossy, const EnvironmentMap& environ
     logInfo(line);
 }
 
-void runRelight(const RelightOptions& options) {
-    if (!options.specular.brdf.empty())
-        return runSpecularRelight(options.specular, options.bundle, options.env, options.eye, options.output,
-                                  options.glossyOnly);
-    double start = nowSeconds();
-    sh::Window window = sh::parseWindow(options.window);
+// The flag checks of `prt relight` that need no input read (kExitUsage for what cannot go together), and with
+// --image the camera parsed into `camera`. `imageMode`: whether --image was given.
+void checkRelightFlags(const RelightOptions& options, bool imageMode, PinholeCamera& camera) {
     // writeVertexRadiance checks this too, but only after the work; a typo should fail at once.
     std::string outputExtension = fileExtension(options.output);
-    bool imageMode = !options.imageSize.empty();
     if (imageMode != !options.camera.empty())
         throw Error("", "--image", "--image and --camera go together", kExitUsage);
-    PinholeCamera camera;
     if (imageMode) {
         if (options.texels && options.lights.empty())
             throw Error("", "--image", "pictures of a bake's texels are `prt render --texels`'s (or give --lights)",
@@ -402,6 +397,17 @@ void runRelight(const RelightOptions& options) {
             throw Error("", "--visibility-turns",
                         "casts the turns 0, 360/N, ... itself: give --rotate-y to the runs that draw", kExitUsage);
     }
+}
+
+void runRelight(const RelightOptions& options) {
+    if (!options.specular.brdf.empty())
+        return runSpecularRelight(options.specular, options.bundle, options.env, options.eye, options.output,
+                                  options.glossyOnly);
+    double start = nowSeconds();
+    sh::Window window = sh::parseWindow(options.window);
+    bool imageMode = !options.imageSize.empty();
+    PinholeCamera camera;
+    checkRelightFlags(options, imageMode, camera);
     // A glossy bundle under lights goes through the glossy path (--eye, --glossy-only, or a picture of one).
     if (!options.lights.empty() &&
         (!options.eye.empty() || options.glossyOnly ||
