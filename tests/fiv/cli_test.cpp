@@ -73,6 +73,18 @@ const Files& files() {
     return f;
 }
 
+// Writes DIR/flat.exr, a uniform 32x16 map of radiance 1, and DIR/sunny.exr, the same with one texel of 4000: a
+// sun holding most of the map's power, which `prt fiv --sources` extracts as one small source.
+void writeFlatAndSunnyMaps(const TempDir& dir) {
+    Image flat;
+    flat.width = 32, flat.height = 16;
+    flat.rgb.assign(32 * 16 * 3, 1.0f);
+    writeImage(dir / "flat.exr", flat);
+    Image sunny = flat;
+    for (int c = 0; c < 3; ++c) sunny.rgb[3 * (5 * 32 + 20) + size_t(c)] = 4000.0f;
+    writeImage(dir / "sunny.exr", sunny);
+}
+
 } // namespace
 
 TEST(FivCli, SplitAndShardsGiveTheSameBundleBytes) {
@@ -425,13 +437,7 @@ TEST(FivCli, HardenedReadersRefuseEveryCrashClassWithoutOutput) {
 TEST(FivCli, SourcesShadowASunByItsOwnRaysAndLeaveAMapWithoutOneAlone) {
     const Files& f = files();
     TempDir dir;
-    Image flat;
-    flat.width = 32, flat.height = 16;
-    flat.rgb.assign(32 * 16 * 3, 1.0f);
-    writeImage(dir / "flat.exr", flat);
-    Image sunny = flat;
-    for (int c = 0; c < 3; ++c) sunny.rgb[3 * (5 * 32 + 20) + size_t(c)] = 4000.0f;
-    writeImage(dir / "sunny.exr", sunny);
+    writeFlatAndSunnyMaps(dir);
     const std::string common = f / "sphere.glb --grid 16,9,6 --cube 8 --threads 1 ";
     for (const char* map : {"flat", "sunny"}) {
         ASSERT_EQ(run("fiv " + common + "--env " + dir / (std::string(map) + ".exr") + " -o " + dir / (std::string(map) + ".glb")), 0);
@@ -489,13 +495,7 @@ TEST(FivCli, SelfVerticesStoreTheMeshsOwnShadowingAndFivshadeUsesItOnThatMeshOnl
 TEST(FivCli, SourceGridIsWrittenAsLayersReadByFivshadeAndCarriedByFivscene) {
     const Files& f = files();
     TempDir dir;
-    Image flat;
-    flat.width = 32, flat.height = 16;
-    flat.rgb.assign(32 * 16 * 3, 1.0f);
-    writeImage(dir / "flat.exr", flat);
-    Image sunny = flat;
-    for (int c = 0; c < 3; ++c) sunny.rgb[3 * (5 * 32 + 20) + size_t(c)] = 4000.0f;
-    writeImage(dir / "sunny.exr", sunny);
+    writeFlatAndSunnyMaps(dir);
     const std::string common = f / "sphere.glb --grid 16,9,6 --cube 8 --threads 1 --sources ";
     ASSERT_EQ(run("fiv " + common + "--env " + dir / "flat.exr -o " + dir / "flat.glb"), 0);
     std::string log;
