@@ -53,7 +53,7 @@ void addMetrics(nlohmann::ordered_json& document, const ErrorMetrics& metrics) {
 
 // Ends the report with the luminance weights, prints it, and writes it to `path` too unless that is empty.
 void report(nlohmann::ordered_json& document, const std::string& path) {
-    document["luminance_weights"] = kLuminanceWeights;
+    document["luminance_weights"] = kLuminance;
     std::string text = document.dump(2) + "\n";
     if (!path.empty()) writeBytesAtomic(path, text);
     std::fputs(text.c_str(), stdout);

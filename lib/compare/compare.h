@@ -2,15 +2,14 @@
 // Radiance arrays are flat rgb rows ([N][3], row-major), in the mesh's vertex order or an image's pixel order.
 #pragma once
 
+#include "luminance.h" // kLuminance, the weights of every luminance metric
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace prt {
-
-// Rec.709 luminance weights, used for every luminance metric.
-inline constexpr double kLuminanceWeights[3] = {0.2126, 0.7152, 0.0722};
 
 // How far a result is from a reference. Every error is result minus reference; the RMS-type metrics run over
 // all values (rows times channels), the luminance metrics over rows.

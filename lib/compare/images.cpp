@@ -15,7 +15,7 @@ namespace prt {
 namespace {
 
 double luminance(const float* rgb) {
-    return kLuminanceWeights[0] * rgb[0] + kLuminanceWeights[1] * rgb[1] + kLuminanceWeights[2] * rgb[2];
+    return kLuminance[0] * rgb[0] + kLuminance[1] * rgb[1] + kLuminance[2] * rgb[2];
 }
 
 // Viridis at five stops, interpolated linearly: dark blue (no error) to yellow (the top of the scale).

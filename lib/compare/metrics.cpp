@@ -18,7 +18,7 @@ double normalised(double error, double scale) {
 }
 
 double luminance(const float* rgb) {
-    return kLuminanceWeights[0] * rgb[0] + kLuminanceWeights[1] * rgb[1] + kLuminanceWeights[2] * rgb[2];
+    return kLuminance[0] * rgb[0] + kLuminance[1] * rgb[1] + kLuminance[2] * rgb[2];
 }
 
 } // namespace

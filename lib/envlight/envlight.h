@@ -26,6 +26,7 @@
 
 #include "bundle.h"
 #include "image.h"
+#include "luminance.h"
 #include "sh.h"
 
 #include <nlohmann/json.hpp>
@@ -41,7 +42,7 @@ struct Surface; // lib/material: a scene's materials, for cut-outs in the cone v
 
 namespace prt::envlight {
 
-inline constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722};
+using prt::kLuminance; // lib/core/luminance.h
 
 struct ConeLight {
     std::array<double, 3> direction{0, 1, 0}; // unit, towards the light

@@ -3,6 +3,7 @@
 #include "fiv_internal.h"
 
 #include "core.h"
+#include "luminance.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,12 +13,6 @@
 #include <atomic>
 
 namespace prt::fiv {
-
-namespace {
-
-constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722}; // Rec.709, as extractSmallSources
-
-} // namespace
 
 void checkSourceGrid(const GridSpec& grid, size_t sourceTexels, const std::string& source, int exitCode) {
     try {

@@ -3,6 +3,7 @@
 #include "fiv.h"
 
 #include "core.h"
+#include "luminance.h"
 #include "sh.h"
 
 #include <algorithm>
@@ -12,8 +13,6 @@
 namespace prt::fiv {
 
 namespace {
-
-constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722}; // Rec.709, as lib/envlight and lib/compare
 
 double luminance(const float* rgb) { return kLuminance[0] * rgb[0] + kLuminance[1] * rgb[1] + kLuminance[2] * rgb[2]; }
 

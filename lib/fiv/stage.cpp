@@ -123,8 +123,7 @@ void runFiv(const FivStageOptions& options) {
             grid = reduceVisibility(vis, residualCube, options.inputs[0]);
             if (withSourceGrid && !sources.direction.empty()) { // the grid keeps the rest; the sources get their own
                 const GridSpec& g = options.sourceGrid;
-                checkSourceGrid(g, sources.direction.size() / 3, options.inputs[0], kExitUsage);
-                SourceGridOptions so;
+                SourceGridOptions so; // sampleSourceGrid checks the grid against the sources' texel count
                 so.grid = g;
                 so.sharpen = options.sourceSharpen;
                 so.threads = options.visibility.threads;

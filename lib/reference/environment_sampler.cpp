@@ -2,6 +2,7 @@
 #include "path_tracer.h"
 
 #include "core.h"
+#include "luminance.h"
 #include "sh.h"
 
 #include <OpenEXR/ImfEnvmap.h>
@@ -13,8 +14,6 @@
 namespace prt::pathtrace {
 
 namespace {
-
-constexpr double kLuminance[3] = {0.2126, 0.7152, 0.0722};
 
 // A unit direction's distance scale onto the cube: d / max|d_i| lies on the cube [-1, 1]^3, and the solid angle
 // of face-plane area dA there is dA / r^3 with r = 1 / max|d_i|.
