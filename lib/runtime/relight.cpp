@@ -89,7 +89,7 @@ namespace {
 struct RelightTasks {
     const RelightModel* model;
     const float* lighting;
-    const float* projections; // Cpca: [clusters][components + 1][3]
+    const float* projections; // Cpca: [clusters][components + 1][4]
     size_t begin, end;
     float* radiance;
 };

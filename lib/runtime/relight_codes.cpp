@@ -1,5 +1,5 @@
-// The fused code kernel: u8 / u16 transfer codes of 4..8 bands relit straight from the codes, with no decoded row
-// in memory (relight_encoded.cpp keeps the decode tile for the other band counts and for halves).
+// The fused code kernel: u8 / u16 transfer codes of 1..8 bands relit straight from the codes, with no decoded row
+// in memory (relight_encoded.cpp keeps the decode tile for other band counts).
 #include "runtime.h"
 
 #include "runtime_internal.h"
@@ -80,12 +80,16 @@ bool codesHaveAvx2() {
 #define PRT_CODES(N) codes_base::relightCodesKernel<Code, N>
 #endif
 
-// n = 1..3 take the decode tile: at order 3 the fused kernel (then in 12 lanes) measured 0.75x float against the
-// tile's 1.13x (tests/runtime/bench_runtime).
+// Every n in 1..8: n = 1..3 took the decode tile until the fused kernel (with prefetch) measured 2.5-3.5x its rate
+// at 1, 2 and 3 bands (docs/results.md, issue 21; in 12 lanes and without prefetch it had been 0.75x float at order
+// 3 against the tile's 1.13x).
 template <class Code>
 bool relightCodesOf(const RelightModel& model, const std::vector<Code>& codes, int n, size_t first, size_t last,
                     size_t band, const float* lighting, float* radiance) {
     switch (n) {
+    case 1: PRT_CODES(1)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
+    case 2: PRT_CODES(2)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
+    case 3: PRT_CODES(3)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
     case 4: PRT_CODES(4)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
     case 5: PRT_CODES(5)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
     case 6: PRT_CODES(6)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;

@@ -130,9 +130,13 @@ void relightRaggedRange(const RelightModel& model, const float* lighting, size_t
             v = run;
             continue;
         }
+        // Halves on a processor with F16C: fused (relight_half.cpp), leaving at most the array's last row.
+        const size_t fused = model.storage == TransferStorage::Float16
+                                 ? relightHalves(model, v, run, int(count), lighting, out + (v - first) * 3)
+                                 : 0;
         // Tiles of whole vertices: decode, then the float kernel on the tile.
         const size_t perTile = std::max<size_t>(1, kTileValues / (size_t(count) * 3));
-        for (size_t t = v; t < run; t += perTile) {
+        for (size_t t = v + fused; t < run; t += perTile) {
             const size_t tileEnd = std::min(run, t + perTile);
             if (model.storage == TransferStorage::Float16) {
                 const uint16_t* halves = model.halves.data() + size_t(offsets[t]) * 3;
@@ -151,25 +155,74 @@ void relightRaggedRange(const RelightModel& model, const float* lighting, size_t
 
 std::vector<float> cpcaProjections(const RelightModel& model, const float* lighting) {
     const size_t rows = size_t(model.cpcaClusters) * (model.cpcaComponents + 1);
-    std::vector<float> projections(rows * 3);
-    relight(model.cpcaBasis.data(), rows, model.order * model.order, lighting, projections.data());
+    std::vector<float> rgb(rows * 3), projections(rows * 4, 0.0f);
+    relight(model.cpcaBasis.data(), rows, model.order * model.order, lighting, rgb.data());
+    for (size_t r = 0; r < rows; ++r) std::memcpy(&projections[r * 4], &rgb[r * 3], sizeof(float) * 3);
     return projections;
 }
 
-void relightCpcaRange(const RelightModel& model, const float* projections, size_t first, size_t last, float* out) {
-    const size_t M = size_t(model.cpcaComponents);
-    for (size_t v = first; v < last; ++v) {
-        const float* p = projections + size_t(model.cpcaCluster[v]) * (M + 1) * 3;
-        const float* w = model.cpcaWeights.data() + v * M;
-        float r = p[0], g = p[1], b = p[2]; // the mean, then each direction i = 0, 1, ... in order
+namespace {
+
+typedef float V4f __attribute__((vector_size(16)));
+
+// Per vertex and channel: the mean's projection, then + w_i * direction i's for i = 0, 1, ... in order, each
+// product rounded then added, in the lanes of one 4-float vector (the fourth lane, 0, unused): per channel the
+// same operations in the same order as one scalar sum per channel, so the bits depend neither on the vector width
+// nor on kM (M known at compile time, 0: take it from `components`). Every vertex but the last stores all 4 lanes,
+// the fourth into the next vertex's first channel, which that vertex then writes.
+template <int kM>
+PRT_ALWAYS_INLINE inline void cpcaBody(const float* __restrict projections, const uint32_t* __restrict cluster,
+                                       const float* __restrict weights, size_t components, size_t count,
+                                       float* __restrict out) {
+    if constexpr (kM != 0) components = kM;
+    const size_t M = components;
+    for (size_t v = 0; v < count; ++v) {
+        const float* p = projections + size_t(cluster[v]) * (M + 1) * 4;
+        const float* w = weights + v * M;
+        V4f sum, direction;
+        std::memcpy(&sum, p, sizeof sum);
         for (size_t i = 0; i < M; ++i) {
-            r += w[i] * p[(i + 1) * 3];
-            g += w[i] * p[(i + 1) * 3 + 1];
-            b += w[i] * p[(i + 1) * 3 + 2];
+            std::memcpy(&direction, p + (i + 1) * 4, sizeof direction);
+            sum += w[i] * direction;
         }
-        out[(v - first) * 3] = r;
-        out[(v - first) * 3 + 1] = g;
-        out[(v - first) * 3 + 2] = b;
+        if (v + 1 < count) {
+            std::memcpy(out + v * 3, &sum, sizeof sum);
+        } else {
+            out[v * 3] = sum[0];
+            out[v * 3 + 1] = sum[1];
+            out[v * 3 + 2] = sum[2];
+        }
+    }
+}
+
+// Baseline and AVX2 (a broadcast load and a multiply from memory per term; no FMA, so the same bits).
+template <int kM>
+void cpcaBase(const float* projections, const uint32_t* cluster, const float* weights, size_t components,
+              size_t count, float* out) {
+    cpcaBody<kM>(projections, cluster, weights, components, count, out);
+}
+#if PRT_HAVE_AVX2_CLONE
+template <int kM>
+__attribute__((target("avx2"))) void cpcaAvx2(const float* projections, const uint32_t* cluster,
+                                              const float* weights, size_t components, size_t count, float* out) {
+    cpcaBody<kM>(projections, cluster, weights, components, count, out);
+}
+#define PRT_CPCA(M) (hasAvx2() ? cpcaAvx2<M> : cpcaBase<M>)
+#else
+#define PRT_CPCA(M) cpcaBase<M>
+#endif
+
+} // namespace
+
+void relightCpcaRange(const RelightModel& model, const float* projections, size_t first, size_t last, float* out) {
+    const size_t M = size_t(model.cpcaComponents), count = last - first;
+    const uint32_t* cluster = model.cpcaCluster.data() + first;
+    const float* weights = model.cpcaWeights.data() + first * M;
+    switch (M) {
+    case 4: return PRT_CPCA(4)(projections, cluster, weights, M, count, out);
+    case 8: return PRT_CPCA(8)(projections, cluster, weights, M, count, out);
+    case 16: return PRT_CPCA(16)(projections, cluster, weights, M, count, out);
+    default: return PRT_CPCA(0)(projections, cluster, weights, M, count, out);
     }
 }
 

@@ -54,15 +54,23 @@ void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::
 
 // Relight kernels of the encoded storages (relight_encoded.cpp), vertices [first, last) into out ([last - first][3]),
 // without the albedo. relightRaggedRange: a model with offsets, any storage but Cpca, each row bit-identical to
-// the float kernel on decodedTransfer. cpcaProjections: [clusters][components + 1][3], each cluster's mean and
-// directions dotted with the lighting by the float kernel; relightCpcaRange sums them with the vertex's weights.
+// the float kernel on decodedTransfer. cpcaProjections: [clusters][components + 1][4] (RGB, then 0), each
+// cluster's mean and directions dotted with the lighting by the float kernel; relightCpcaRange sums them with the
+// vertex's weights, per channel in the order mean, direction 0, 1, ...
 void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out);
 std::vector<float> cpcaProjections(const RelightModel& model, const float* lighting);
 void relightCpcaRange(const RelightModel& model, const float* projections, size_t first, size_t last, float* out);
 // The fused code kernel (relight_codes.cpp): vertices [first, last) of a u8 / u16 model, all of n bands, relit from
 // their codes into out; `band` is `first`'s band-0 scale index (per-vertex scales). False, with nothing written,
-// for other storages or n outside 4..8 (those take the decode tile).
+// for other storages or n outside 1..8 (those take the decode tile).
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                   float* out);
+// The fused half kernel (relight_half.cpp): vertices [first, last) of a Float16 model, all of `count` coefficients
+// (count = n^2, n in 1..8), relit from their halves into out, bit for bit the float kernel on decodedTransfer's
+// rows. Returns how many leading vertices it relit: 0 (nothing written) where the processor lacks AVX2 or F16C or
+// for other counts, else last - first, less the array's last row for odd n (whose last 4-half load would pass the
+// array's end; n > 1). The caller relights the rest.
+size_t relightHalves(const RelightModel& model, size_t first, size_t last, int count, const float* lighting,
+                     float* out);
 
 } // namespace prt

@@ -1,8 +1,9 @@
-// Relighting throughput at orders 3, 5 and 8 for every storage the runtime relights from (float32, half, u16 and u8
-// codes, clustered PCA), each next to a memory yardstick measured in the same run: a plain read (64-bit word sum)
-// of exactly the bytes that relight reads (relightBytes). The table at the end gives bytes per vertex, Mvert/s,
+// Relighting throughput at orders 3, 5 and 8 (or those of --orders) for every storage the runtime relights from
+// (float32, half, u16 and u8 codes, clustered PCA), each next to a memory yardstick measured in the same run: a
+// plain read (64-bit word sum) of exactly the bytes that relight reads (relightBytes). The table at the end gives bytes per vertex, Mvert/s,
 // each storage against float32, and each relight against streaming its own bytes. Single-threaded: relight()
-// runs on the calling thread without a job system. Run by hand: build/tests/runtime/bench_runtime [--vertices N].
+// runs on the calling thread without a job system. Run by hand:
+// build/tests/runtime/bench_runtime [--vertices N] [--orders 1,2,3].
 #include "prt/relight.h"
 
 #include <benchmark/benchmark.h>
@@ -13,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -164,15 +166,31 @@ public:
 } // namespace
 
 int main(int argc, char** argv) {
-    for (int i = 1; i + 1 < argc; ++i)
-        if (std::strcmp(argv[i], "--vertices") == 0) {
-            gVertices = std::strtoull(argv[i + 1], nullptr, 10);
+    std::vector<int> orders = {3, 5, 8};
+    for (int i = 1; i + 1 < argc;)
+        if (std::strcmp(argv[i], "--vertices") == 0 || std::strcmp(argv[i], "--orders") == 0) {
+            if (argv[i][2] == 'v') {
+                gVertices = std::strtoull(argv[i + 1], nullptr, 10);
+            } else { // a comma-separated list of orders in 1..8
+                orders.clear();
+                for (const char* p = argv[i + 1]; *p;) {
+                    char* end = nullptr;
+                    const long order = std::strtol(p, &end, 10);
+                    if (end == p || order < 1 || order > 8) {
+                        std::fprintf(stderr, "bench_runtime: --orders wants orders in 1..8, e.g. 1,2,3\n");
+                        return 2;
+                    }
+                    orders.push_back(int(order));
+                    p = *end == ',' ? end + 1 : end;
+                }
+            }
             for (int j = i; j + 2 <= argc; ++j) argv[j] = argv[j + 2];
             argc -= 2;
-            break;
+        } else {
+            ++i;
         }
     // Per storage and order, relight and yardstick run back to back on one workload, so both see the same load.
-    for (int order : {3, 5, 8})
+    for (int order : orders)
         for (const char* storage : kStorages) {
             const std::string name = std::string(storage) + "/" + std::to_string(order);
             benchmark::RegisterBenchmark(("relight/" + name).c_str(), relightStorage, storage, order)
@@ -187,7 +205,7 @@ int main(int argc, char** argv) {
     benchmark::RunSpecifiedBenchmarks(&reporter);
     std::printf("\n%zu vertices, single thread\n%-6s %-8s %10s %12s %14s %14s %12s %14s\n", gVertices, "order",
                 "storage", "B/vertex", "MB/relight", "relight Mv/s", "stream Mv/s", "vs float32", "relight/stream");
-    for (int order : {3, 5, 8})
+    for (int order : orders)
         for (const char* storage : kStorages) {
             const std::string name = std::string(storage) + "/" + std::to_string(order);
             auto get = [](const std::map<std::string, double>& table, const std::string& key) {
