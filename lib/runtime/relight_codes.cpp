@@ -80,7 +80,7 @@ bool codesHaveAvx2() {
 #define PRT_CODES(N) codes_base::relightCodesKernel<Code, N>
 #endif
 
-// Every n in 1..8: n = 1..3 took the decode tile until the fused kernel (with prefetch) measured 2.5-3.5x its rate
+// Every n in 1..8: n = 1..3 took the decode tile until the fused kernel (with prefetch) measured 1.4-3.6x its rate
 // at 1, 2 and 3 bands (docs/results.md, issue 21; in 12 lanes and without prefetch it had been 0.75x float at order
 // 3 against the tile's 1.13x).
 template <class Code>

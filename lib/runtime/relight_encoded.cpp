@@ -1,7 +1,9 @@
-// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes of 4..8 bands are
-// relit by a fused kernel that reads each code once (relight_codes.cpp, no decoded row); half rows and other codes
-// are decoded a few vertices at a time into a tile that stays in the L1 cache and relit there by the float kernel,
-// so memory carries only the compressed bytes; clustered PCA is relit in its own basis (Sloan et al. 2003).
+// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes of 1..8 bands are
+// relit by a fused kernel that reads each code once (relight_codes.cpp, no decoded row), half rows of 1..8 bands on
+// a processor with F16C by a fused kernel with the float kernel's bits (relight_half.cpp); other rows (more bands,
+// halves without F16C, the last half row of an odd order) are decoded a few vertices at a time into a tile that
+// stays in the L1 cache and relit there by the float kernel, so memory carries only the compressed bytes;
+// clustered PCA is relit in its own basis (Sloan et al. 2003).
 #include "runtime.h"
 
 #include "runtime_internal.h"

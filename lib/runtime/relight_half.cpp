@@ -8,6 +8,7 @@
 #include <cstring>
 
 #if PRT_HAVE_AVX2_CLONE
+#include <cpuid.h>
 #include <immintrin.h>
 #endif
 
@@ -145,8 +146,13 @@ void relightHalfBand0(const uint16_t* __restrict halves, size_t vertexCount, con
 #pragma GCC pop_options
 #endif
 
+// AVX2 (which includes the OS saving the YMM state) and F16C, CPUID leaf 1 ECX bit 29 (bit_F16C; clang's
+// __builtin_cpu_supports does not know "f16c").
 bool haveF16c() {
-    static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+    static const bool yes = [] {
+        unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+        return __builtin_cpu_supports("avx2") && __get_cpuid(1, &eax, &ebx, &ecx, &edx) && (ecx & bit_F16C) != 0;
+    }();
     return yes;
 }
 

@@ -86,7 +86,7 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 
 // Relights vertices [begin, end) of `model`, whatever its storage, times model.albedo per vertex when that is not
 // empty, in tasks of kRelightBlock vertices run through `jobs` (default: in order on the calling thread).
-// Float32 and Float16 rows are bit-identical to the kernel on decodedTransfer(model); u8 / u16 codes of 4..8
+// Float32 and Float16 rows are bit-identical to the kernel on decodedTransfer(model); u8 / u16 codes of 1..8
 // bands are relit by a fused kernel straight from the codes (q - C times sigma_l L_j), within (gamma_{n+2} +
 // gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows (tests/runtime); Cpca projects each
 // cluster's mean and directions on the lighting once per call, then sums M weights per vertex, which agrees
