@@ -169,7 +169,7 @@ int main(int argc, char** argv) {
     std::vector<int> orders = {3, 5, 8};
     for (int i = 1; i + 1 < argc;)
         if (std::strcmp(argv[i], "--vertices") == 0 || std::strcmp(argv[i], "--orders") == 0) {
-            if (argv[i][2] == 'v') {
+            if (std::strcmp(argv[i], "--vertices") == 0) {
                 gVertices = std::strtoull(argv[i + 1], nullptr, 10);
             } else { // a comma-separated list of orders in 1..8
                 orders.clear();
