@@ -8,9 +8,9 @@
 typedef double real;
 typedef double8 real8;
 #define LOADF(p) convert_double8(vload8(0, p))
-// Below this exponent (e < 8.5e-17, under half an ulp of the lobe's amplitude) 8 directions of a lobe count as
+// Below this exponent (e < 2e-22 of the lobe's amplitude, far under its half ulp) 8 directions of a lobe count as
 // zero: their exp, J^T r terms and moment products are skipped (docs/glossy.md "Solvers").
-#define CUTOFF (-37.0)
+#define CUTOFF (-50.0)
 
 typedef struct {
     real cost;          // sum of squared residuals (the objective of glossy.h)

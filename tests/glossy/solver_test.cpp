@@ -182,7 +182,7 @@ void expectSameCosts(const DirectionGrid& grid, const FitBatch& start, const Fit
 }
 
 // The share of the kernel's 8-direction chunks (grid order, the last one padded) in which lobe k of x lies below
-// lm_kernel.cl's cutoff, lambda (cos - 1) < -37, in every direction: the chunks the kernel takes as zero.
+// lm_kernel.cl's cutoff, lambda (cos - 1) < -50, in every direction: the chunks the kernel takes as zero.
 double cutChunkShare(const DirectionGrid& grid, const float* x, int lobes) {
     size_t cut = 0, chunks = 0;
     for (int k = 0; k < lobes; ++k) {
@@ -193,7 +193,7 @@ double cutChunkShare(const DirectionGrid& grid, const float* x, int lobes) {
             for (size_t i = i0; i < std::min(i0 + 8, grid.count()); ++i) {
                 const float* w = &grid.directions[i * 3];
                 double cosine = (q[1] * w[0] + q[2] * w[1] + q[3] * w[2]) / length;
-                below = below && std::exp(double(q[4])) * (cosine - 1.0) < -37.0;
+                below = below && std::exp(double(q[4])) * (cosine - 1.0) < -50.0;
             }
             cut += below;
         }
@@ -201,7 +201,7 @@ double cutChunkShare(const DirectionGrid& grid, const float* x, int lobes) {
     return double(cut) / double(chunks);
 }
 
-// Sharp lobes, where the kernel skips most of the grid (lobe values below e^-37 < 2^-53 of the amplitude): its
+// Sharp lobes, where the kernel skips most of the grid (lobe values below e^-50 = 2e-22 of the amplitude): its
 // cost, J^T r and J^T J still match the host's full double sums, and both solvers still agree. Grid 16 lies
 // wholly in the kernel's cache of lobe values (192 x 8 directions), grid 24 mostly past it (values recomputed).
 void expectSharpLobesMatch(int resolution) {
