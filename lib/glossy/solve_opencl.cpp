@@ -1,5 +1,5 @@
 // The batched solver: lm_kernel.cl on the first OpenCL device (PoCL's CPU device here), one work item per
-// problem. The context, queue and each lobe count's program are created once per process.
+// problem. The context, queue and the program for each lobe count and cache size are created once per process.
 #include "glossy.h"
 #include "glossy_internal.h"
 #include "lm_kernel.h"
@@ -118,7 +118,11 @@ namespace {
 void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights,
               const FitBounds& bounds, const SolverOptions& options, std::vector<double>* normalsOut) {
     Device& dev = device();
-    const std::string buildOptions = "-D NL=" + std::to_string(batch.lobes);
+    const size_t stride = (grid.count() + 7) / 8 * 8; // the kernel reads 8 directions at a time
+    // The kernel keeps each lobe's values over the first CACHED x 8 directions of the grid (Values in
+    // lm_kernel.cl: the whole grid up to 6 x 16^2), so the program is built per lobe count and cache size.
+    const std::string buildOptions = "-D NL=" + std::to_string(batch.lobes) +
+                                     " -D CACHED=" + std::to_string(std::min<size_t>(stride / 8, 192));
     cl_program& program = dev.programs[buildOptions];
     if (!program) program = build(dev, kLmKernelSource, buildOptions);
     cl_int status;
@@ -127,10 +131,10 @@ void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, cons
 
     const size_t problems = batch.problems, count = grid.count(), width = size_t(batch.lobes) * kLobeParams;
     const size_t padded = (problems + kLocalSize - 1) / kLocalSize * kLocalSize;
-    const size_t stride = (count + 7) / 8 * 8; // the kernel reads 8 directions at a time
-    // The grid in columns, padded with zero-weight directions; the weights in double, as objective.cpp has them.
-    std::vector<float> dirX(stride, 0.0f), dirY(stride, 0.0f), dirZ(stride, 1.0f);
-    // The data term's moments (lm_kernel.cl, evaluate): solid angle times 1, x, y, z, xx, xy, xz, yy, yz, zz, for
+    // The grid in columns (the float directions in double: the kernel converts nothing), padded with zero-weight
+    // directions; the weights in double, as objective.cpp has them.
+    std::vector<double> dirX(stride, 0.0), dirY(stride, 0.0), dirZ(stride, 1.0);
+    // The data term's moments (lm_kernel.cl, normalAt): solid angle times 1, x, y, z, xx, xy, xz, yy, yz, zz, for
     // every 8 directions the 10 moments' 8 values one after the other (one base address per 8 directions), zero
     // on the padding.
     std::vector<double> moments(10 * stride, 0.0);
@@ -159,9 +163,9 @@ void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, cons
 
     const cl_mem_flags in = CL_MEM_READ_ONLY;
     Buffer kernelBuffer(dev.context, in, kernelValues.size() * 4, kernelValues.data());
-    Buffer dirXBuffer(dev.context, in, stride * 4, dirX.data());
-    Buffer dirYBuffer(dev.context, in, stride * 4, dirY.data());
-    Buffer dirZBuffer(dev.context, in, stride * 4, dirZ.data());
+    Buffer dirXBuffer(dev.context, in, stride * 8, dirX.data());
+    Buffer dirYBuffer(dev.context, in, stride * 8, dirY.data());
+    Buffer dirZBuffer(dev.context, in, stride * 8, dirZ.data());
     Buffer momentBuffer(dev.context, in, moments.size() * 8, moments.data());
     Buffer energyBuffer(dev.context, in, padded * 8, energies.data());
     Buffer amplitudeBuffer(dev.context, in, padded * 4, amplitudeMax.data());
