@@ -79,7 +79,7 @@ def main():
         if choice["plain_sh"] and probe:  # the shares of the lights the fallback declined
             with open(probe_lights) as f:
                 doc = json.load(f)
-        small = sum(0.2126 * l["power"][0] + 0.7152 * l["power"][1] + 0.0722 * l["power"][2]
+        small = sum(sum(w * p for w, p in zip(ef.LUMINANCE, l["power"]))
                     for l in doc["lights"] if l["angular_radius_degrees"] < 5.0) / total
         rows.append(dict(env=env, lights=choice["lights"], residual_order=order, plain_sh=choice["plain_sh"],
                          predicted_ratio=(min(choice["errors"][1:] or choice["errors"]) / choice["plain_error"]),

@@ -29,7 +29,7 @@ import re
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from prt_commands import DATA, ROOT, file_hash, run_logged, stage_seconds  # noqa: E402
+from prt_commands import DATA, LUMINANCE, ROOT, file_hash, run_logged, stage_seconds  # noqa: E402
 
 SHARP = ["city", "interior", "night", "studio", "sunrise"]  # a small bright source (docs/results.md)
 SMOOTH = ["courtyard", "forest", "sunset"]
@@ -48,7 +48,7 @@ def metrics(result_path, ref):
     return dict(relative_rmse=math.sqrt(mse) / rms_ref,
                 relative_rmse_noise_corrected=math.sqrt(max(0.0, mse - ref["mean_squared_stderr"])) / rms_ref,
                 negative_vertex_fraction=float((a < 0).any(axis=1).mean()),
-                mean_luminance_bias=float(np.mean(a @ [0.2126, 0.7152, 0.0722]) / np.mean(r @ [0.2126, 0.7152, 0.0722]) - 1))
+                mean_luminance_bias=float(np.mean(a @ LUMINANCE) / np.mean(r @ LUMINANCE) - 1))
 
 
 class References:

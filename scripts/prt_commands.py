@@ -12,6 +12,8 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DATA = os.path.join(ROOT, ".cache", "data")
+# Rec. 709 luminance weights of linear RGB, as lib/core/luminance.h.
+LUMINANCE = (0.2126, 0.7152, 0.0722)
 
 
 def run_logged(args, who):

@@ -7,7 +7,8 @@
 // outside the coverage. The result is the viewer's own linear radiance, read back from a float render target.
 import * as THREE from 'three';
 
-const kLuminance = [0.2126, 0.7152, 0.0722];
+// Rec. 709 luminance weights, as lib/core/luminance.h.
+export const kLuminance = [0.2126, 0.7152, 0.0722];
 const kViridis = [[0.267, 0.005, 0.329], [0.229, 0.322, 0.546], [0.128, 0.567, 0.551], [0.369, 0.789, 0.383],
                   [0.993, 0.906, 0.144]];
 const kOutsideMask = 48;

@@ -11,7 +11,7 @@ import { hybridGlsl, hybridUniforms, loadLights, parseVisibilityNpy, readHybridL
 import { sceneMeshes } from './scene.js';
 import { fitLighting, rotateLightingY } from './sh.js';
 import { loadSky, skyMesh } from './sky.js';
-import { linearReadback, referencePanels } from './compare.js';
+import { kLuminance, linearReadback, referencePanels } from './compare.js';
 import { orbitCamera, parseNumbers } from './camera.js';
 import { isFivSceneJson } from './fiv.js';
 import { startFivViewer } from './fiv_view.js';
@@ -340,7 +340,7 @@ export async function startViewer(canvas, panel, params) {
   // The relit radiance on the CPU, only for the error against a reference (per vertex).
   function errorAgainstReference() {
     if (!reference || kind !== 'vertex' || reference.length !== vertexCount * 3) return null;
-    const C = t.order * t.order, weights = [0.2126, 0.7152, 0.0722];
+    const C = t.order * t.order, weights = kLuminance;
     let squared = 0, referenceSquared = 0, relativeSum = 0, referenceLuminance = 0;
     for (let v = 0; v < vertexCount; ++v)
       referenceLuminance += weights[0] * reference[v * 3] + weights[1] * reference[v * 3 + 1] + weights[2] * reference[v * 3 + 2];

@@ -44,16 +44,16 @@ std::string glossyShardRefusal(const nlohmann::json& params) {
     return "";
 }
 
-std::vector<StageSpec> makeCatalogue() {
-    std::vector<StageSpec> stages;
-
+StageSpec sceneStage() {
     StageSpec scene{"scene", 1, "procedural scene with a known answer"};
     scene.outputs = {{"mesh", FileKind::Mesh, "-o", "glb"}};
     scene.params = {{"name", ParamType::String, 0.0, 0.0,
                      {"sphere", "plane", "box-room", "cavity", "sphere-in-cavity", "two-spheres"}, true, true}};
-    stages.push_back(scene);
+    return scene;
+}
 
-    // 2: glTF scenes and OBJ with MTL are kept as the asset (scene bundles, version 3)
+// 2: glTF scenes and OBJ with MTL are kept as the asset (scene bundles, version 3)
+StageSpec meshprepStage() {
     StageSpec meshprep{"meshprep", 2, "clean a mesh: weld, normals, decimation; keep a glTF or OBJ+MTL scene as the asset"};
     meshprep.inputs = {{"mesh", FileKind::Mesh, "", ""}};
     meshprep.outputs = {{"mesh", FileKind::Mesh, "-o", "glb"}, {"report", FileKind::Report, "--report", "json"}};
@@ -63,15 +63,19 @@ std::vector<StageSpec> makeCatalogue() {
                        {"decimate-to", ParamType::Integer, 1.0, 2147483647.0}, // triangles
                        {"scale", ParamType::Number, 1e-30, 1e30},
                        {"flatten", ParamType::Boolean}};
-    stages.push_back(meshprep);
+    return meshprep;
+}
 
+StageSpec envshStage() {
     StageSpec envsh{"envsh", 1, "project an environment map onto SH"};
     envsh.inputs = {{"env", FileKind::Env, "", ""}};
     envsh.outputs = {{"sh", FileKind::Sh, "-o", "json"}};
     envsh.params = {{"order", ParamType::Integer, 1.0, kMaxOrder}, kRotateY, kWindow};
-    stages.push_back(envsh);
+    return envsh;
+}
 
-    // 2: transfer_bounce layer; 3: one spawn rule (lib/raycast); 4: scenes (materials at hits, irradiance transfer)
+// 2: transfer_bounce layer; 3: one spawn rule (lib/raycast); 4: scenes (materials at hits, irradiance transfer)
+StageSpec transferStage() {
     StageSpec transfer{"transfer", 5, "per-vertex SH transfer by ray casting"};
     transfer.inputs = {{"mesh", FileKind::Mesh, "", ""}};
     transfer.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
@@ -85,10 +89,12 @@ std::vector<StageSpec> makeCatalogue() {
     transfer.shardable = true;
     transfer.paramsRefusal = transferParamsRefusal;
     transfer.passes = transferPasses;
-    stages.push_back(transfer);
+    return transfer;
+}
 
-    // Adaptive order and compact storage of a transfer bundle (docs/adapt.md); one map at most as its prior, which
-    // `order` (uniform truncation) does without.
+// Adaptive order and compact storage of a transfer bundle (docs/adapt.md); one map at most as its prior, which
+// `order` (uniform truncation) does without.
+StageSpec adaptStage() {
     StageSpec adapt{"adapt", 1, "adaptive SH order and compact storage of a transfer bundle"};
     adapt.inputs = {{"bundle", FileKind::Bundle, "", ""}, {"env", FileKind::Env, "--env", "", true}};
     adapt.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
@@ -102,11 +108,13 @@ std::vector<StageSpec> makeCatalogue() {
                     {"components", ParamType::Integer, 0.0, 65536.0},
                     {"max-step", ParamType::Integer, 1.0, kMaxOrder}};
     adapt.paramsRefusal = adaptParamsRefusal;
-    stages.push_back(adapt);
+    return adapt;
+}
 
-    // Shards are ranges of covered texels ("texel_range" layers). Gutter fill and seam stitching couple the whole
-    // atlas, so the merge is `prt bake ... --merge SHARD...`, which joins the rows and finishes as one bake does.
-    // 3: spawn rule, content-addressed textures; 4: texel_surface and texel_transfer_bounce layers (texel hybrid)
+// Shards are ranges of covered texels ("texel_range" layers). Gutter fill and seam stitching couple the whole
+// atlas, so the merge is `prt bake ... --merge SHARD...`, which joins the rows and finishes as one bake does.
+// 3: spawn rule, content-addressed textures; 4: texel_surface and texel_transfer_bounce layers (texel hybrid)
+StageSpec bakeStage() {
     StageSpec bake{"bake", 5, "per-texel SH transfer into atlas textures"};
     bake.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"high", FileKind::Mesh, "--high", "", true}};
     // The textures land next to the bundle (bundle.transfer.exr, ...), listed in its layers' params.files; `prt run`
@@ -131,10 +139,12 @@ std::vector<StageSpec> makeCatalogue() {
     bake.takesThreads = true;
     bake.shardable = true;
     bake.mergeFlag = "--merge";
-    stages.push_back(bake);
+    return bake;
+}
 
-    // Cone lights plus SH residual (prt-lights JSON). Lights files travel as FileKind::Sh: SH lighting in JSON,
-    // read only by the ports named "lights".
+// Cone lights plus SH residual (prt-lights JSON). Lights files travel as FileKind::Sh: SH lighting in JSON,
+// read only by the ports named "lights".
+StageSpec envlightStage() {
     StageSpec envlight{"envlight", 1, "split an environment map into cone lights plus an SH residual"};
     envlight.inputs = {{"env", FileKind::Env, "", ""}};
     envlight.outputs = {{"lights", FileKind::Sh, "-o", "json"}};
@@ -151,10 +161,12 @@ std::vector<StageSpec> makeCatalogue() {
                        {"detection-window", ParamType::String, 0.0, 0.0, {"none", "hann", "lanczos"}},
                        {"thesis-lights", ParamType::Boolean},
                        {"fixed-radius", ParamType::Number, 1e-3, 89.0}};
-    stages.push_back(envlight);
+    return envlight;
+}
 
-    // Glossy lobes per vertex and view plus the diffuse transfer (docs/glossy.md). Shards are vertex ranges joined by
-    // mergeShards; the diffuse part comes from `bounces` (unshardable above 0) or a wired transfer bundle.
+// Glossy lobes per vertex and view plus the diffuse transfer (docs/glossy.md). Shards are vertex ranges joined by
+// mergeShards; the diffuse part comes from `bounces` (unshardable above 0) or a wired transfer bundle.
+StageSpec glossyStage() {
     StageSpec glossy{"glossy", 1, "glossy view-dependent transfer: spherical-Gaussian lobes per vertex and view"};
     glossy.inputs = {{"mesh", FileKind::Mesh, "", ""}, {"diffuse", FileKind::Bundle, "--diffuse", "", true}};
     glossy.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
@@ -179,10 +191,12 @@ std::vector<StageSpec> makeCatalogue() {
     glossy.takesThreads = true;
     glossy.shardable = true;
     glossy.shardRefusal = glossyShardRefusal;
-    stages.push_back(glossy);
+    return glossy;
+}
 
-    // 2: the decomposed lighting (lights input) keeps its negative residual instead of clamping it
-    // 3: scenes traced with their materials
+// 2: the decomposed lighting (lights input) keeps its negative residual instead of clamping it
+// 3: scenes traced with their materials
+StageSpec referenceStage() {
     StageSpec reference{"reference", 3, "ground-truth radiance by path tracing"};
     reference.inputs = {{"mesh", FileKind::Mesh, "", ""},
                         {"env", FileKind::Env, "--env", "", true},
@@ -198,9 +212,11 @@ std::vector<StageSpec> makeCatalogue() {
                         {"brdf", ParamType::String}, // phong:EXPONENT,KS: glossy ground truth toward `eye`
                         {"eye", ParamType::String}};
     reference.takesThreads = true;
-    stages.push_back(reference);
+    return reference;
+}
 
-    // 2: a scene's irradiance transfer times its diffuse_albedo layer
+// 2: a scene's irradiance transfer times its diffuse_albedo layer
+StageSpec relightStage() {
     StageSpec relight{"relight", 2, "per-vertex radiance of a bundle under new lighting"};
     relight.inputs = {{"bundle", FileKind::Bundle, "", ""},
                       {"env", FileKind::Env, "--env", "", true},
@@ -212,15 +228,19 @@ std::vector<StageSpec> makeCatalogue() {
     // eye (and glossy-only) add a glossy bundle's lobes toward that point.
     relight.params = {kRotateY, kWindow, {"light-samples", ParamType::Integer, 0.0, 65536.0},
                       {"eye", ParamType::String}, {"glossy-only", ParamType::Boolean}};
-    stages.push_back(relight);
+    return relight;
+}
 
+StageSpec compareStage() {
     StageSpec compare{"compare", 1, "error metrics of a result against a reference"};
     compare.inputs = {{"result", FileKind::Radiance, "", ""}, {"reference", FileKind::Radiance, "", ""}};
     compare.outputs = {{"metrics", FileKind::Metrics, "-o", "json"}};
-    stages.push_back(compare);
+    return compare;
+}
 
-    // FIV (docs/fiv.md) in two stages, so that a new environment reruns only the cheap reduction: the masks
-    // (`prt fiv-visibility`, sharded over grid rows and joined by `--merge`), then `prt fiv VISIBILITY --env`.
+// FIV (docs/fiv.md) in two stages, so that a new environment reruns only the cheap reduction: the masks
+// (`prt fiv-visibility`, sharded over grid rows and joined by `--merge`), then `prt fiv VISIBILITY --env`.
+StageSpec fivVisibilityStage() {
     StageSpec fivVisibility{"fiv-visibility", 1, "FIV visibility masks of an occluder type (environment-independent)"};
     fivVisibility.inputs = {{"mesh", FileKind::Mesh, "", ""}};
     fivVisibility.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
@@ -233,15 +253,21 @@ std::vector<StageSpec> makeCatalogue() {
     fivVisibility.takesThreads = true;
     fivVisibility.shardable = true;
     fivVisibility.mergeFlag = "--merge";
-    stages.push_back(fivVisibility);
+    return fivVisibility;
+}
 
+StageSpec fivStage() {
     StageSpec fiv{"fiv", 1, "FIV grid, DifMap and FIV(Env): the environment reduction of the masks"};
     fiv.inputs = {{"visibility", FileKind::Bundle, "", ""}, {"env", FileKind::Env, "--env", ""}};
     fiv.outputs = {{"bundle", FileKind::Bundle, "-o", "glb"}};
     fiv.params = {{"difmap", ParamType::Integer, 1.0, 256.0}, {"float32", ParamType::Boolean}};
-    stages.push_back(fiv);
+    return fiv;
+}
 
-    return stages;
+std::vector<StageSpec> makeCatalogue() {
+    return {sceneStage(),     meshprepStage(), envshStage(),  transferStage(),  adaptStage(),
+            bakeStage(),      envlightStage(), glossyStage(), referenceStage(), relightStage(),
+            compareStage(),   fivVisibilityStage(), fivStage()};
 }
 
 } // namespace

@@ -88,6 +88,71 @@ json bakeRecord(const BakeStats& stats) {
             {"ratio_to_bare", stats.rays / stats.directSeconds / stats.bareRaysPerSecond}};
 }
 
+// Push-pull against one-ring dilation on 4096^2: LOW's atlas rasterised at that size, 27 and 75 channels (orders
+// 3 and 5), seeded with a pattern on the covered texels.
+json fillFigures(const TriMesh& low, const std::string& lowPath) {
+    const int size = 4096;
+    RasterOptions raster;
+    raster.width = raster.height = size;
+    TexelSamples big = rasteriseAtlas(low, raster, lowPath);
+    std::vector<uint8_t> covered = coverageMask(big);
+    json fills = json::array();
+    for (int fillChannels : {27, 75}) {
+        std::vector<float> texels(size_t(size) * size * fillChannels, 0.0f);
+        auto seed = [&] {
+            std::fill(texels.begin(), texels.end(), 0.0f);
+            for (size_t i = 0; i < big.texel.size(); ++i)
+                for (int c = 0; c < fillChannels; ++c)
+                    texels[size_t(big.texel[i]) * fillChannels + c] = float(i % 97) + c;
+        };
+        seed();
+        double start = nowSeconds();
+        pushPull(texels.data(), size, size, fillChannels, covered.data());
+        double pushPullSeconds = nowSeconds() - start;
+        seed();
+        start = nowSeconds();
+        dilateOneRing(texels.data(), size, size, fillChannels, covered.data());
+        double dilateSeconds = nowSeconds() - start;
+        fills.push_back({{"channels", fillChannels},
+                         {"push_pull_seconds", pushPullSeconds},
+                         {"dilate_one_ring_seconds", dilateSeconds}});
+    }
+    return {{"covered_fraction", double(big.texel.size()) / (double(size) * size)}, {"fills", fills}};
+}
+
+// Storage per texel format at order 3 and this resolution: `prt bake` into a temporary folder, the coefficient
+// images', bundle's and normal map's bytes, against the uncompressed float and u8 sizes.
+json storageFigures(const std::string& lowPath, const std::string& fullPath, int resolution, int samples) {
+    std::string folder = (std::filesystem::temp_directory_path() / "prt_bake_figures").string();
+    std::filesystem::create_directories(folder);
+    json storage;
+    for (TexelFormat format : {TexelFormat::Half, TexelFormat::Float, TexelFormat::U8}) {
+        BakeOptions o;
+        o.input = lowPath;
+        o.high = fullPath;
+        o.resolution = resolution;
+        o.order = 3;
+        o.samples = samples;
+        o.format = format;
+        o.output = folder + "/bunny_" + texelFormatName(format) + ".glb";
+        runBake(o);
+        uint64_t bytes = 0;
+        for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+            std::string name = entry.path().filename().string();
+            if (name.rfind("bunny_" + std::string(texelFormatName(format)) + ".transfer", 0) == 0)
+                bytes += entry.file_size();
+        }
+        std::string normalMap = folder + "/" + readBundle(o.output).layers[1].params["uri"].get<std::string>();
+        storage[texelFormatName(format)] = {{"coefficient_bytes", bytes},
+                                            {"bundle_bytes", std::filesystem::file_size(o.output)},
+                                            {"normal_map_bytes", std::filesystem::file_size(normalMap)}};
+    }
+    storage["uncompressed_float_bytes"] = uint64_t(resolution) * resolution * 27 * 4;
+    storage["uncompressed_u8_bytes"] = uint64_t(resolution) * resolution * 27;
+    std::filesystem::remove_all(folder);
+    return storage;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -201,69 +266,8 @@ int main(int argc, char** argv) {
                           {"texel_high_detail_stitched", stitchedJump.rms / stitchedJump.meanRadiance},
                           {"texel_low_only_stitched", plainJump.rms / plainJump.meanRadiance}}}};
 
-        // ---- push-pull on 4096^2: LOW's atlas rasterised at that size, 27 and 75 channels (orders 3 and 5) ----
-        {
-            const int size = 4096;
-            RasterOptions raster;
-            raster.width = raster.height = size;
-            TexelSamples big = rasteriseAtlas(low, raster, lowPath);
-            std::vector<uint8_t> covered = coverageMask(big);
-            json fills = json::array();
-            for (int fillChannels : {27, 75}) {
-                std::vector<float> texels(size_t(size) * size * fillChannels, 0.0f);
-                auto seed = [&] {
-                    std::fill(texels.begin(), texels.end(), 0.0f);
-                    for (size_t i = 0; i < big.texel.size(); ++i)
-                        for (int c = 0; c < fillChannels; ++c)
-                            texels[size_t(big.texel[i]) * fillChannels + c] = float(i % 97) + c;
-                };
-                seed();
-                double start = nowSeconds();
-                pushPull(texels.data(), size, size, fillChannels, covered.data());
-                double pushPullSeconds = nowSeconds() - start;
-                seed();
-                start = nowSeconds();
-                dilateOneRing(texels.data(), size, size, fillChannels, covered.data());
-                double dilateSeconds = nowSeconds() - start;
-                fills.push_back({{"channels", fillChannels},
-                                 {"push_pull_seconds", pushPullSeconds},
-                                 {"dilate_one_ring_seconds", dilateSeconds}});
-            }
-            out["fill_4096"] = {{"covered_fraction", double(big.texel.size()) / (double(size) * size)},
-                                {"fills", fills}};
-        }
-
-        // ---- storage per format, order 3 at this resolution ----
-        {
-            std::string folder = (std::filesystem::temp_directory_path() / "prt_bake_figures").string();
-            std::filesystem::create_directories(folder);
-            json storage;
-            for (TexelFormat format : {TexelFormat::Half, TexelFormat::Float, TexelFormat::U8}) {
-                BakeOptions o;
-                o.input = lowPath;
-                o.high = fullPath;
-                o.resolution = resolution;
-                o.order = 3;
-                o.samples = samples;
-                o.format = format;
-                o.output = folder + "/bunny_" + texelFormatName(format) + ".glb";
-                runBake(o);
-                uint64_t bytes = 0;
-                for (const auto& entry : std::filesystem::directory_iterator(folder)) {
-                    std::string name = entry.path().filename().string();
-                    if (name.rfind("bunny_" + std::string(texelFormatName(format)) + ".transfer", 0) == 0)
-                        bytes += entry.file_size();
-                }
-                std::string normalMap = folder + "/" + readBundle(o.output).layers[1].params["uri"].get<std::string>();
-                storage[texelFormatName(format)] = {{"coefficient_bytes", bytes},
-                                                    {"bundle_bytes", std::filesystem::file_size(o.output)},
-                                                    {"normal_map_bytes", std::filesystem::file_size(normalMap)}};
-            }
-            storage["uncompressed_float_bytes"] = uint64_t(resolution) * resolution * 27 * 4;
-            storage["uncompressed_u8_bytes"] = uint64_t(resolution) * resolution * 27;
-            out["storage_order3"] = storage;
-            std::filesystem::remove_all(folder);
-        }
+        out["fill_4096"] = fillFigures(low, lowPath);
+        out["storage_order3"] = storageFigures(lowPath, fullPath, resolution, samples);
         std::cout << out.dump(2) << std::endl;
     } catch (const Error& e) {
         std::fprintf(stderr, "%s\n", e.what());

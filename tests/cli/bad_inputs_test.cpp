@@ -199,13 +199,14 @@ std::function<std::string()> specularBundle(uint64_t order) {
     };
 }
 
-std::vector<Case> catalogue() {
+// The mesh readers: OBJ, PLY, OFF, STL, glTF and GLB, glTF scenes, OBJ with MTL.
+std::vector<Case> meshCases() {
     auto mesh = [](std::string reader, std::string name, std::string extension, std::function<std::string()> content,
                    std::string message, std::map<std::string, std::string> env = {}) {
         return Case{reader, name, {{"m." + extension, content}},
                     "meshprep {in}/m." + extension + " -o {out}/m.glb --report {out}/r.json", 3, message, env};
     };
-    std::vector<Case> cases = {
+    return {
         // ---- OBJ ----
         mesh("obj", "empty file", "obj", text(""), "empty"),
         mesh("obj", "face index past the vertices", "obj", text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "out of range"),
@@ -338,7 +339,13 @@ std::vector<Case> catalogue() {
         mesh("glb", "glTF 1 binary container", "glb", text("glTF" + bytesOf({1, 20, 0, 0}) + "    "), "glTF"),
         // ---- mesh format ----
         mesh("mesh", "unknown extension", "xyz", text("v 0 0 0\n"), "unknown mesh format"),
-        Case{"mesh", "missing file", {}, "meshprep {in}/absent.obj -o {out}/m.glb", 3, "absent.obj"},
+        Case{"mesh", "missing file", {}, "meshprep {in}/absent.obj -o {out}/m.glb", 3, "absent.obj"}
+    };
+}
+
+// Maps, npy, pipeline TOML, bundles and SH lighting JSON.
+std::vector<Case> dataCases() {
+    return {
         // ---- environment maps (OpenImageIO) ----
         Case{"exr", "text named .exr", {{"e.exr", text("not an image")}}, "envsh {in}/e.exr --order 3 -o {out}/sh.json", 3, "e.exr"},
         Case{"exr", "missing file", {}, "envsh {in}/absent.exr --order 3 -o {out}/sh.json", 3, "not found"},
@@ -390,7 +397,13 @@ std::vector<Case> catalogue() {
              "relight {in}/t.glb --sh {in}/sh.json -o {out}/r.npy", 3, "not prt-sh JSON"},
         Case{"sh-json", "not JSON", {{"sh.json", text("{\"format\": ")}}, "relight {in}/t.glb --sh {in}/sh.json -o {out}/r.npy", 3, "not JSON"},
         Case{"sh-json", "order out of range", {{"sh.json", text("{\"format\": \"prt-sh\", \"order\": 99, \"coefficients\": []}")}},
-             "relight {in}/t.glb --sh {in}/sh.json -o {out}/r.npy", 3, "order 99"},
+             "relight {in}/t.glb --sh {in}/sh.json -o {out}/r.npy", 3, "order 99"}
+    };
+}
+
+// Round 2 (issue 20): deep JSON, wrong JSON types, sizes without caps, unchecked values.
+std::vector<Case> hardeningCases() {
+    return {
         // ---- round 2 (issue 20): deep JSON, wrong JSON types, sizes without caps, unchecked values ----
         Case{"deep-json", "bundle glTF JSON nesting 100,000 arrays", {{"d.gltf", [] {
                  return "{\"asset\": {\"version\": \"2.0\"}, \"extras\": " + nested(100000) + "}";
@@ -474,14 +487,28 @@ std::vector<Case> catalogue() {
              "relight {in}/t.glb --lights {in}/l.json --env {in}/b.glb -o {out}/r.npy", 3, "records no input hash"},
         Case{"messages", "lights made from another map", {{"l.json", lightsText()}},
              "relight {in}/t.glb --lights {in}/l.json --env {in}/b.glb -o {out}/r.npy", 3,
-             "made from \"sky.exr\" (\"xxh128:0123456789abcdef0123456789abcdef\"), not from"},
+             "made from \"sky.exr\" (\"xxh128:0123456789abcdef0123456789abcdef\"), not from"}
+    };
+}
+
+// Command lines: unknown flags, values out of range, caps that are not numbers.
+std::vector<Case> commandLineCases() {
+    return {
         // ---- command lines ----
         Case{"cli", "unknown flag", {}, "meshprep {in}/m.obj -o {out}/m.glb --frobnicate", 2, "frobnicate"},
         Case{"cli", "order 0", {}, "envsh {in}/e.exr --order 0 -o {out}/sh.json", 2, "--order"},
         Case{"cli", "shard past its count", {}, "transfer {in}/b.glb -o {out}/t.glb --shard 3/2", 2, "--shard"},
         Case{"cli", "element cap not a number", {{"m.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
-             "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}},
+             "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}}
     };
+}
+
+std::vector<Case> catalogue() {
+    std::vector<Case> cases;
+    for (std::vector<Case> (*group)() : {meshCases, dataCases, hardeningCases, commandLineCases}) {
+        std::vector<Case> more = group();
+        cases.insert(cases.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
+    }
     return cases;
 }
 
