@@ -186,8 +186,11 @@ void runGlossy(const GlossyArgs& args) {
     options.nested = args.nested;
     options.heldOutResolution = args.heldOutGrid;
     if (!(args.nestedMargin >= 0.0 && args.nestedMargin < 1.0)) throw usage("--nested-margin", "must lie in [0, 1)");
-    if (!args.nested && (args.nestedMargin > 0.0 || args.nestedPerVertex))
-        throw usage(args.nestedPerVertex ? "--nested-per-vertex" : "--nested-margin", "needs --nested");
+    if (!args.nested && (args.nestedMargin > 0.0 || args.nestedPerVertex || args.nestedMax))
+        throw usage(args.nestedPerVertex ? "--nested-per-vertex" : args.nestedMax ? "--nested-max" : "--nested-margin",
+                    "needs --nested");
+    if (args.nestedMax && !args.nestedLighting.empty())
+        throw usage("--nested-max", "and --nested-lighting are two scores: pick one");
     options.nestedMargin = args.nestedMargin;
     options.nestedPerVertex = args.nestedPerVertex;
     options.nestedMaxNorm = args.nestedMax;

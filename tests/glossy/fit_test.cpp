@@ -230,6 +230,7 @@ TEST(GlossyNested, HeldOutGridLiesMostlyBetweenTheFitGrid) {
 
 // Held-out data cost of every fitted (vertex, view) of a sphere (convex: V = 1 above the tangent plane, so the
 // kernel is known without rays), recomputed here from the output lobes; -1 where the view has no fit.
+// With options.nestedMaxNorm the score is maxResidual, with options.nestedLighting litCost (the nested gate's).
 std::vector<double> sphereHeldOutCosts(const prt::TriMesh& sphere, const GlossyOptions& options,
                                        const GlossyLobes& lobes) {
     const DirectionGrid held = heldOutGrid(heldOutResolution(options));
@@ -251,7 +252,11 @@ std::vector<double> sphereHeldOutCosts(const prt::TriMesh& sphere, const GlossyO
                 std::copy_n(row + k * kLobeParams, 4, &solver[size_t(k) * kLobeParams]);
                 solver[size_t(k) * kLobeParams + 4] = std::log(row[k * kLobeParams + 4]);
             }
-            costs.push_back(fitted ? dataCost(held, kernel.data(), lobes.lobes, solver.data()) : -1.0);
+            const size_t rows = options.nestedLighting.size() / held.count();
+            double score = rows ? litCost(held, kernel.data(), lobes.lobes, solver.data(), options.nestedLighting.data(), rows)
+                           : options.nestedMaxNorm ? maxResidual(held, kernel.data(), lobes.lobes, solver.data())
+                                                   : dataCost(held, kernel.data(), lobes.lobes, solver.data());
+            costs.push_back(fitted ? score : -1.0);
         }
     }
     return costs;
@@ -422,6 +427,40 @@ TEST(GlossyNested, MarginAndPerVertexKeepCriteriaNeverRaiseTheHeldOutError) {
             }
             EXPECT_LE(after, before * (1 + 1e-4) + 1e-12) << "vertex " << v << ", " << lobes << " lobes";
         }
+    }
+}
+
+// The max-norm and lighting-aware scores through the nested fit: recomputed from the output, each view's score
+// never rises with stage 2, and the gate keeps some views' stage 2 and drops others'.
+TEST(GlossyNested, MaxNormAndLightingScoresNeverRiseWithTheLobeCount) {
+    prt::TriMesh sphere = prt::makeSphere(1.0f, 5, 8);
+    GlossyOptions options;
+    options.phong = {64.0, 0.5};
+    options.gridResolution = 6;
+    options.progress = false;
+    options.nested = true;
+    const DirectionGrid held = heldOutGrid(heldOutResolution(options));
+    for (int score = 0; score < 2; ++score) {
+        options.nestedMaxNorm = score == 0;
+        options.nestedLighting.clear();
+        if (score == 1) // two lightings: uniform, and the upper half twice as bright
+            for (int row = 0; row < 2; ++row)
+                for (size_t i = 0; i < held.count(); ++i)
+                    options.nestedLighting.push_back(held.solidAngle[i] * (row == 0 ? 1.0f : held.directions[i * 3 + 1] > 0 ? 2.0f : 0.0f));
+        std::vector<std::vector<double>> costs;
+        for (int lobes = 1; lobes <= 2; ++lobes) {
+            options.lobes = lobes;
+            GlossyLobes nested = computeGlossyLobes(sphere, options);
+            if (lobes == 2) {
+                EXPECT_GT(nested.keptStage[1], 0u) << score;
+                EXPECT_LT(nested.keptStage[1], nested.stats.problems) << score;
+            }
+            costs.push_back(sphereHeldOutCosts(sphere, options, nested));
+        }
+        for (size_t p = 0; p < costs[0].size(); ++p)
+            if (costs[0][p] >= 0) {
+                EXPECT_LE(costs[1][p], costs[0][p] * (1 + 1e-3) + 1e-9) << "score " << score << ", " << p;
+            }
     }
 }
 
