@@ -14,11 +14,13 @@ import argparse, json, os, subprocess, sys
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-PRT = os.path.join(ROOT, "build", "prt")
+PRT = os.environ.get("PRT_BIN", os.path.join(ROOT, "build", "prt"))  # PRT_BIN: another build
 DATA = os.path.join(ROOT, ".cache", "data")
 EXPONENT, KS, ALBEDO = 32, 0.5, 0.5
 EYES = {"front": (0.0, 5.0, 25.0), "side": (20.0, 12.0, 10.0), "back": (-15.0, 3.0, -18.0)}
 ENVS = ("courtyard", "sunrise")
+TRAINING = ("city", "forest", "interior", "night", "studio", "sunset")  # the maps a criterion may be trained on
+TRAINING_LIGHTING = ",".join(os.path.join(DATA, "env", m + ".exr") for m in TRAINING)
 # name: (prt glossy flags, the variant whose bundles it relights (None: its own), relight environment)
 VARIANTS = {
     "base": ([], None, {}),                              # the defaults (coherence pass, greedy start)
@@ -30,6 +32,20 @@ VARIANTS = {
     # error on held-out directions (docs/glossy.md, "More lobes were worse").
     "nested": (["--nested"], None, {}),
     "nested_nocoh": (["--nested", "--no-coherence"], None, {}),
+    # Keep criteria of the nested fit: per vertex (all views or none) and with a relative margin m on the held-out
+    # error (docs/glossy.md, "The keep criterion").
+    "nested_pv": (["--nested", "--nested-per-vertex"], None, {}),
+    "nested_m05": (["--nested", "--nested-margin", 0.05], None, {}),
+    "nested_m10": (["--nested", "--nested-margin", 0.1], None, {}),
+    "nested_m20": (["--nested", "--nested-margin", 0.2], None, {}),
+    "nested_pv_m05": (["--nested", "--nested-per-vertex", "--nested-margin", 0.05], None, {}),
+    "nested_pv_m10": (["--nested", "--nested-per-vertex", "--nested-margin", 0.1], None, {}),
+    # The largest held-out residual (the worst direction of a small source) in place of the L2 held-out error.
+    "nested_max": (["--nested", "--nested-max"], None, {}),
+    "nested_pv_max": (["--nested", "--nested-per-vertex", "--nested-max"], None, {}),
+    # Lighting-aware: the relit held-out error under the six training maps (never courtyard or sunrise), 8 turns each.
+    "nested_lit": (["--nested", "--nested-lighting", TRAINING_LIGHTING], None, {}),
+    "nested_pv_lit": (["--nested", "--nested-per-vertex", "--nested-lighting", TRAINING_LIGHTING], None, {}),
     # The same bundles relit without blending lobe parameters across the 3 views around the eye: the radiance of
     # each view's own lobes, blended (radiance), or the nearest view's alone (nearest).
     "base_radiance": ([], "base", {"PRT_GLOSSY_BLEND": "radiance"}),
@@ -56,6 +72,7 @@ def main():
     ap.add_argument("--lobes", default="1,2,3")
     ap.add_argument("--variants", default="base,nocoh")
     ap.add_argument("--solver", default="pocl")
+    ap.add_argument("--envs", default=",".join(ENVS), help="maps (e.g. city,forest: training maps of a criterion)")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--diffuse-orders", default="", help="e.g. 2,3,4,5,6,8: the diffuse part's error per SH order")
     ap.add_argument("--diffuse-samples", type=int, default=1024)
@@ -72,8 +89,9 @@ def main():
     eye_text = lambda eye: ",".join(map(str, EYES[eye]))
 
     # The oracle: the diffuse direct sum once per map, the glossy one per (map, eye); glossy part = difference.
+    envs = opts.envs.split(",")
     oracle = {}
-    for env in ENVS:
+    for env in envs:
         diffuse = o(f"oracle_{env}_diffuse.npy")
         run(["reference", mesh, "--env", env_path(env), "--brute-force", "--albedo", ALBEDO, *threads, "-o", diffuse],
             diffuse)
@@ -98,8 +116,10 @@ def main():
                 glossy_flags, bundle)
             stats = json.load(open(o(fit_name + ".json")))
             row = {"fit_seconds": stats.get("fit_seconds"), "mean_relative_error": stats.get("mean_relative_error"),
-                   "view_flips": stats.get("view_flips"), "view_pairs": stats.get("view_pairs")}
-            for env in ENVS:
+                   "view_flips": stats.get("view_flips"), "view_pairs": stats.get("view_pairs"),
+                   "nested_kept_stage": stats.get("nested_kept_stage"),
+                   "held_out_mean_relative_error": stats.get("held_out_mean_relative_error")}
+            for env in envs:
                 for eye in EYES:
                     for part in ("total", "glossy"):
                         path = o(f"{name}_{env}_{eye}_{part}.npy")
@@ -113,7 +133,7 @@ def main():
     for variant in opts.variants.split(","):
         print(f"\n{variant}: glossy part / total, relative RMSE against the oracle")
         print("| env | eye | " + " | ".join(f"{n} lobes" for n in opts.lobes.split(",")) + " |")
-        for env in ENVS:
+        for env in envs:
             for eye in EYES:
                 cells = [f"{100 * results[f'{opts.tag}{variant}_n{n}'][f'{env}/{eye}/glossy']:.2f}% / "
                          f"{100 * results[f'{opts.tag}{variant}_n{n}'][f'{env}/{eye}/total']:.2f}%"
@@ -121,6 +141,10 @@ def main():
                 print(f"| {env} | {eye} | " + " | ".join(cells) + " |")
         fits = [f"{100 * results[f'{opts.tag}{variant}_n{n}']['mean_relative_error']:.1f}%" for n in opts.lobes.split(",")]
         print("fit residual (grid): " + ", ".join(fits))
+        kept = [str(results[f'{opts.tag}{variant}_n{n}'].get('nested_kept_stage')) for n in opts.lobes.split(",")]
+        held = [f"{100 * (results[f'{opts.tag}{variant}_n{n}'].get('held_out_mean_relative_error') or 0):.2f}%"
+                for n in opts.lobes.split(",")]
+        print("kept per stage: " + ", ".join(kept) + "; held-out (grid 16) mean: " + ", ".join(held))
 
 
 def diffuse_orders(opts, o, mesh, env_path, eye_text, oracle):

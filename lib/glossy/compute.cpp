@@ -2,6 +2,7 @@
 // the horizon, a first independent fit, lobe alignment across views, then the coherence fit; the chunk's kernels
 // are dropped before the next chunk, so memory is one chunk plus the output.
 #include "glossy.h"
+#include "glossy_internal.h"
 
 #include "core.h"
 #include "raycast.h"
@@ -45,6 +46,13 @@ void checkOptions(const TriMesh& mesh, const GlossyOptions& options) {
     if (options.heldOutResolution != 0 && (options.heldOutResolution < 2 || options.heldOutResolution > 64))
         throw Error("", "--held-out-grid", "cube resolution must lie in 2..64 (0: twice --grid)", kExitUsage);
     if (options.chunkVertices < 1) throw Error("", "chunk", "must be >= 1", kExitUsage);
+    if (!(options.nestedMargin >= 0.0 && options.nestedMargin < 1.0))
+        throw Error("", "--nested-margin", "must lie in [0, 1)", kExitUsage);
+    if (!options.nestedLighting.empty() &&
+        (!options.nested || options.nestedLighting.size() % heldOutGrid(heldOutResolution(options)).count() != 0))
+        throw Error("", "--nested-lighting", "needs --nested and rows of the held-out grid's size", kExitUsage);
+    if (options.nestedMaxNorm && (!options.nested || !options.nestedLighting.empty()))
+        throw Error("", "--nested-max", "needs --nested and not --nested-lighting", kExitUsage);
     if (mesh.normals.size() != mesh.positions.size())
         throw Error("", "mesh", "has no vertex normals (prt meshprep adds them)");
     if (!options.indirectTransfer.empty() &&
@@ -370,9 +378,35 @@ std::vector<float> coherencePass(const DirectionGrid& grid, Chunk& tabulated, co
     return fitted;
 }
 
+} // namespace
+
+// Which problems keep stage k of the nested fit: every one at k = 1; else where the held-out cost `held` is below
+// (1 - options.nestedMargin) times the kept cost `previous`, per problem, or with options.nestedPerVertex per
+// vertex (problems first[i] .. first[i + 1]) by the sums over its problems. Needs held, previous of the same size.
+std::vector<uint8_t> keepStage(const std::vector<size_t>& first, const std::vector<double>& held,
+                               const std::vector<double>& previous, int k, const GlossyOptions& options) {
+    const size_t problems = held.size();
+    std::vector<uint8_t> keep(problems, 1);
+    if (k == 1) return keep;
+    const double factor = 1.0 - options.nestedMargin;
+    if (!options.nestedPerVertex) {
+        for (size_t p = 0; p < problems; ++p) keep[p] = held[p] < factor * previous[p];
+        return keep;
+    }
+    for (size_t i = 0; i + 1 < first.size(); ++i) {
+        double now = 0.0, before = 0.0;
+        for (size_t p = first[i]; p < first[i + 1]; ++p) now += held[p], before += previous[p];
+        for (size_t p = first[i]; p < first[i + 1]; ++p) keep[p] = now < factor * before;
+    }
+    return keep;
+}
+
+namespace {
+
 // The nested fit of one chunk (GlossyOptions::nested): stages 1..lobes, stage k from stage k - 1's kept fit plus
 // one greedy lobe on its residual (initialiseFrom), pass 1 and the coherence pass as the plain fit; a problem keeps
-// stage k where its held-out data cost (dataCost on `heldOut`, tabulated.heldKernel) is below stage k - 1's, else
+// stage k where keepStage says (its held-out data cost, dataCost on `heldOut`, tabulated.heldKernel, against
+// stage k - 1's: by options.nestedMargin, per view or per vertex), else
 // stage k - 1's lobes and a zero lobe (amplitude 0, along the first lobe, the exponent's sharpness). Returns the
 // output form as coherencePass; heldCost[p] is the kept fit's held-out data cost; keptStage[k - 1] counts the
 // problems that kept stage k.
@@ -385,6 +419,8 @@ std::vector<float> nestedFit(const DirectionGrid& grid, const DirectionGrid& hel
     std::vector<float> kept, keptCost; // output form [problems][(k - 1) * kLobeParams], and its costs
     std::vector<int> keptIterations;
     heldCost.assign(problems, 0.0);
+    std::vector<double> keptScore(problems, 0.0); // the kept fit's keep score: litCost, or without lighting heldCost
+    const size_t rows = options.nestedLighting.size() / std::max<size_t>(heldCount, 1);
     if (keptStage.size() < size_t(lobes)) keptStage.resize(size_t(lobes), 0);
     const float zeroSharpness = float(std::clamp(options.phong.exponent, options.bounds.lambdaMin, options.bounds.lambdaMax));
     for (int k = 1; k <= lobes; ++k) {
@@ -400,10 +436,19 @@ std::vector<float> nestedFit(const DirectionGrid& grid, const DirectionGrid& hel
         }
         solve(grid, batch, FitWeights{}, options);
         std::vector<float> fitted = coherencePass(grid, tabulated, options, coherence);
+        std::vector<double> held(problems), score(problems);
         for (size_t p = 0; p < problems; ++p) {
-            double held = dataCost(heldOut, &tabulated.heldKernel[p * heldCount], k, &batch.params[p * width]);
-            if (k == 1 || held < heldCost[p]) {
-                heldCost[p] = held;
+            const float* kernel = &tabulated.heldKernel[p * heldCount];
+            held[p] = dataCost(heldOut, kernel, k, &batch.params[p * width]);
+            score[p] = rows ? litCost(heldOut, kernel, k, &batch.params[p * width], options.nestedLighting.data(), rows)
+                       : options.nestedMaxNorm ? maxResidual(heldOut, kernel, k, &batch.params[p * width])
+                                               : held[p];
+        }
+        std::vector<uint8_t> keep = keepStage(tabulated.first, score, keptScore, k, options);
+        for (size_t p = 0; p < problems; ++p) {
+            if (keep[p]) {
+                heldCost[p] = held[p];
+                keptScore[p] = score[p];
                 ++keptStage[size_t(k) - 1];
                 continue;
             }

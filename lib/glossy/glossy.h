@@ -190,6 +190,19 @@ struct GlossyOptions {
     // lobe. So each view's held-out error never rises with the lobe count, and stage 1 is the plain 1-lobe fit.
     bool nested = false;
     int heldOutResolution = 0; // nested: the held-out grid is heldOutGrid(this), 0: twice gridResolution (max 64)
+    // Nested keep criterion: stage k is kept only where its held-out cost is below (1 - nestedMargin) times stage
+    // k - 1's (0: any decrease), in [0, 1). nestedPerVertex: one decision per vertex for all its views, by the
+    // held-out costs summed over them (so the runtime's blend of neighbouring views never mixes k and k - 1 lobe
+    // solutions of one vertex); the per-view bound then holds for the vertex's sum, not for each view.
+    double nestedMargin = 0.0;
+    bool nestedPerVertex = false;
+    // Nested, lighting-aware: non-empty, [rows][heldOutGrid count] radiance x solid angle of training lightings at
+    // the held-out directions; the keep criterion is then litCost (the relit error of a distant eye along the
+    // view, summed over the rows) in place of the held-out data cost. The reported held-out error stays the L2 one.
+    std::vector<float> nestedLighting;
+    // Nested: the keep criterion is the largest held-out residual (maxResidual: the error under one small source,
+    // such as a sun, in the worst direction) in place of the held-out data cost; not with nestedLighting.
+    bool nestedMaxNorm = false;
     size_t vertexBegin = 0, vertexEnd = SIZE_MAX;
     bool progress = true;
     std::string lobeType = "float16"; // the bundle layer's componentType: "float16" or "float32"

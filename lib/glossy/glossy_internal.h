@@ -28,4 +28,20 @@ void evaluateResiduals(const DirectionGrid& grid, const ProblemView& problem, co
 std::vector<double> openClNormalEquations(const DirectionGrid& grid, const FitBatch& batch, const FitWeights& weights,
                                           const FitBounds& bounds);
 
+// The relit error of lobes `params` (solver form, as dataCost) summed over lightings: sum over rows r of
+// (sum_i lighting[r][i] (model_i - kernel_i))^2, with lighting [rows][grid.count()] radiance x solid angle at
+// grid's directions (GlossyOptions::nestedLighting). In double; >= 0.
+double litCost(const DirectionGrid& grid, const float* kernel, int lobes, const float* params, const float* lighting,
+               size_t rows);
+
+// The largest |model_i - kernel_i| over grid's directions (the relit error's bound under one small source of unit
+// irradiance, GlossyOptions::nestedMaxNorm), in double; >= 0.
+double maxResidual(const DirectionGrid& grid, const float* kernel, int lobes, const float* params);
+
+// The nested fit's keep decision of stage k (compute.cpp): keep[p] = 1 for every p at k = 1; else, per problem,
+// held[p] < (1 - options.nestedMargin) previous[p], or with options.nestedPerVertex the same test on the sums over
+// each vertex's problems first[i] .. first[i + 1] (first.back() == held.size()), applied to all of them.
+std::vector<uint8_t> keepStage(const std::vector<size_t>& first, const std::vector<double>& held,
+                               const std::vector<double>& previous, int k, const GlossyOptions& options);
+
 } // namespace prt::glossy

@@ -39,6 +39,14 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
     if (options.warmStart) layer.params["warm_start"] = true; // absent when off, so other bundles keep their bytes
     if (options.nested) layer.params["nested"] = {{"held_out", "cube grid turned 0.5 rad about (1, 2, 3)"},
                                                      {"resolution", heldOutResolution(options)}};
+    // The keep criterion, only where it is not the default per-view L2 gate (so those bundles keep their bytes).
+    if (options.nested && options.nestedMargin > 0) layer.params["nested"]["margin"] = options.nestedMargin;
+    if (options.nested && options.nestedPerVertex) layer.params["nested"]["per_vertex"] = true;
+    if (options.nested && options.nestedMaxNorm) layer.params["nested"]["score"] = "largest held-out residual";
+    if (options.nested && !options.nestedLighting.empty())
+        layer.params["nested"]["score"] = "relit held-out error under " +
+                                          std::to_string(options.nestedLighting.size() / heldOutGrid(heldOutResolution(options)).count()) +
+                                          " training lightings";
     if (!options.indirectTransfer.empty()) // absent when off, so bundles without it keep their bytes
         layer.params["indirect"] = {{"bounce", "one diffuse bounce off the mesh (shadowed SH transfer at the hit)"},
                                     {"order", options.indirectOrder}, {"samples", options.indirectSamples}};

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <vector>
 
 namespace prt::glossy {
 
@@ -17,7 +18,10 @@ double dataEnergy(const DirectionGrid& grid, const float* kernel) {
     return energy;
 }
 
-double dataCost(const DirectionGrid& grid, const float* kernel, int lobes, const float* params) {
+namespace {
+
+// The lobes' model minus the kernel at every direction of `grid` (dataCost's residuals), in double.
+std::vector<double> dataResiduals(const DirectionGrid& grid, const float* kernel, int lobes, const float* params) {
     double mean[kMaxLobes][3], sharpness[kMaxLobes];
     for (int k = 0; k < lobes; ++k) {
         const float* p = params + k * kLobeParams;
@@ -25,7 +29,7 @@ double dataCost(const DirectionGrid& grid, const float* kernel, int lobes, const
         for (int c = 0; c < 3; ++c) mean[k][c] = length > 0.0 ? p[1 + c] / length : 0.0;
         sharpness[k] = std::exp(double(p[4]));
     }
-    double cost = 0.0;
+    std::vector<double> residuals(grid.count());
     for (size_t i = 0; i < grid.count(); ++i) {
         const float* w = &grid.directions[i * 3];
         double model = 0.0;
@@ -33,8 +37,34 @@ double dataCost(const DirectionGrid& grid, const float* kernel, int lobes, const
             double cosine = mean[k][0] * w[0] + mean[k][1] * w[1] + mean[k][2] * w[2];
             model += double(params[k * kLobeParams]) * std::exp(sharpness[k] * (cosine - 1.0));
         }
-        double residual = model - double(kernel[i]);
-        cost += double(grid.solidAngle[i]) * residual * residual;
+        residuals[i] = model - double(kernel[i]);
+    }
+    return residuals;
+}
+
+} // namespace
+
+double dataCost(const DirectionGrid& grid, const float* kernel, int lobes, const float* params) {
+    const std::vector<double> residuals = dataResiduals(grid, kernel, lobes, params);
+    double cost = 0.0;
+    for (size_t i = 0; i < grid.count(); ++i) cost += double(grid.solidAngle[i]) * residuals[i] * residuals[i];
+    return cost;
+}
+
+double maxResidual(const DirectionGrid& grid, const float* kernel, int lobes, const float* params) {
+    double worst = 0.0;
+    for (double r : dataResiduals(grid, kernel, lobes, params)) worst = std::max(worst, std::abs(r));
+    return worst;
+}
+
+double litCost(const DirectionGrid& grid, const float* kernel, int lobes, const float* params, const float* lighting,
+               size_t rows) {
+    const std::vector<double> residuals = dataResiduals(grid, kernel, lobes, params);
+    double cost = 0.0;
+    for (size_t r = 0; r < rows; ++r) {
+        double lit = 0.0;
+        for (size_t i = 0; i < grid.count(); ++i) lit += double(lighting[r * grid.count() + i]) * residuals[i];
+        cost += lit * lit;
     }
     return cost;
 }

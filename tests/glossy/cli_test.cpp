@@ -68,6 +68,13 @@ TEST_F(GlossyCli, BadInputsFailWithoutOutput) {
     PrtRun heldOut = prt(base + "--brdf phong:8,0.5 --lobes 2 --nested --held-out-grid 1", dir);
     EXPECT_EQ(heldOut.exitCode, 2);
     EXPECT_NE(heldOut.text.find("--held-out-grid"), std::string::npos) << heldOut.text;
+    // The keep criteria: only with --nested, a margin in [0, 1), the max norm not with a lighting prior.
+    for (const char* flags : {"--nested-margin 0.1", "--nested --nested-margin 1", "--nested-per-vertex",
+                              "--nested --nested-max --nested-lighting x.exr"}) {
+        PrtRun keep = prt(base + "--brdf phong:8,0.5 --lobes 2 " + flags, dir);
+        EXPECT_EQ(keep.exitCode, 2) << flags;
+        EXPECT_NE(keep.text.find("--nested"), std::string::npos) << flags << ": " << keep.text;
+    }
     // No OpenCL platform: an empty ICD vendor folder.
     fs::create_directories(dir / "no_vendors");
     PrtRun platform = prt(base + "--brdf phong:8,0.5", dir, "OCL_ICD_VENDORS=" + path("no_vendors"));

@@ -1,6 +1,7 @@
 // The fit: a synthetic Gaussian is recovered by both solvers, the OpenCL batch is deterministic, kernel build
 // failures carry their log, lobe matching, and the stage's results do not depend on chunking or ranges.
 #include "glossy.h"
+#include "glossy_internal.h"
 
 #include "core.h"
 #include "scene.h"
@@ -229,6 +230,7 @@ TEST(GlossyNested, HeldOutGridLiesMostlyBetweenTheFitGrid) {
 
 // Held-out data cost of every fitted (vertex, view) of a sphere (convex: V = 1 above the tangent plane, so the
 // kernel is known without rays), recomputed here from the output lobes; -1 where the view has no fit.
+// With options.nestedMaxNorm the score is maxResidual, with options.nestedLighting litCost (the nested gate's).
 std::vector<double> sphereHeldOutCosts(const prt::TriMesh& sphere, const GlossyOptions& options,
                                        const GlossyLobes& lobes) {
     const DirectionGrid held = heldOutGrid(heldOutResolution(options));
@@ -250,7 +252,11 @@ std::vector<double> sphereHeldOutCosts(const prt::TriMesh& sphere, const GlossyO
                 std::copy_n(row + k * kLobeParams, 4, &solver[size_t(k) * kLobeParams]);
                 solver[size_t(k) * kLobeParams + 4] = std::log(row[k * kLobeParams + 4]);
             }
-            costs.push_back(fitted ? dataCost(held, kernel.data(), lobes.lobes, solver.data()) : -1.0);
+            const size_t rows = options.nestedLighting.size() / held.count();
+            double score = rows ? litCost(held, kernel.data(), lobes.lobes, solver.data(), options.nestedLighting.data(), rows)
+                           : options.nestedMaxNorm ? maxResidual(held, kernel.data(), lobes.lobes, solver.data())
+                                                   : dataCost(held, kernel.data(), lobes.lobes, solver.data());
+            costs.push_back(fitted ? score : -1.0);
         }
     }
     return costs;
@@ -306,6 +312,155 @@ TEST(GlossyNested, MoreLobesNeverRaiseTheHeldOutErrorAndSolversAgree) {
         for (int s = 0; s < 2; ++s)
             for (double c : costs[s][size_t(lobes) - 1]) sum[s] += std::max(0.0, c);
         EXPECT_NEAR(sum[1], sum[0], 0.03 * sum[0]) << lobes << " lobes";
+    }
+}
+
+// The keep criterion in closed form: with a 10% margin a lobe that lowers a view's held-out cost by 5% (it fits
+// a sample, not the kernel between samples) is dropped and one that halves it is kept; without a margin any
+// decrease is kept; per vertex one decision by the summed costs covers all the vertex's views, also one that
+// rises; stage 1 is always kept.
+TEST(GlossyNested, KeepStageMarginDropsASmallGainAndKeepsAHalving) {
+    const std::vector<size_t> first = {0, 2, 3}; // vertex 0: problems 0, 1; vertex 1: problem 2
+    const std::vector<double> previous = {1.0, 1.0, 1.0}, held = {0.95, 0.5, 0.99}, rising = {1.2, 0.5, 1.1};
+    GlossyOptions options;
+    EXPECT_EQ(keepStage(first, held, previous, 1, options), (std::vector<uint8_t>{1, 1, 1}));
+    EXPECT_EQ(keepStage(first, held, previous, 2, options), (std::vector<uint8_t>{1, 1, 1}));
+    options.nestedMargin = 0.1;
+    EXPECT_EQ(keepStage(first, held, previous, 1, options), (std::vector<uint8_t>{1, 1, 1}));
+    EXPECT_EQ(keepStage(first, held, previous, 2, options), (std::vector<uint8_t>{0, 1, 0}));
+    options.nestedPerVertex = true; // vertex 0: 1.45 < 0.9 x 2; vertex 1: 0.99 > 0.9
+    EXPECT_EQ(keepStage(first, held, previous, 2, options), (std::vector<uint8_t>{1, 1, 0}));
+    options.nestedMargin = 0.0; // vertex 0: 1.7 < 2 although its view 0 rises; vertex 1: 1.1 > 1
+    EXPECT_EQ(keepStage(first, rising, previous, 3, options), (std::vector<uint8_t>{1, 1, 0}));
+    options.nestedMargin = 0.2; // vertex 0: 1.7 > 0.8 x 2
+    EXPECT_EQ(keepStage(first, rising, previous, 3, options), (std::vector<uint8_t>{0, 0, 0}));
+}
+
+// litCost in closed form: lobes of amplitude 0 leave residual -kernel, so under one row of lighting w_i the cost is
+// (sum_i w_i kernel_i)^2, two rows add; exact lobes cost 0 under any lighting. The same for maxResidual.
+TEST(GlossyNested, LitCostIsTheSquaredRelitErrorSummedOverLightings) {
+    const DirectionGrid grid = cubeGrid(4);
+    const float lobe[kLobeParams] = {0.7f, 0.0f, 0.6f, 0.8f, std::log(20.0f)};
+    std::vector<float> kernel(grid.count()), lighting(2 * grid.count());
+    double first = 0, second = 0;
+    for (size_t i = 0; i < grid.count(); ++i) {
+        const float* w = &grid.directions[i * 3];
+        kernel[i] = 0.7f * std::exp(20.0f * (0.6f * w[1] + 0.8f * w[2] - 1.0f));
+        lighting[i] = grid.solidAngle[i];
+        lighting[grid.count() + i] = grid.solidAngle[i] * (w[1] > 0 ? 2.0f : 0.0f);
+        first += double(lighting[i]) * kernel[i], second += double(lighting[grid.count() + i]) * kernel[i];
+    }
+    float zero[kLobeParams] = {0.0f, 0.0f, 0.6f, 0.8f, std::log(20.0f)};
+    EXPECT_NEAR(litCost(grid, kernel.data(), 1, zero, lighting.data(), 1), first * first, 1e-9 * first * first);
+    EXPECT_NEAR(litCost(grid, kernel.data(), 1, zero, lighting.data(), 2), first * first + second * second,
+                1e-9 * (first * first + second * second));
+    EXPECT_NEAR(litCost(grid, kernel.data(), 1, lobe, lighting.data(), 2), 0.0, 1e-9 * first * first);
+    // maxResidual: the kernel's peak for zero lobes, 0 for the exact lobe.
+    const float peak = *std::max_element(kernel.begin(), kernel.end());
+    EXPECT_NEAR(maxResidual(grid, kernel.data(), 1, zero), peak, 1e-7 * peak);
+    EXPECT_NEAR(maxResidual(grid, kernel.data(), 1, lobe), 0.0, 1e-5 * peak);
+}
+
+// The nested fit with a margin and per vertex: with the margin every view's held-out cost still never rises with
+// the lobe count and fewer (but some) views keep stage 2; per vertex every vertex keeps stage k in all its fitted
+// views or in none, and the vertex's summed held-out cost never rises.
+TEST(GlossyNested, MarginAndPerVertexKeepCriteriaNeverRaiseTheHeldOutError) {
+    prt::TriMesh sphere = prt::makeSphere(1.0f, 5, 8);
+    GlossyOptions options;
+    options.phong = {64.0, 0.5};
+    options.gridResolution = 6;
+    options.progress = false;
+    options.nested = true;
+    options.lobes = 2;
+    const uint64_t anyGain = computeGlossyLobes(sphere, options).keptStage[1];
+    options.nestedMargin = 0.1;
+    std::vector<std::vector<double>> costs;
+    for (int lobes = 1; lobes <= 2; ++lobes) {
+        options.lobes = lobes;
+        GlossyLobes nested = computeGlossyLobes(sphere, options);
+        if (lobes == 2) {
+            EXPECT_GT(nested.keptStage[1], 0u);
+            EXPECT_LT(nested.keptStage[1], anyGain);
+        }
+        costs.push_back(sphereHeldOutCosts(sphere, options, nested));
+    }
+    // Each view either keeps stage 2 (held-out cost at most 0.9 of stage 1's) or stage 1's cost (float rounding).
+    for (size_t p = 0; p < costs[0].size(); ++p) {
+        if (costs[0][p] < 0) continue;
+        const double before = costs[0][p], after = costs[1][p];
+        EXPECT_TRUE(after <= 0.9 * before * (1 + 1e-4) + 1e-12 || std::abs(after - before) <= 1e-4 * before + 1e-12)
+            << p << ": " << before << " -> " << after;
+    }
+
+    options.nestedMargin = 0.0;
+    options.nestedPerVertex = true;
+    costs.clear();
+    for (int lobes = 1; lobes <= 3; ++lobes) {
+        options.lobes = lobes;
+        GlossyLobes nested = computeGlossyLobes(sphere, options);
+        costs.push_back(sphereHeldOutCosts(sphere, options, nested));
+        if (lobes < 2) continue;
+        size_t keeping = 0, dropping = 0;
+        const int width = lobes * kLobeParams;
+        for (size_t v = 0; v < sphere.vertexCount(); ++v) {
+            size_t kept = 0, fitted = 0;
+            for (int view = 0; view < kViewCount; ++view) {
+                if (costs.back()[v * kViewCount + size_t(view)] < 0) continue;
+                ++fitted;
+                kept += nested.values[(v * kViewCount + size_t(view)) * size_t(width) + size_t(lobes - 1) * kLobeParams] != 0.0f;
+            }
+            EXPECT_TRUE(kept == 0 || kept == fitted) << "vertex " << v << ": " << kept << " of " << fitted;
+            keeping += kept > 0, dropping += kept == 0 && fitted > 0;
+        }
+        // On the sphere every vertex sees the same kernels turned, and summed over its views stage 2 does not
+        // lower the held-out error (the per-view gate keeps it in some views): no vertex keeps it.
+        if (lobes == 2) {
+            EXPECT_EQ(keeping > 0, nested.keptStage[1] > 0);
+            EXPECT_GT(dropping, 0u);
+        }
+        const auto &fewer = costs[size_t(lobes) - 2], &more = costs[size_t(lobes) - 1];
+        for (size_t v = 0; v < sphere.vertexCount(); ++v) {
+            double before = 0, after = 0;
+            for (int view = 0; view < kViewCount; ++view) {
+                size_t p = v * kViewCount + size_t(view);
+                if (fewer[p] >= 0) before += fewer[p], after += more[p];
+            }
+            EXPECT_LE(after, before * (1 + 1e-4) + 1e-12) << "vertex " << v << ", " << lobes << " lobes";
+        }
+    }
+}
+
+// The max-norm and lighting-aware scores through the nested fit: recomputed from the output, each view's score
+// never rises with stage 2, and the gate keeps some views' stage 2 and drops others'.
+TEST(GlossyNested, MaxNormAndLightingScoresNeverRiseWithTheLobeCount) {
+    prt::TriMesh sphere = prt::makeSphere(1.0f, 5, 8);
+    GlossyOptions options;
+    options.phong = {64.0, 0.5};
+    options.gridResolution = 6;
+    options.progress = false;
+    options.nested = true;
+    const DirectionGrid held = heldOutGrid(heldOutResolution(options));
+    for (int score = 0; score < 2; ++score) {
+        options.nestedMaxNorm = score == 0;
+        options.nestedLighting.clear();
+        if (score == 1) // two lightings: uniform, and the upper half twice as bright
+            for (int row = 0; row < 2; ++row)
+                for (size_t i = 0; i < held.count(); ++i)
+                    options.nestedLighting.push_back(held.solidAngle[i] * (row == 0 ? 1.0f : held.directions[i * 3 + 1] > 0 ? 2.0f : 0.0f));
+        std::vector<std::vector<double>> costs;
+        for (int lobes = 1; lobes <= 2; ++lobes) {
+            options.lobes = lobes;
+            GlossyLobes nested = computeGlossyLobes(sphere, options);
+            if (lobes == 2) {
+                EXPECT_GT(nested.keptStage[1], 0u) << score;
+                EXPECT_LT(nested.keptStage[1], nested.stats.problems) << score;
+            }
+            costs.push_back(sphereHeldOutCosts(sphere, options, nested));
+        }
+        for (size_t p = 0; p < costs[0].size(); ++p)
+            if (costs[0][p] >= 0) {
+                EXPECT_LE(costs[1][p], costs[0][p] * (1 + 1e-3) + 1e-9) << "score " << score << ", " << p;
+            }
     }
 }
 
