@@ -44,4 +44,9 @@ double maxResidual(const DirectionGrid& grid, const float* kernel, int lobes, co
 std::vector<uint8_t> keepStage(const std::vector<size_t>& first, const std::vector<double>& held,
                                const std::vector<double>& previous, int k, const GlossyOptions& options);
 
+// Counts the lobe-order flips of result (flips.cpp) into result.stats: viewPairs / viewFlips over neighbouring
+// views of each vertex, vertexPairs / vertexFlips over the edges of mesh inside [vertexBegin, vertexEnd) at each
+// view. Needs result.values for its vertex range; does nothing below 2 lobes.
+void countFlips(const TriMesh& mesh, GlossyLobes& result);
+
 } // namespace prt::glossy
