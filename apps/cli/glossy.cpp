@@ -6,15 +6,12 @@
 #include "core.h"
 #include "glossy.h"
 #include "image.h"
-#include "luminance.h"
 #include "sh.h"
 #include "transfer.h"
 
 #include <nlohmann/json.hpp>
 
-#include <cmath>
 #include <memory>
-#include <numbers>
 
 #ifndef PRT_VERSION
 #define PRT_VERSION "0.0.0"
@@ -57,53 +54,6 @@ struct GlossyArgs {
 };
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
-
-// The nested fit's lighting prior (--nested-lighting, GlossyOptions::nestedLighting): each map box-filtered to
-// 128x64 bins, turned about y by 2 pi r / rotations (r = 0 .. rotations - 1), its luminance x solid angle summed
-// into the nearest held-out direction, each row normalised to sum 1 (every map and turn weighs the same). Needs
-// equirectangular maps at least 128 wide (readEnvironmentMap checks the values). Returns [maps x rotations][held].
-std::vector<float> lightingPrior(const std::vector<std::string>& paths, const glossy::DirectionGrid& held, int rotations) {
-    constexpr int kWidth = 128, kHeight = 64;
-    std::vector<float> rows;
-    for (const std::string& path : paths) {
-        EnvironmentMap env = readEnvironmentMap(path);
-        const int width = env.radiance.width, height = env.radiance.height;
-        if (env.layout != EnvLayout::Equirectangular || width < kWidth)
-            throw Error(path, "--nested-lighting", "must be an equirectangular map at least 128 texels wide", kExitUsage);
-        const std::vector<double> solidAngle = sh::texelSolidAngles(env);
-        std::vector<double> bins(size_t(kWidth) * kHeight, 0.0);
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x) {
-                const size_t t = size_t(y) * width + size_t(x);
-                const float* c = &env.radiance.rgb[3 * t];
-                bins[size_t(y * kHeight / height) * kWidth + size_t(x * kWidth / width)] +=
-                    solidAngle[t] * (kLuminance[0] * c[0] + kLuminance[1] * c[1] + kLuminance[2] * c[2]);
-            }
-        for (int r = 0; r < rotations; ++r) {
-            const double angle = 2.0 * std::numbers::pi * r / rotations, cs = std::cos(angle), sn = std::sin(angle);
-            std::vector<double> row(held.count(), 0.0);
-            double total = 0.0;
-            for (int y = 0; y < kHeight; ++y)
-                for (int x = 0; x < kWidth; ++x) {
-                    double d[3];
-                    sh::equirectDirection(kWidth, kHeight, x, y, d);
-                    const double turned[3] = {cs * d[0] + sn * d[2], d[1], -sn * d[0] + cs * d[2]};
-                    size_t best = 0;
-                    double bestDot = -2.0;
-                    for (size_t i = 0; i < held.count(); ++i) {
-                        const float* h = &held.directions[i * 3];
-                        const double dot = turned[0] * h[0] + turned[1] * h[1] + turned[2] * h[2];
-                        if (dot > bestDot) bestDot = dot, best = i;
-                    }
-                    const double value = bins[size_t(y) * kWidth + size_t(x)];
-                    row[best] += value, total += value;
-                }
-            if (!(total > 0.0)) throw Error(path, "--nested-lighting", "is black", kExitUsage);
-            for (double v : row) rows.push_back(float(v / total));
-        }
-    }
-    return rows;
-}
 
 // The diffuse part for the rows `range` (shard shardIndex of shardCount). A --diffuse layer is copied whole into
 // every shard (the merge keeps layers that every shard holds identically); a computed one covers the range.
@@ -197,8 +147,11 @@ void runGlossy(const GlossyArgs& args) {
     if (!args.nestedLighting.empty()) {
         if (!args.nested) throw usage("--nested-lighting", "needs --nested");
         if (args.nestedRotations < 1 || args.nestedRotations > 64) throw usage("--nested-rotations", "must lie in 1..64");
-        options.nestedLighting = lightingPrior(args.nestedLighting, glossy::heldOutGrid(glossy::heldOutResolution(options)),
-                                               args.nestedRotations);
+        const glossy::DirectionGrid held = glossy::heldOutGrid(glossy::heldOutResolution(options));
+        for (const std::string& path : args.nestedLighting) {
+            std::vector<float> rows = glossy::lightingPrior(readEnvironmentMap(path), path, held, args.nestedRotations);
+            options.nestedLighting.insert(options.nestedLighting.end(), rows.begin(), rows.end());
+        }
     }
     if (args.nested && args.warmStart)
         throw Error("", "--nested", "already starts each stage from the previous one: drop --warm-start", kExitUsage);

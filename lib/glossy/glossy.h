@@ -24,6 +24,10 @@
 #include <string>
 #include <vector>
 
+namespace prt {
+struct EnvironmentMap; // image.h
+}
+
 namespace prt::glossy {
 
 inline constexpr int kLobeParams = 5;
@@ -248,6 +252,14 @@ struct GlossyLobes {
     std::vector<float> heldOutError;
     std::vector<uint64_t> keptStage;
 };
+
+// The nested fit's lighting prior from one training map (GlossyOptions::nestedLighting): the map box-filtered to
+// 128x64 bins, turned about y by 2 pi r / rotations (r = 0 .. rotations - 1), its luminance x solid angle summed
+// into the nearest direction of `held`, each row normalised to sum 1 (every map and turn weighs the same). Needs an
+// equirectangular map at least 128 texels wide, not black, and rotations >= 1 (throws prt::Error naming `path`
+// otherwise). Returns [rotations][held.count()].
+std::vector<float> lightingPrior(const EnvironmentMap& env, const std::string& path, const DirectionGrid& held,
+                                 int rotations);
 
 // Needs normals per vertex and options in range (throws prt::Error kExitUsage / kExitInput otherwise).
 // Streams: memory holds one chunk's kernels plus the output. Bit-identical for any thread count and any range.
