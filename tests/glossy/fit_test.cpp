@@ -361,16 +361,22 @@ TEST(GlossyNested, LitCostIsTheSquaredRelitErrorSummedOverLightings) {
     EXPECT_NEAR(maxResidual(grid, kernel.data(), 1, lobe), 0.0, 1e-5 * peak);
 }
 
-// The nested fit with a margin and per vertex: with the margin every view's held-out cost still never rises with
-// the lobe count and fewer (but some) views keep stage 2; per vertex every vertex keeps stage k in all its fitted
-// views or in none, and the vertex's summed held-out cost never rises.
-TEST(GlossyNested, MarginAndPerVertexKeepCriteriaNeverRaiseTheHeldOutError) {
-    prt::TriMesh sphere = prt::makeSphere(1.0f, 5, 8);
+// The nested fit's options on the small test sphere: Phong 64, grid 6, quiet.
+GlossyOptions nestedSphereOptions() {
     GlossyOptions options;
     options.phong = {64.0, 0.5};
     options.gridResolution = 6;
     options.progress = false;
     options.nested = true;
+    return options;
+}
+
+// The nested fit with a margin and per vertex: with the margin every view's held-out cost still never rises with
+// the lobe count and fewer (but some) views keep stage 2; per vertex every vertex keeps stage k in all its fitted
+// views or in none, and the vertex's summed held-out cost never rises.
+TEST(GlossyNested, MarginAndPerVertexKeepCriteriaNeverRaiseTheHeldOutError) {
+    prt::TriMesh sphere = prt::makeSphere(1.0f, 5, 8);
+    GlossyOptions options = nestedSphereOptions();
     options.lobes = 2;
     const uint64_t anyGain = computeGlossyLobes(sphere, options).keptStage[1];
     options.nestedMargin = 0.1;
@@ -434,11 +440,7 @@ TEST(GlossyNested, MarginAndPerVertexKeepCriteriaNeverRaiseTheHeldOutError) {
 // never rises with stage 2, and the gate keeps some views' stage 2 and drops others'.
 TEST(GlossyNested, MaxNormAndLightingScoresNeverRiseWithTheLobeCount) {
     prt::TriMesh sphere = prt::makeSphere(1.0f, 5, 8);
-    GlossyOptions options;
-    options.phong = {64.0, 0.5};
-    options.gridResolution = 6;
-    options.progress = false;
-    options.nested = true;
+    GlossyOptions options = nestedSphereOptions();
     const DirectionGrid held = heldOutGrid(heldOutResolution(options));
     for (int score = 0; score < 2; ++score) {
         options.nestedMaxNorm = score == 0;
