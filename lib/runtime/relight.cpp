@@ -1,4 +1,7 @@
-// The relighting kernel: per vertex, a dot product of its transfer row with the lighting, per channel.
+// The relighting kernel: per vertex, a dot product of its transfer row with the lighting, per channel. The lane
+// loop here defines the order of additions; where the processor has AVX2, orders 1..5 run relight_vector.cpp's
+// kernel, which keeps that order lane for lane, and this loop relights the rest (orders past 5, an odd order's last
+// row, processors without AVX2).
 #include "runtime.h"
 
 #include "core.h"
@@ -15,10 +18,11 @@ namespace {
 // so they fill whole SSE registers. 12 measured faster than 24 at orders 3 and 5 (fewer lanes to reduce per
 // vertex) and equal at order 8, where the kernel runs at the memory bandwidth (tests/runtime/bench_runtime).
 constexpr int kLanes = 12;
-// Rows of up to 48 values (orders 1..4) read 4 KB ahead: at order 3 the hardware prefetcher alone left the kernel
-// at 0.78-0.90 of the rate its bytes stream, one prefetch per row brings it to 1.1-1.5 (tests/runtime/bench_runtime);
-// longer rows stream as fast without (a prefetch of one line per row of 5-12 lines measured slower). Calls of at
-// most 4096 floats (relight_encoded.cpp's decode tiles, already in L1) do not prefetch.
+// Measured on this loop before the vector kernel took orders 1..5 on AVX2: rows of up to 48 values (orders 1..4)
+// read 4 KB ahead: at order 3 the hardware prefetcher alone left the loop at 0.78-0.90 of the rate its bytes
+// stream, one prefetch per row brings it to 1.1-1.5 (tests/runtime/bench_runtime); longer rows stream as fast
+// without (a prefetch of one line per row of 5-12 lines measured slower). Calls of at most 4096 floats
+// (relight_encoded.cpp's decode tiles, already in L1) do not prefetch.
 constexpr uintptr_t kPrefetchBytes = 4096;
 
 // `kValues` (coefficients * 3) known at compile time lets the compiler unroll the common orders completely;
@@ -72,6 +76,11 @@ void relightRows(const float* transfer, size_t vertexCount, int values, const fl
 
 void relight(const float* transfer, size_t vertexCount, int coefficientCount, const float* lighting,
              float* radiance) {
+    // Where the processor has AVX2, orders 1..5 take the vector kernel (the same bits), all but an odd order's
+    // last row.
+    const size_t done = relightFloatRows(transfer, vertexCount, coefficientCount, lighting, radiance);
+    transfer += done * size_t(coefficientCount) * 3, radiance += done * 3, vertexCount -= done;
+    if (vertexCount == 0) return;
     switch (coefficientCount) {
     case 9: return relightRows<27>(transfer, vertexCount, 27, lighting, radiance);
     case 16: return relightRows<48>(transfer, vertexCount, 48, lighting, radiance);

@@ -1,6 +1,6 @@
 // Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes of 1..8 bands are
 // relit by a fused kernel that reads each code once (relight_codes.cpp, no decoded row), half rows of 1..8 bands on
-// a processor with F16C by a fused kernel with the float kernel's bits (relight_half.cpp); other rows (more bands,
+// a processor with F16C by a fused kernel with the float kernel's bits (relight_vector.cpp); other rows (more bands,
 // halves without F16C, the last half row of an odd order) are decoded a few vertices at a time into a tile that
 // stays in the L1 cache and relit there by the float kernel, so memory carries only the compressed bytes;
 // clustered PCA is relit in its own basis (Sloan et al. 2003).
@@ -132,7 +132,7 @@ void relightRaggedRange(const RelightModel& model, const float* lighting, size_t
             v = run;
             continue;
         }
-        // Halves on a processor with F16C: fused (relight_half.cpp), leaving at most the array's last row.
+        // Halves on a processor with F16C: fused (relight_vector.cpp), leaving at most the array's last row.
         const size_t fused = model.storage == TransferStorage::Float16
                                  ? relightHalves(model, v, run, int(count), lighting, out + (v - first) * 3)
                                  : 0;

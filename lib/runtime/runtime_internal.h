@@ -65,12 +65,18 @@ void relightCpcaRange(const RelightModel& model, const float* projections, size_
 // for other storages or n outside 1..8 (those take the decode tile).
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                   float* out);
-// The fused half kernel (relight_half.cpp): vertices [first, last) of a Float16 model, all of `count` coefficients
+// The fused half kernel (relight_vector.cpp): vertices [first, last) of a Float16 model, all of `count` coefficients
 // (count = n^2, n in 1..8), relit from their halves into out, bit for bit the float kernel on decodedTransfer's
 // rows. Returns how many leading vertices it relit: 0 (nothing written) where the processor lacks AVX2 or F16C or
 // for other counts, else last - first, less the array's last row for odd n (whose last 4-half load would pass the
 // array's end; n > 1). The caller relights the rest.
 size_t relightHalves(const RelightModel& model, size_t first, size_t last, int count, const float* lighting,
                      float* out);
+// The same kernel on float rows (relight_vector.cpp): vertices [0, vertexCount) of `count` coefficients (n^2, n in
+// 1..5), bit for bit relight.cpp's lane loop. Returns how many leading vertices it relit: 0 (nothing written)
+// where the processor lacks AVX2 or for other counts (orders 6..8 measured faster in the lane loop), else vertexCount, less the last row for odd n > 1 (whose
+// last 4-float load would pass the row). The caller relights the rest.
+size_t relightFloatRows(const float* transfer, size_t vertexCount, int count, const float* lighting,
+                        float* radiance);
 
 } // namespace prt

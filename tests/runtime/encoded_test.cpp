@@ -342,7 +342,7 @@ TEST(EncodedRelight, JobHookGivesTheSerialResultBitForBit) {
     EXPECT_EQ(calls, models.size());
 }
 
-// Uniform orders 1..8 built directly, so the fused half kernel (relight_half.cpp, where the processor has F16C)
+// Uniform orders 1..8 built directly, so the fused half kernel (relight_vector.cpp, where the processor has F16C)
 // runs long runs that end at the array's last row, whose odd-order tail load it leaves to the decode tile. Halves of
 // every finite pattern, a third of them +-0, against lighting with exact zeros, so products of -0 reach every lane:
 // the relit radiance is the float kernel's on the decoded rows bit for bit, for the whole buffer, ranges that start

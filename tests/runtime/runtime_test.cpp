@@ -8,8 +8,10 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -154,6 +156,59 @@ TEST(Runtime, KernelMatchesDoublePrecisionAtEveryOrder) {
         std::vector<double> expected = referenceRadiance(model, lighting.data());
         for (size_t i = 0; i < radiance.size(); ++i)
             ASSERT_NEAR(radiance[i], expected[i], 1e-5 * order * order) << "order " << order << " value " << i;
+    }
+}
+
+// The kernel's documented order of additions (relight.cpp): lane i of 12 sums values i, i + 12, i + 24, ... of the
+// row, from +0, each product rounded and then added; lanes 0..5 add lanes 6..11; channel c is lane c + lane c + 3.
+// Written out in scalars, with nothing shared with the kernel.
+void laneOrderRadiance(const float* row, int values, const float* lighting, float* radiance) {
+    float lane[12] = {};
+    for (int k = 0; k < values; ++k) lane[k % 12] += row[k] * lighting[k];
+    for (int i = 0; i < 6; ++i) lane[i] += lane[i + 6];
+    for (int c = 0; c < 3; ++c) radiance[c] = lane[c] + lane[c + 3];
+}
+
+// Orders 1..5 take the vector kernel where the processor has AVX2 (relight_vector.cpp; orders 3 and 5 leave the
+// last row to the lane loop), 6 and more the lane loop: every order gives the documented order's bits. The transfer
+// is exactly as long as its rows (so a read past the end is a sanitizer error), a third of its values +-0 against
+// lighting with exact zeros (so -0 products reach every lane), and every 7th row starts with NaN or infinity: an odd
+// order's 4-value tail load reads that value for the row before, whose masked fourth product must leave it finite.
+TEST(Runtime, KernelGivesTheDocumentedOrderOfAdditionsBitForBitAtEveryOrder) {
+    for (int order = 1; order <= 9; ++order) {
+        SCOPED_TRACE("order " + std::to_string(order));
+        const int values = order * order * 3;
+        for (size_t vertexCount : {size_t(1), size_t(2), size_t(3), size_t(4099)}) {
+            std::mt19937 random(uint32_t(order * 31 + vertexCount));
+            std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+            std::vector<float> transfer(vertexCount * values);
+            for (float& value : transfer) value = random() % 3 == 0 ? (random() % 2 ? -0.0f : 0.0f) : uniform(random);
+            for (size_t v = 0; v < vertexCount; v += 7)
+                transfer[v * values] = v % 2 ? std::numeric_limits<float>::infinity() : std::nanf("");
+            std::vector<float> lighting = randomValues(size_t(values), uint32_t(order + 60));
+            for (int i = 0; i < values; i += 5) lighting[i] = i % 2 ? -0.0f : 0.0f;
+            lighting[0] = 0.5f; // the NaN and infinity rows' own first product stays NaN or infinite
+
+            std::vector<float> radiance(vertexCount * 3);
+            prt::relight(transfer.data(), vertexCount, order * order, lighting.data(), radiance.data());
+            size_t compared = 0;
+            for (size_t v = 0; v < vertexCount; ++v) {
+                float expected[3];
+                laneOrderRadiance(transfer.data() + v * values, values, lighting.data(), expected);
+                for (int c = 0; c < 3; ++c) {
+                    const float got = radiance[v * 3 + c];
+                    if (std::isnan(expected[c])) {
+                        ASSERT_TRUE(std::isnan(got)) << "vertex " << v << " channel " << c;
+                        continue;
+                    }
+                    ASSERT_EQ(std::memcmp(&got, &expected[c], sizeof got), 0)
+                        << "vertex " << v << " of " << vertexCount << " channel " << c << ": " << got << " for "
+                        << expected[c];
+                    ++compared;
+                }
+            }
+            EXPECT_GT(compared, vertexCount * 3 / 2) << "most values are finite";
+        }
     }
 }
 
