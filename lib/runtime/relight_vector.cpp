@@ -1,6 +1,6 @@
-// The vector row kernel (AVX2): float rows of 1..5 bands and half rows of 1..8, the halves converted by F16C inside the dot
-// product with no decoded row in memory; bit for bit the float kernel (relight.cpp) on the same (decoded) rows, two
-// vertices folded at a time. Processors without AVX2 (and F16C, for halves) take relight.cpp's lane loop for floats
+// The vector row kernel (AVX2): float rows of 1..5 bands and half rows of 1..8, the halves converted by F16C inside
+// the dot product with no decoded row in memory; bit for bit the float kernel (relight.cpp) on the same (decoded)
+// rows, two vertices folded at a time. Processors without AVX2 (and F16C, for halves) take relight.cpp's lane loop for floats
 // and relight_encoded.cpp's decode tile for halves.
 #include "runtime.h"
 
@@ -57,8 +57,8 @@ PRT_ALWAYS_INLINE inline V4f load4(const float* f) {
 // +0, each product rounded, then added) held as lanes 0..7 in `a` and 8..11 in `b`: the same products and the same
 // additions, lane for lane in the same order, and half->float is exact, so every lane has the float kernel's bits.
 // Odd n leave 3 values (3 n^2 = 3 mod 12) for lanes 0..2: a 4-value load (one value past the row) whose fourth
-// product is masked to +0 (whatever it was, NaN included), and lanes 3..7 add +0, which leaves them as they are: a lane that starts at +0 is never
-// -0 (x + y is -0 only when both are), and x + (+0) = x for every other x.
+// product is masked to +0 (whatever it was, NaN included), and lanes 3..7 add +0, which leaves them as they are: a
+// lane that starts at +0 is never -0 (x + y is -0 only when both are), and x + (+0) = x for every other x.
 template <typename T, int kValues>
 struct Rows {
     static constexpr int kFull = kValues / 12, kTail = kValues % 12;

@@ -74,8 +74,9 @@ size_t relightHalves(const RelightModel& model, size_t first, size_t last, int c
                      float* out);
 // The same kernel on float rows (relight_vector.cpp): vertices [0, vertexCount) of `count` coefficients (n^2, n in
 // 1..5), bit for bit relight.cpp's lane loop. Returns how many leading vertices it relit: 0 (nothing written)
-// where the processor lacks AVX2 or for other counts (orders 6..8 measured faster in the lane loop), else vertexCount, less the last row for odd n > 1 (whose
-// last 4-float load would pass the row). The caller relights the rest.
+// where the processor lacks AVX2 or for other counts (orders 6..8 measured faster in the lane loop), else
+// vertexCount, less the last row for odd n > 1 (whose last 4-float load would pass the row). The caller relights
+// the rest.
 size_t relightFloatRows(const float* transfer, size_t vertexCount, int count, const float* lighting,
                         float* radiance);
 
