@@ -14,7 +14,10 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include <span>
+#include <stdexcept>
 
+#include <sys/mman.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -169,9 +172,28 @@ void laneOrderRadiance(const float* row, int values, const float* lighting, floa
     for (int c = 0; c < 3; ++c) radiance[c] = lane[c] + lane[c + 3];
 }
 
+// `count` floats that end where an unreadable page begins, so that a read past the last one faults, in any build.
+struct GuardedFloats {
+    size_t count, mappedBytes;
+    void* mapping;
+    float* data;
+    explicit GuardedFloats(size_t n) : count(n) {
+        const size_t page = size_t(sysconf(_SC_PAGESIZE)), bytes = (n * sizeof(float) + page - 1) / page * page;
+        mappedBytes = bytes + page;
+        mapping = mmap(nullptr, mappedBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (mapping == MAP_FAILED) throw std::runtime_error("mmap failed");
+        char* guard = static_cast<char*>(mapping) + bytes;
+        if (mprotect(guard, page, PROT_NONE) != 0) throw std::runtime_error("mprotect failed");
+        data = reinterpret_cast<float*>(guard) - n;
+    }
+    ~GuardedFloats() { munmap(mapping, mappedBytes); }
+    GuardedFloats(const GuardedFloats&) = delete;
+    GuardedFloats& operator=(const GuardedFloats&) = delete;
+};
+
 // Orders 1..5 take the vector kernel where the processor has AVX2 (relight_vector.cpp; orders 3 and 5 leave the
 // last row to the lane loop), 6 and more the lane loop: every order gives the documented order's bits. The transfer
-// is exactly as long as its rows (so a read past the end is a sanitizer error), a third of its values +-0 against
+// ends at an unreadable page (so a read past its last row faults), a third of its values +-0 against
 // lighting with exact zeros (so -0 products reach every lane), and every 7th row starts with NaN or infinity: an odd
 // order's 4-value tail load reads that value for the row before, whose masked fourth product must leave it finite.
 TEST(Runtime, KernelGivesTheDocumentedOrderOfAdditionsBitForBitAtEveryOrder) {
@@ -181,7 +203,8 @@ TEST(Runtime, KernelGivesTheDocumentedOrderOfAdditionsBitForBitAtEveryOrder) {
         for (size_t vertexCount : {size_t(1), size_t(2), size_t(3), size_t(4099)}) {
             std::mt19937 random(uint32_t(order * 31 + vertexCount));
             std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
-            std::vector<float> transfer(vertexCount * values);
+            GuardedFloats guarded(vertexCount * values);
+            std::span<float> transfer(guarded.data, guarded.count);
             for (float& value : transfer) value = random() % 3 == 0 ? (random() % 2 ? -0.0f : 0.0f) : uniform(random);
             for (size_t v = 0; v < vertexCount; v += 7)
                 transfer[v * values] = v % 2 ? std::numeric_limits<float>::infinity() : std::nanf("");
