@@ -12,6 +12,13 @@
 
 namespace prt {
 
+#if PRT_HAVE_AVX2_CLONE
+bool processorHasAvx2() {
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+}
+#endif
+
 namespace {
 
 // Accumulator lanes: a multiple of 3, so lane i always holds channel i % 3 of [coefficient][3] rows, and of 4,
@@ -62,8 +69,8 @@ __attribute__((target("avx2"))) void relightRowsAvx2(const float* transfer, size
 }
 template <int kValues>
 void relightRows(const float* transfer, size_t vertexCount, int values, const float* lighting, float* radiance) {
-    static const bool avx2 = __builtin_cpu_supports("avx2");
-    (avx2 ? relightRowsAvx2<kValues> : relightRowsBase<kValues>)(transfer, vertexCount, values, lighting, radiance);
+    (processorHasAvx2() ? relightRowsAvx2<kValues> : relightRowsBase<kValues>)(transfer, vertexCount, values,
+                                                                                lighting, radiance);
 }
 #else
 template <int kValues>

@@ -70,12 +70,8 @@ namespace codes_avx2 {
 #endif
 
 #if PRT_HAVE_AVX2_CLONE
-bool codesHaveAvx2() {
-    static const bool yes = __builtin_cpu_supports("avx2");
-    return yes;
-}
 #define PRT_CODES(N) \
-    (codesHaveAvx2() ? codes_avx2::relightCodesKernel<Code, N> : codes_base::relightCodesKernel<Code, N>)
+    (processorHasAvx2() ? codes_avx2::relightCodesKernel<Code, N> : codes_base::relightCodesKernel<Code, N>)
 #else
 #define PRT_CODES(N) codes_base::relightCodesKernel<Code, N>
 #endif

@@ -85,11 +85,7 @@ __attribute__((target("avx2"))) void decodeCodesAvx2(const RelightModel& model, 
                                                      size_t first, size_t last, size_t band, float* tile) {
     decodeBody<Code, kN>(model, codes, n, first, last, band, tile);
 }
-bool hasAvx2() {
-    static const bool yes = __builtin_cpu_supports("avx2");
-    return yes;
-}
-#define PRT_DECODE(N) (hasAvx2() ? decodeCodesAvx2<Code, N> : decodeCodesBase<Code, N>)
+#define PRT_DECODE(N) (processorHasAvx2() ? decodeCodesAvx2<Code, N> : decodeCodesBase<Code, N>)
 #else
 #define PRT_DECODE(N) decodeCodesBase<Code, N>
 #endif
@@ -209,7 +205,7 @@ __attribute__((target("avx2"))) void cpcaAvx2(const float* projections, const ui
                                               const float* weights, size_t components, size_t count, float* out) {
     cpcaBody<kM>(projections, cluster, weights, components, count, out);
 }
-#define PRT_CPCA(M) (hasAvx2() ? cpcaAvx2<M> : cpcaBase<M>)
+#define PRT_CPCA(M) (processorHasAvx2() ? cpcaAvx2<M> : cpcaBase<M>)
 #else
 #define PRT_CPCA(M) cpcaBase<M>
 #endif

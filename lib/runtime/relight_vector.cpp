@@ -1,7 +1,7 @@
 // The vector row kernel (AVX2): float rows of 1..5 bands and half rows of 1..8, the halves converted by F16C inside
 // the dot product with no decoded row in memory; bit for bit the float kernel (relight.cpp) on the same (decoded)
-// rows, two vertices folded at a time. Processors without AVX2 (and F16C, for halves) take relight.cpp's lane loop for floats
-// and relight_encoded.cpp's decode tile for halves.
+// rows, two vertices folded at a time. Processors without AVX2 (and F16C, for halves) take relight.cpp's lane loop
+// for floats and relight_encoded.cpp's decode tile for halves.
 #include "runtime.h"
 
 #include "runtime_internal.h"
@@ -178,17 +178,12 @@ bool relightRowsVector(const T* values, size_t vertexCount, int count, const flo
 #pragma GCC pop_options
 #endif
 
-bool haveAvx2() {
-    static const bool yes = __builtin_cpu_supports("avx2");
-    return yes;
-}
-
 // AVX2 (which includes the OS saving the YMM state) and F16C, CPUID leaf 1 ECX bit 29 (bit_F16C; clang's
 // __builtin_cpu_supports does not know "f16c").
 bool haveF16c() {
     static const bool yes = [] {
         unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
-        return __builtin_cpu_supports("avx2") && __get_cpuid(1, &eax, &ebx, &ecx, &edx) && (ecx & bit_F16C) != 0;
+        return processorHasAvx2() && __get_cpuid(1, &eax, &ebx, &ecx, &edx) && (ecx & bit_F16C) != 0;
     }();
     return yes;
 }
@@ -209,7 +204,7 @@ size_t relightFloatRows(const float* transfer, size_t vertexCount, int count, co
                         float* radiance) {
     // Orders 6..8 stay with relight.cpp's lane loop, which streams their long rows from memory faster (1M vertices,
     // three alternating rounds: order 6 at 1.12 of the stream rate against 0.86 here, 7 at 1.20 against 1.06).
-    if (!haveAvx2() || vertexCount == 0 || count > 25) return 0;
+    if (!processorHasAvx2() || vertexCount == 0 || count > 25) return 0;
     // Odd n > 1 read one float past each row, and nothing is known of the memory after the last.
     const size_t vertices = count % 2 == 1 && count > 1 ? vertexCount - 1 : vertexCount;
     return relightRowsVector(transfer, vertices, count, lighting, radiance) ? vertices : 0;

@@ -20,6 +20,12 @@
 
 namespace prt {
 
+#if PRT_HAVE_AVX2_CLONE
+// Whether this processor runs AVX2 code (the instructions and the OS saving the YMM state), asked once; every
+// kernel that dispatches to an AVX2 version asks here (relight.cpp).
+bool processorHasAvx2();
+#endif
+
 // The unit direction d from vertex `vertex` of `model` toward the point `eye`; false (d untouched) at the eye
 // itself. What glossyRadiance and glossyConeLightRadiance shade each vertex toward.
 bool directionToEye(const GlossyModel& model, uint32_t vertex, const float eye[3], float d[3]);
