@@ -2,9 +2,10 @@
 # The README's test command (after scripts/bootstrap.sh): installs what only the tests need, builds the rest of
 # build/ (all targets) and runs the whole suite on that release build, then the
 # sanitizer tree build-asan (clang 14, AddressSanitizer + UndefinedBehaviorSanitizer, libFuzzer coverage) with
-# the reader and ray-casting tests under the sanitizers and a short fuzz smoke per harness.
+# the reader, ray-casting and runtime-kernel tests under the sanitizers and a short fuzz smoke per harness.
 # Sanitizer subset (to stay within CI's budget on 2 cores): test_core, test_bundle, test_mesh, test_image,
-# test_raycast, and every tests/fuzz harness for PRT_FUZZ_SMOKE_SECONDS (default 10) each.
+# test_raycast, test_runtime (the relight kernels' vector tail loads), and every tests/fuzz harness for
+# PRT_FUZZ_SMOKE_SECONDS (default 10) each.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${PRT_JOBS:-2}
@@ -35,7 +36,7 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build
 ctest --test-dir build --output-on-failure -j"$jobs"
 
-sanitized=(test_core test_bundle test_mesh test_image test_raycast)
+sanitized=(test_core test_bundle test_mesh test_image test_raycast test_runtime)
 fuzzers=(mesh_obj mesh_ply mesh_off mesh_stl mesh_gltf mesh_glb exr pipeline bundle npy lights shard fiv glossy adaptive)
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang-14 \
   -DCMAKE_CXX_COMPILER=clang++-14 -DPRT_SANITIZE=ON -DPRT_FUZZ=ON \
