@@ -153,6 +153,7 @@ void reportStats(const TransferStats& stats, double start) {
                              {"direct_cpu_seconds", stats.directCpuSeconds},
                              {"bounce_seconds", stats.bounceSeconds},
                              {"hit_record_bytes", stats.hitRecordBytes},
+                             {"exitant_rows", stats.exitantRows},
                              {"transfer_bytes", stats.transferBytes}};
     logEvent("transfer_stats", record.dump());
     StageCost cost;

@@ -86,9 +86,11 @@ void runDirectPass(const Context& context, float* out, float* unitOut, std::vect
 // for the whole mesh) the rows are unit-albedo G_b, a third of the bytes to gather, and `total` receives
 // albedo^(number+1) * G_b per channel, since bounce b of uniform albedo rho is rho^(b+1) G_b.
 // `previous` is only read, so each vertex's gather order (its hits in sample order) fixes every bit; the
-// per-vertex work is one function whoever calls (the whole mesh or a shard).
+// per-vertex work is one function whoever calls (the whole mesh or a shard). Corner k of triangle t gathers row
+// cornerRows[3 t + k] of `previous`: mesh.indices where `previous` holds every vertex, a bounce shard's own table
+// where it holds only the rows its hits name (shards.cpp).
 void bounce(const Context& context, const std::vector<HitBlock>& hitBlocks, int channels, const float* previous,
-            float* next, float* total, int number, Progress* progress);
+            const uint32_t* cornerRows, float* next, float* total, int number, Progress* progress);
 
 // What hit records take (the layout in transfer.h): 4 bytes per receiver, 10 per hit.
 uint64_t hitRecordBytes(const std::vector<HitBlock>& blocks);
@@ -101,6 +103,10 @@ inline size_t hitBlockCount(size_t receivers) { return (receivers + rays::kBlock
 // prt::Error(kExitInput) naming the file and the problem.
 void writeHitRecords(const std::string& path, const ShardRun& run, const std::vector<HitBlock>& blocks);
 std::vector<HitBlock> readHitRecords(const std::string& path, const ShardRun& run);
-std::vector<float> readExitant(const std::string& path, const ShardRun& run, int pass);
+// The exitant array of pass `pass` (gatherExitant's file), only the rows of the vertices that `needed` marks
+// ([run.vertexCount] flags), packed in vertex order. The whole section is read in pieces of about 1 MiB and checked
+// whole (its length, its checksum, every value finite), so memory is the marked rows plus one piece.
+std::vector<float> readExitant(const std::string& path, const ShardRun& run, int pass,
+                               const std::vector<uint8_t>& needed);
 
 } // namespace prt::passes

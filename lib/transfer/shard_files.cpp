@@ -27,6 +27,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <stdexcept>
 #include <vector>
 
 namespace prt {
@@ -336,14 +337,35 @@ std::vector<HitBlock> readHitRecords(const std::string& path, const ShardRun& ru
     return blocks;
 }
 
-std::vector<float> readExitant(const std::string& path, const ShardRun& run, int pass) {
+std::vector<float> readExitant(const std::string& path, const ShardRun& run, int pass,
+                               const std::vector<uint8_t>& needed) {
+    if (needed.size() != run.vertexCount)
+        throw std::logic_error("readExitant: needs one flag per vertex of the run");
     Reader reader = openShardFile(path, "exitant", "an exitant array", run, false);
     readPass(reader, pass);
-    uint64_t floats = checkedProduct({run.vertexCount, coefficients(run), uint64_t(run.channels)}, "exitant values",
-                                     path, "header");
+    const uint64_t rowFloats = coefficients(run) * uint64_t(run.channels);
+    uint64_t floats = checkedProduct({run.vertexCount, rowFloats}, "exitant values", path, "header");
     expectPayload(reader, floats * 4);
-    std::vector<float> exitant(floats);
-    reader.readFinite(exitant.data(), floats, "exitant");
+    uint64_t kept = 0;
+    for (uint8_t flag : needed) kept += flag != 0;
+    std::vector<float> exitant(kept * rowFloats);
+    // Pieces of one checksum chunk (rows may straddle two), each value checked, the marked rows' values kept.
+    std::vector<float> piece(std::min<uint64_t>(kChecksumChunk / 4, floats));
+    uint64_t firstBad = floats; // the first value that is not finite, reported once the checksum holds
+    float* out = exitant.data();
+    for (uint64_t first = 0; first < floats; first += piece.size()) {
+        const uint64_t count = std::min<uint64_t>(piece.size(), floats - first);
+        reader.read(piece.data(), count, "exitant");
+        for (uint64_t i = 0; i < count && firstBad == floats; ++i)
+            if (!std::isfinite(piece[i])) firstBad = first + i;
+        for (uint64_t f = first; f < first + count;) { // row by row: the part of row f / rowFloats in this piece
+            const uint64_t end = std::min(first + count, (f / rowFloats + 1) * rowFloats);
+            if (needed[f / rowFloats]) out = std::copy(piece.data() + (f - first), piece.data() + (end - first), out);
+            f = end;
+        }
+    }
+    reader.verify("exitant");
+    if (firstBad != floats) reader.fail("exitant", "value " + std::to_string(firstBad) + " is not finite");
     return exitant;
 }
 
@@ -389,13 +411,14 @@ Reader openShardRows(const std::string& path, const ShardRun& run, int pass, Sha
 
 } // namespace
 
-ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, bool exitantOnly) {
+ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, ShardSections sections) {
     ShardRows rows;
     uint64_t totalFloats = 0, exitantFloats = 0;
     bool hasExitant = false;
     Reader reader = openShardRows(path, run, pass, rows, totalFloats, exitantFloats, hasExitant);
-    if (exitantOnly && !hasExitant) reader.fail("header", "holds no exitant rows (the last pass writes none)");
-    if (exitantOnly) {
+    if (sections == ShardSections::Exitant && !hasExitant)
+        reader.fail("header", "holds no exitant rows (the last pass writes none)");
+    if (sections == ShardSections::Exitant) {
         reader.skip(2 * totalFloats * 4);
     } else {
         rows.total.resize(totalFloats);
@@ -403,6 +426,7 @@ ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, 
         reader.readFinite(rows.total.data(), totalFloats, "total");
         reader.readFinite(rows.direct.data(), totalFloats, "direct");
     }
+    if (sections == ShardSections::TotalAndDirect) return rows;
     rows.exitant.resize(exitantFloats);
     reader.readFinite(rows.exitant.data(), exitantFloats, "exitant");
     return rows;

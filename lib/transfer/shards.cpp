@@ -29,6 +29,28 @@ TransferOptions rangeOptions(const ShardRun& run) {
     return options;
 }
 
+// The vertices a bounce over `hitBlocks` gathers from, the corners of its hit triangles: 1 in needed[v] for those.
+// Needs triangles below mesh.triangleCount() (readHitRecords checks them).
+std::vector<uint8_t> hitCorners(const TriMesh& mesh, const std::vector<HitBlock>& hitBlocks) {
+    std::vector<uint8_t> needed(mesh.vertexCount(), 0);
+    for (const HitBlock& block : hitBlocks)
+        for (uint32_t t : block.triangle)
+            for (int k = 0; k < 3; ++k) needed[mesh.indices[3 * size_t(t) + k]] = 1;
+    return needed;
+}
+
+// bounce()'s table for rows packed in vertex order from those `needed` marks (readExitant): each triangle corner's
+// row among them, 0 for a corner no hit reads.
+std::vector<uint32_t> packedCornerRows(const TriMesh& mesh, const std::vector<uint8_t>& needed) {
+    std::vector<uint32_t> rowOf(needed.size(), 0);
+    uint32_t rows = 0;
+    for (size_t v = 0; v < needed.size(); ++v)
+        if (needed[v]) rowOf[v] = rows++;
+    std::vector<uint32_t> cornerRows(mesh.indices.size());
+    for (size_t i = 0; i < cornerRows.size(); ++i) cornerRows[i] = rowOf[mesh.indices[i]];
+    return cornerRows;
+}
+
 } // namespace
 
 ShardRun makeShardRun(const TriMesh& mesh, const TransferOptions& options, const std::string& meshHash,
@@ -90,10 +112,12 @@ ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass,
     if (pass < 1 || pass > run.options.bounces)
         throw Error("", "--pass", std::to_string(pass) + " outside 1.." + std::to_string(run.options.bounces),
                     kExitUsage);
-    ShardRows rows = readShardRows(previousPath, run, pass - 1, false);
-    rows.exitant = std::vector<float>(); // this pass gathers the whole array instead
+    ShardRows rows = readShardRows(previousPath, run, pass - 1, ShardSections::TotalAndDirect);
     const std::vector<HitBlock> hitBlocks = readHitRecords(hitsPath, run);
-    const std::vector<float> previous = readExitant(exitantPath, run, pass - 1);
+    // Only the rows its hits gather from: around the shard's own part of a large scene, a fraction of the array.
+    const std::vector<uint8_t> needed = hitCorners(mesh, hitBlocks);
+    const std::vector<float> previous = readExitant(exitantPath, run, pass - 1, needed);
+    const std::vector<uint32_t> cornerRows = packedCornerRows(mesh, needed);
 
     const TransferOptions options = rangeOptions(run);
     const std::vector<float> spawn = spawnNormals(mesh);
@@ -103,14 +127,16 @@ ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass,
     stats.rayOffset = context.offset;
     stats.hits = rows.hits;
     stats.hitRecordBytes = hitRecordBytes(hitBlocks);
-    stats.transferBytes = (rows.total.size() + rows.direct.size() + previous.size() + next.size()) * sizeof(float);
+    stats.exitantRows = previous.size() / (size_t(context.coefficients) * run.channels);
+    stats.transferBytes = (rows.total.size() + rows.direct.size() + previous.size() + next.size()) * sizeof(float) +
+                          cornerRows.size() * sizeof(uint32_t);
     double start = nowSeconds();
     tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
     arena.execute([&] {
         std::optional<Progress> progress;
         if (options.progress) progress.emplace("transfer bounce " + std::to_string(pass), run.rowEnd - run.rowBegin);
-        bounce(context, hitBlocks, run.channels, previous.data(), last ? nullptr : next.data(), rows.total.data(), pass,
-               progress ? &*progress : nullptr);
+        bounce(context, hitBlocks, run.channels, previous.data(), cornerRows.data(), last ? nullptr : next.data(),
+               rows.total.data(), pass, progress ? &*progress : nullptr);
         if (progress) progress->finish();
     });
     stats.bounceSeconds.push_back(nowSeconds() - start);

@@ -214,9 +214,9 @@ struct BounceTerms {
 // Rows of hit triangles are scattered over the mesh: bounceVertex fetches them a few hits ahead (and their corner
 // indices further ahead) so the memory latency overlaps the arithmetic.
 constexpr size_t kRowsAhead = 8, kCornersAhead = 16;
-void prefetchRows(const TriMesh& mesh, const float* previous, size_t rowFloats, uint32_t triangle) {
+void prefetchRows(const uint32_t* cornerRows, const float* previous, size_t rowFloats, uint32_t triangle) {
     const size_t rowBytes = rowFloats * sizeof(float);
-    const uint32_t* corner = &mesh.indices[3 * size_t(triangle)];
+    const uint32_t* corner = &cornerRows[3 * size_t(triangle)];
     for (int k = 0; k < 3; ++k) {
         const char* row = reinterpret_cast<const char*>(previous + corner[k] * rowFloats);
         for (size_t byte = 0; byte < rowBytes; byte += 64) __builtin_prefetch(row + byte);
@@ -227,11 +227,11 @@ void prefetchRows(const TriMesh& mesh, const float* previous, size_t rowFloats, 
 // The per-vertex body of bounce(): vertex i of `hits` (row v of `next` and `total`), whose hits are [h, end).
 // Sums `previous` at each hit, in the order recorded, into `sum`, scales it by 2/N (and the albedo) into `light`,
 // adds that to the total row and stores it in the next row. Every path that bounces a vertex, the whole mesh or a
-// shard, goes through here, so the floats match bit for bit.
+// shard, goes through here, so the floats match bit for bit. Corner k of triangle t reads row cornerRows[3 t + k]
+// of `previous`.
 void bounceVertex(const Context& context, const BounceTerms& terms, const HitBlock& hits, size_t h, size_t end,
-                  size_t v, const float* previous, float* next, float* total, float* __restrict sum,
-                  float* __restrict light) {
-    const TriMesh& mesh = context.mesh;
+                  size_t v, const float* previous, const uint32_t* cornerRows, float* next, float* total,
+                  float* __restrict sum, float* __restrict light) {
     const size_t rowFloats = terms.rowFloats, hitCount = hits.triangle.size();
     if (h == end) {
         // Nothing to gather: leaves `total` untouched to the bit (adding +0 would flip -0).
@@ -241,12 +241,12 @@ void bounceVertex(const Context& context, const BounceTerms& terms, const HitBlo
     std::fill(sum, sum + rowFloats, 0.0f);
     for (; h < end; ++h) {
         if (h + kCornersAhead < hitCount)
-            __builtin_prefetch(&mesh.indices[3 * size_t(hits.triangle[h + kCornersAhead])]);
-        if (h + kRowsAhead < hitCount) prefetchRows(mesh, previous, rowFloats, hits.triangle[h + kRowsAhead]);
-        const uint32_t* corner = &mesh.indices[3 * size_t(hits.triangle[h])];
-        const float* __restrict a = previous + corner[0] * rowFloats;
-        const float* __restrict b = previous + corner[1] * rowFloats;
-        const float* __restrict c = previous + corner[2] * rowFloats;
+            __builtin_prefetch(&cornerRows[3 * size_t(hits.triangle[h + kCornersAhead])]);
+        if (h + kRowsAhead < hitCount) prefetchRows(cornerRows, previous, rowFloats, hits.triangle[h + kRowsAhead]);
+        const uint32_t* corner = &cornerRows[3 * size_t(hits.triangle[h])];
+        const float* __restrict a = previous + size_t(corner[0]) * rowFloats;
+        const float* __restrict b = previous + size_t(corner[1]) * rowFloats;
+        const float* __restrict c = previous + size_t(corner[2]) * rowFloats;
         float cosine = context.cosines[hits.sample[h]];
         float wb = cosine * float(hits.barycentric[h] & 0xFFFFu) * (1.0f / 65535.0f);
         float wc = cosine * float(hits.barycentric[h] >> 16) * (1.0f / 65535.0f);
@@ -277,7 +277,7 @@ void bounceVertex(const Context& context, const BounceTerms& terms, const HitBlo
 } // namespace
 
 void bounce(const Context& context, const std::vector<HitBlock>& hitBlocks, int channels, const float* previous,
-            float* next, float* total, int number, Progress* progress) {
+            const uint32_t* cornerRows, float* next, float* total, int number, Progress* progress) {
     BounceTerms terms;
     terms.channels = channels;
     terms.rowFloats = size_t(context.coefficients) * channels;
@@ -292,11 +292,11 @@ void bounce(const Context& context, const std::vector<HitBlock>& hitBlocks, int 
             const HitBlock& hits = hitBlocks[block];
             const size_t hitCount = hits.triangle.size(), first = block * rays::kBlockVertices;
             for (size_t h = 0; h < std::min(kRowsAhead, hitCount); ++h)
-                prefetchRows(context.mesh, previous, terms.rowFloats, hits.triangle[h]);
+                prefetchRows(cornerRows, previous, terms.rowFloats, hits.triangle[h]);
             size_t h = 0;
             for (size_t i = 0; i < hits.end.size(); ++i) {
-                bounceVertex(context, terms, hits, h, hits.end[i], first + i, previous, next, total, gathered.data(),
-                             light.data());
+                bounceVertex(context, terms, hits, h, hits.end[i], first + i, previous, cornerRows, next, total,
+                             gathered.data(), light.data());
                 h = hits.end[i];
             }
             if (progress) progress->add(hits.end.size());
@@ -411,8 +411,8 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
             bool last = b == options.bounces;
             std::optional<Progress> progress =
                 maybeProgress(options, "transfer bounce " + std::to_string(b), mesh.vertexCount());
-            bounce(context, hitBlocks, channels, previous.data(), last ? nullptr : next.data(), total.data(), b,
-                   progress ? &*progress : nullptr);
+            bounce(context, hitBlocks, channels, previous.data(), mesh.indices.data(), last ? nullptr : next.data(),
+                   total.data(), b, progress ? &*progress : nullptr);
             finish(progress);
             if (!last) previous.swap(next);
             stats.bounceSeconds.push_back(nowSeconds() - start);
@@ -483,7 +483,7 @@ Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, 
             if (options.keepDirect)
                 std::copy(rows, rows + count * context.stride, result.direct.begin() + first * context.stride);
             stats.hitRecordBytes = std::max(stats.hitRecordBytes, hitRecordBytes(hitBlocks));
-            bounce(context, hitBlocks, 3, outgoing.data(), nullptr, rows, 1, nullptr);
+            bounce(context, hitBlocks, 3, outgoing.data(), context.mesh.indices.data(), nullptr, rows, 1, nullptr);
         }
         finish(progress);
         stats.directCpuSeconds = double(std::clock() - cpuStart) / CLOCKS_PER_SEC;

@@ -85,6 +85,7 @@ struct TransferStats {
     double directCpuSeconds = 0.0; // the same in process CPU time, which other processes' load does not inflate
     std::vector<double> bounceSeconds;
     uint64_t hitRecordBytes = 0;
+    uint64_t exitantRows = 0;      // a bounce shard's rows of the previous pass's exitant array: those its hits name
     uint64_t transferBytes = 0;    // transfer arrays alive at the peak
     uint64_t peakMemoryBytes = 0;  // process peak resident set after the computation
 };
@@ -153,15 +154,19 @@ ShardRows computeDirectShard(const TriMesh& mesh, const ShardRun& run, const std
 // Pass `pass` (1..bounces) of the run's shard: bounce `pass` of its rows. Reads and checks `previousPath` (this
 // shard's rows of pass - 1, writeShardRows), `hitsPath` (this shard's hit records) and `exitantPath` (the exitant
 // array of pass - 1, gatherExitant); throws prt::Error(kExitInput) naming the file when one belongs to another run,
-// shard or pass, or is malformed. Peak memory: the mesh, that array (vertices * order^2 * channels floats) and
-// this shard's hits and rows. After the last pass the rows' totals equal computeTransfer's rows bit for bit.
+// shard or pass, or is malformed. Peak memory: the mesh, the rows of that array that its hits gather from (the
+// corners of its hit triangles, order^2 * channels floats each: around a shard of a large scene, a fraction of the
+// vertices; at most all of them), a row index per triangle corner, and this shard's hits and rows. After the last pass the rows' totals equal computeTransfer's rows bit for bit.
 ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass, const std::string& previousPath,
                              const std::string& hitsPath, const std::string& exitantPath, TransferStats& stats);
 
 // Writes a shard's rows (atomically: temporary name, then rename) for the next pass.
 void writeShardRows(const std::string& path, const ShardRun& run, const ShardRows& rows);
-// Reads them back, checked against the run, the shard and the pass; `exitantOnly` skips total and direct.
-ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, bool exitantOnly);
+// Which sections of shard rows readShardRows reads (and checks); the others are skipped, and left empty.
+enum class ShardSections { All, TotalAndDirect, Exitant };
+// Reads them back, checked against the run, the shard and the pass. A bounce reads TotalAndDirect: it gathers
+// from the pass's joined exitant array instead.
+ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, ShardSections sections);
 
 // Joins the exitant rows of one pass's shards (files in any order, one per shard of run.shardCount, each checked
 // against the run) into the whole array, written atomically to `output` for the next pass. Returns the pass.

@@ -52,8 +52,8 @@ void writeSeeds(const std::string& dir) {
     prt::writeShardRows(work + "/rows", run, rows);
     prt::gatherExitant({work + "/rows"}, run, work + "/exitant");
     // One seed per reader: the reader byte, then the file.
-    const char* files[] = {"hits", "rows", "exitant", "rows"};
-    for (int reader = 0; reader < 4; ++reader) {
+    const char* files[] = {"hits", "rows", "exitant", "rows", "rows"};
+    for (int reader = 0; reader < 5; ++reader) {
         std::string bytes(1, char(reader));
         bytes += prt::readFileBytes(work + "/" + files[reader]);
         prt::writeBytesAtomic(dir + "/" + std::to_string(reader) + "-" + files[reader], bytes);
@@ -76,11 +76,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const prt::ShardRun run = fuzzRun();
     std::string path = prt::fuzz::writeInput(data + 1, size - 1, "shard");
     prt::fuzz::expectOnlyErrors([&] {
-        switch (data[0] % 4) {
+        switch (data[0] % 5) {
         case 0: prt::passes::readHitRecords(path, run); break;
-        case 1: prt::readShardRows(path, run, 1, false); break;
-        case 2: prt::passes::readExitant(path, run, 1); break;
-        default: prt::readShardRows(path, run, 1, true); break;
+        case 1: prt::readShardRows(path, run, 1, prt::ShardSections::All); break;
+        case 2: prt::passes::readExitant(path, run, 1, {1, 0, 1, 1}); break; // rows 0, 2 and 3 kept
+        case 3: prt::readShardRows(path, run, 1, prt::ShardSections::Exitant); break;
+        default: prt::readShardRows(path, run, 1, prt::ShardSections::TotalAndDirect); break;
         }
     });
     return 0;

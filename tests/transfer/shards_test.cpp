@@ -108,6 +108,33 @@ TEST_F(TransferShards, PerVertexAlbedoBouncesInRgbAlsoMatch) {
     EXPECT_EQ(readFileBytes(sharded(mesh, options, 4, 3, "sharded")), readFileBytes(path("whole.glb")));
 }
 
+// Two closed rooms far apart: no ray leaves either, so a bounce shard of the first room's vertices gathers from
+// none of the second's, and reads only its own rows of the exitant array (what its log reports), with the bundle
+// still the unsharded one byte for byte.
+TEST_F(TransferShards, ABounceShardReadsOnlyTheExitantRowsItsHitsName) {
+    TriMesh near = makeScene("box-room"), far = near; // coloured walls: RGB bounces
+    for (size_t i = 0; i < far.positions.size(); i += 3) far.positions[i] += 100.0f;
+    const TriMesh both = mergeMeshes({near, far});
+    const size_t roomVertices = near.vertexCount();
+    ASSERT_EQ(shardRows(both.vertexCount(), 0, 2).end, roomVertices); // shard 0 is the first room
+    std::string mesh = writeMesh("two_rooms.glb", both);
+    std::string options = "--mode interreflected --order 2 --samples 16";
+    ok("transfer " + mesh + " " + options + " --bounces 2 -o " + path("whole.glb"));
+    EXPECT_EQ(readFileBytes(sharded(mesh, options, 2, 2, "rooms")), readFileBytes(path("whole.glb")));
+
+    // Pass 1 of shard 0 again, from the files sharded() left, with its statistics.
+    CliRun pass = run("transfer " + mesh + " " + options + " --bounces 2 --shard 0/2 --pass 1 --previous " +
+                      path("rooms.p0.0") + " --hits " + path("rooms.p0.0.hits") + " --exitant " + path("rooms.e0") +
+                      " -o " + path("again") + " --log-json");
+    ASSERT_EQ(pass.exitCode, 0) << pass.stderrText;
+    size_t at = pass.stderrText.find("\"exitant_rows\":");
+    ASSERT_NE(at, std::string::npos) << pass.stderrText;
+    const uint64_t rowsRead = std::stoull(pass.stderrText.substr(at + 15));
+    EXPECT_GT(rowsRead, roomVertices / 2); // the room's own walls
+    EXPECT_LE(rowsRead, roomVertices);     // none of the other room's
+    EXPECT_EQ(readFileBytes(path("again")), readFileBytes(path("rooms.p1.0")));
+}
+
 // A tetrahedron seen from inside: 4 vertices whose every ray hits another face, so the bounces carry light.
 TriMesh insideTetrahedron() {
     TriMesh mesh;
@@ -237,9 +264,11 @@ TEST_F(TransferShardFiles, AFlippedPayloadByteIsRefusedByItsChecksum) {
     // The exitant array's last float.
     writeBytesAtomic(path("e0.flipped"), flipped(readFileBytes(path("e0")), 4));
     expectRefused(rows(0), rows(0) + ".hits", path("e0.flipped"), path("e0.flipped"), "exitant: does not match its checksum");
-    // The previous pass's rows: the last float of their exitant section.
-    writeBytesAtomic(path("p0.flipped"), flipped(readFileBytes(rows(0)), 4));
-    expectRefused(path("p0.flipped"), rows(0) + ".hits", path("e0"), path("p0.flipped"), "exitant: does not match its checksum");
+    // The previous pass's rows: the last float of their direct section, before the exitant section (order 2, one
+    // channel: 4 floats per row), which a bounce skips (it gathers from the joined array; the gather checks it).
+    const size_t exitantBytes = shardRows(readBundle(mesh).mesh.vertexCount(), 0, 2).end * 4 * 4;
+    writeBytesAtomic(path("p0.flipped"), flipped(readFileBytes(rows(0)), exitantBytes + 4));
+    expectRefused(path("p0.flipped"), rows(0) + ".hits", path("e0"), path("p0.flipped"), "direct: does not match its checksum");
     // Hit records: the last sample index's low byte.
     writeBytesAtomic(path("hits.flipped"), flipped(readFileBytes(rows(0) + ".hits"), 2));
     expectRefused(rows(0), path("hits.flipped"), path("e0"), path("hits.flipped"), "samples: does not match its checksum");
