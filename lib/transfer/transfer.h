@@ -156,7 +156,8 @@ ShardRows computeDirectShard(const TriMesh& mesh, const ShardRun& run, const std
 // array of pass - 1, gatherExitant); throws prt::Error(kExitInput) naming the file when one belongs to another run,
 // shard or pass, or is malformed. Peak memory: the mesh, the rows of that array that its hits gather from (the
 // corners of its hit triangles, order^2 * channels floats each: around a shard of a large scene, a fraction of the
-// vertices; at most all of them), a row index per triangle corner, and this shard's hits and rows. After the last pass the rows' totals equal computeTransfer's rows bit for bit.
+// vertices; at most all of them), a row index per triangle corner, and this shard's hits and rows. After the last
+// pass the rows' totals equal computeTransfer's rows bit for bit.
 ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass, const std::string& previousPath,
                              const std::string& hitsPath, const std::string& exitantPath, TransferStats& stats);
 
