@@ -100,7 +100,7 @@ Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, s
     Receivers receivers;
     receivers.positions = mesh.positions.data() + 3 * begin;
     receivers.normals = mesh.normals.data() + 3 * begin;
-    receivers.spawnNormals = spawn.data() + 3 * begin;
+    receivers.spawnNormals = spawn.empty() ? nullptr : spawn.data() + 3 * begin;
     if (!mesh.albedo.empty() && !options.albedoOverride) receivers.albedo = mesh.albedo.data() + 3 * begin;
     receivers.firstKey = begin;
     receivers.count = end - begin;
