@@ -104,8 +104,9 @@ inline size_t hitBlockCount(size_t receivers) { return (receivers + rays::kBlock
 void writeHitRecords(const std::string& path, const ShardRun& run, const std::vector<HitBlock>& blocks);
 std::vector<HitBlock> readHitRecords(const std::string& path, const ShardRun& run);
 // The exitant array of pass `pass` (gatherExitant's file), only the rows of the vertices that `needed` marks
-// ([run.vertexCount] flags), packed in vertex order. The whole section is read in pieces of about 1 MiB and checked
-// whole (its length, its checksum, every value finite), so memory is the marked rows plus one piece.
+// ([run.vertexCount] flags), packed in vertex order. Checks the payload's length and the chunk digest table against
+// the header's checksum, then reads only the 1 MiB chunks that hold a marked row, each checked against its digest
+// and for finite values: memory and bytes read are the marked rows' chunks, plus one chunk.
 std::vector<float> readExitant(const std::string& path, const ShardRun& run, int pass,
                                const std::vector<uint8_t>& needed);
 

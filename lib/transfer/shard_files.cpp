@@ -1,17 +1,21 @@
 // The files between the passes of a sharded interreflected transfer: hit records, a shard's rows, and a pass's
 // exitant array. One layout for the three (little-endian, as every machine prt builds on):
-//   8 bytes "PRTSHARD", uint32 format version (2), uint32 header length H (at most 64 KiB), H bytes of JSON, then
+//   8 bytes "PRTSHARD", uint32 format version (3), uint32 header length H (at most 64 KiB), H bytes of JSON, then
 //   the payload, whose every size follows from the header:
 //     hits:    uint32 count[rows], uint32 triangle[hit_count], uint32 barycentric[hit_count], uint16 sample[hit_count]
 //     rows:    float total[rows][n][3], float direct[rows][n][3], float exitant[rows][n * channels] (not after pass B)
-//     exitant: float exitant[vertex_count][n * channels]
+//     exitant: float exitant[vertex_count][n * channels], then char digests[chunks][D]: the exitant section's
+//              chunk digests (below; chunks = max(1, ceil(bytes / 1 MiB)), D = the length of hashBytes' text)
 // The header names the run (mesh hash, counts, options), and hits and rows their shard, so a file of another run
 // is refused by name before its payload is touched; the payload's length must be what the header implies, and
 // that is bounded by the element cap, before anything is allocated. The header's "checksums" holds one checksum
 // per payload section (counts, triangles, barycentrics, samples; total, direct, exitant): XXH3-128 (hashBytes) of
 // the concatenated XXH3-128 digests of the section's consecutive 1 MiB chunks, so it is computed while streaming
 // and a reader that skips a section (the gather reads only the exitant rows) checks what it reads. A section is
-// checked before any of its values is used: a corrupted byte is refused as such, by file and section.
+// checked before any of its values is used: a corrupted byte is refused as such, by file and section. An exitant
+// array also stores its chunk digests, whose hash is the header's checksum: a bounce shard checks the table
+// against it, then reads only the chunks that hold rows it gathers from and checks each against its digest (the
+// gather that wrote the array checked every value finite). Version 3 added the table.
 #include "passes.h"
 
 #include "core.h"
@@ -35,7 +39,7 @@ namespace prt {
 namespace {
 
 constexpr char kMagic[8] = {'P', 'R', 'T', 'S', 'H', 'A', 'R', 'D'};
-constexpr uint32_t kFormatVersion = 2;
+constexpr uint32_t kFormatVersion = 3;
 constexpr size_t kChecksumChunk = 1 << 20;
 constexpr uint32_t kMaxHeaderBytes = 64 * 1024;
 
@@ -94,9 +98,14 @@ struct SectionChecksum {
             }
         }
     }
-    std::string value() const {
+    // The digests of every chunk, the last (partial, or the only one of an empty section) included.
+    std::string table() const {
         std::string all = digests;
         if (!pending.empty() || all.empty()) all += hashBytes(pending.data(), pending.size());
+        return all;
+    }
+    std::string value() const {
+        const std::string all = table();
         return hashBytes(all.data(), all.size());
     }
 };
@@ -161,12 +170,21 @@ struct Reader {
         if (!in) fail(section, "cannot be read (the file changed while it was read?)");
         sections[section].add(data, count * sizeof(T));
     }
-    // Once the whole section is read: refuses it unless it matches the header's checksum.
-    void verify(const char* section) {
+    // Reads `bytes` at the stream's position without adding them to a checksum.
+    void readRaw(void* data, uint64_t bytes, const char* section) {
+        in.read(static_cast<char*>(data), std::streamsize(bytes));
+        if (!in) fail(section, "cannot be read (the file changed while it was read?)");
+    }
+    // The header's checksum of `section`.
+    std::string checksum(const char* section) const {
         const nlohmann::json& checksums = head.value("checksums", nlohmann::json());
         if (!checksums.is_object() || !checksums.contains(section) || !checksums[section].is_string())
             fail("header", std::string("has no checksum for the '") + section + "' section");
-        if (checksums[section].get<std::string>() != sections[section].value())
+        return checksums[section].get<std::string>();
+    }
+    // Once the whole section is read: refuses it unless it matches the header's checksum.
+    void verify(const char* section) {
+        if (checksum(section) != sections[section].value())
             fail(section, "does not match its checksum: the file is corrupt");
     }
     void readFinite(float* data, uint64_t count, const char* section) {
@@ -344,28 +362,44 @@ std::vector<float> readExitant(const std::string& path, const ShardRun& run, int
     Reader reader = openShardFile(path, "exitant", "an exitant array", run, false);
     readPass(reader, pass);
     const uint64_t rowFloats = coefficients(run) * uint64_t(run.channels);
-    uint64_t floats = checkedProduct({run.vertexCount, rowFloats}, "exitant values", path, "header");
-    expectPayload(reader, floats * 4);
+    const uint64_t floats = checkedProduct({run.vertexCount, rowFloats}, "exitant values", path, "header");
+    const uint64_t chunkFloats = kChecksumChunk / 4, chunks = std::max<uint64_t>(1, (floats + chunkFloats - 1) / chunkFloats);
+    const size_t digestLength = hashBytes("", 0).size();
+    expectPayload(reader, floats * 4 + chunks * digestLength);
+    // The digest table first, checked against the header: then each chunk read can be checked on its own.
+    const std::streamoff start = reader.in.tellg();
+    std::string table(chunks * digestLength, '\0');
+    reader.in.seekg(start + std::streamoff(floats * 4));
+    reader.readRaw(table.data(), table.size(), "digests");
+    if (hashBytes(table.data(), table.size()) != reader.checksum("exitant"))
+        reader.fail("digests", "do not match the exitant section's checksum: the file is corrupt");
+    // The chunks that hold a marked row, in order.
+    std::vector<uint8_t> wanted(chunks, 0);
     uint64_t kept = 0;
-    for (uint8_t flag : needed) kept += flag != 0;
+    for (uint64_t v = 0; v < run.vertexCount; ++v) {
+        if (!needed[v]) continue;
+        ++kept;
+        for (uint64_t c = v * rowFloats / chunkFloats; c <= ((v + 1) * rowFloats - 1) / chunkFloats; ++c) wanted[c] = 1;
+    }
     std::vector<float> exitant(kept * rowFloats);
-    // Pieces of one checksum chunk (rows may straddle two), each value checked, the marked rows' values kept.
-    std::vector<float> piece(std::min<uint64_t>(kChecksumChunk / 4, floats));
-    uint64_t firstBad = floats; // the first value that is not finite, reported once the checksum holds
+    if (kept == 0) return exitant;
+    std::vector<float> piece(std::min(chunkFloats, floats));
     float* out = exitant.data();
-    for (uint64_t first = 0; first < floats; first += piece.size()) {
-        const uint64_t count = std::min<uint64_t>(piece.size(), floats - first);
-        reader.read(piece.data(), count, "exitant");
-        for (uint64_t i = 0; i < count && firstBad == floats; ++i)
-            if (!std::isfinite(piece[i])) firstBad = first + i;
-        for (uint64_t f = first; f < first + count;) { // row by row: the part of row f / rowFloats in this piece
+    for (uint64_t c = 0; c < chunks; ++c) {
+        if (!wanted[c]) continue;
+        const uint64_t first = c * chunkFloats, count = std::min(chunkFloats, floats - first);
+        reader.in.seekg(start + std::streamoff(first * 4));
+        reader.readRaw(piece.data(), count * 4, "exitant");
+        if (hashBytes(piece.data(), count * 4) != table.substr(c * digestLength, digestLength))
+            reader.fail("exitant", "chunk " + std::to_string(c) + " does not match its checksum: the file is corrupt");
+        for (uint64_t i = 0; i < count; ++i)
+            if (!std::isfinite(piece[i])) reader.fail("exitant", "value " + std::to_string(first + i) + " is not finite");
+        for (uint64_t f = first; f < first + count;) { // row by row: the part of row f / rowFloats in this chunk
             const uint64_t end = std::min(first + count, (f / rowFloats + 1) * rowFloats);
             if (needed[f / rowFloats]) out = std::copy(piece.data() + (f - first), piece.data() + (end - first), out);
             f = end;
         }
     }
-    reader.verify("exitant");
-    if (firstBad != floats) reader.fail("exitant", "value " + std::to_string(firstBad) + " is not finite");
     return exitant;
 }
 
@@ -485,6 +519,9 @@ int gatherExitant(const std::vector<std::string>& parts, const ShardRun& run, co
             reader.verify("exitant");
             if (infinite < exitantFloats) reader.fail("exitant", "value " + std::to_string(infinite) + " is not finite");
         }
+        // The chunk digests after the section, so that a bounce reads and checks only the chunks it needs.
+        const std::string table = out.sections["exitant"].table();
+        out.out.write(table.data(), std::streamsize(table.size()));
     });
     return pass;
 }

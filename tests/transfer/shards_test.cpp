@@ -261,9 +261,14 @@ TEST_F(TransferShardFiles, TruncatedPaddedOrForeignFilesAreRefused) {
 // One flipped bit in the payload of each kind of file (a float's lowest mantissa bit: still a finite value that
 // every other check accepts) is refused by name, with exit 3, and nothing is written.
 TEST_F(TransferShardFiles, AFlippedPayloadByteIsRefusedByItsChecksum) {
-    // The exitant array's last float.
-    writeBytesAtomic(path("e0.flipped"), flipped(readFileBytes(path("e0")), 4));
-    expectRefused(rows(0), rows(0) + ".hits", path("e0.flipped"), path("e0.flipped"), "exitant: does not match its checksum");
+    // The exitant array's last float, before its table of chunk digests (one chunk here), and a digest's last byte.
+    const size_t table = hashBytes("", 0).size();
+    writeBytesAtomic(path("e0.flipped"), flipped(readFileBytes(path("e0")), table + 4));
+    expectRefused(rows(0), rows(0) + ".hits", path("e0.flipped"), path("e0.flipped"),
+                  "exitant: chunk 0 does not match its checksum");
+    writeBytesAtomic(path("e0.table"), flipped(readFileBytes(path("e0")), 1));
+    expectRefused(rows(0), rows(0) + ".hits", path("e0.table"), path("e0.table"),
+                  "digests: do not match the exitant section's checksum");
     // The previous pass's rows: the last float of their direct section, before the exitant section (order 2, one
     // channel: 4 floats per row), which a bounce skips (it gathers from the joined array; the gather checks it).
     const size_t exitantBytes = shardRows(readBundle(mesh).mesh.vertexCount(), 0, 2).end * 4 * 4;
