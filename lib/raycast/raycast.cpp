@@ -283,27 +283,70 @@ void pinholeRayDirection(const PinholeRays& rays, size_t pixel, float d[3]) {
     normalize(d);
 }
 
-std::vector<float> spawnNormals(const TriMesh& mesh) {
-    const size_t count = mesh.vertexCount();
-    // Vertices at the same position form one group: sort vertex indices by their position's bits.
-    auto bits = [&](size_t v) {
-        std::array<uint32_t, 3> key;
-        std::memcpy(key.data(), &mesh.positions[3 * v], sizeof key);
-        for (uint32_t& k : key) k = k == 0x80000000u ? 0u : k; // -0 and +0 are one position
-        return key;
-    };
-    std::vector<uint32_t> order(count);
-    for (size_t v = 0; v < count; ++v) order[v] = uint32_t(v);
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return bits(a) < bits(b); });
-    std::vector<uint32_t> group(count);
-    size_t groups = 0;
-    for (size_t i = 0; i < count; ++i) {
-        if (i > 0 && bits(order[i]) != bits(order[i - 1])) ++groups;
-        group[order[i]] = uint32_t(groups);
+namespace {
+
+// Vertices at the same position, one group per position: an open-addressing table (linear probing, at most 70%
+// full) of group numbers, each group keyed by the position of its first vertex (bits compared, -0 and +0 one
+// position). 4 bytes per slot and per group.
+struct PositionGroups {
+    const float* positions;
+    std::vector<int32_t> slots;          // a group, or -1: empty
+    std::vector<uint32_t> firstVertex;   // per group
+    size_t mask = 0;
+
+    PositionGroups(const float* positions_, size_t maxGroups) : positions(positions_) {
+        size_t capacity = 16;
+        while (capacity * 7 < maxGroups * 10) capacity *= 2;
+        slots.assign(capacity, -1);
+        mask = capacity - 1;
     }
-    std::vector<double> sum(3 * (count ? groups + 1 : 0), 0.0);
+    std::array<uint32_t, 3> key(size_t v) const {
+        std::array<uint32_t, 3> bits;
+        std::memcpy(bits.data(), positions + 3 * v, sizeof bits);
+        for (uint32_t& b : bits) b = b == 0x80000000u ? 0u : b;
+        return bits;
+    }
+    // The slot of vertex v's position: the one holding its group, or the empty one where it belongs.
+    size_t slot(size_t v) const {
+        const std::array<uint32_t, 3> bits = key(v);
+        uint64_t h = (uint64_t(bits[0]) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(bits[1]) * 0xC2B2AE3D27D4EB4Full) ^
+                     (uint64_t(bits[2]) * 0x165667B19E3779F9ull);
+        size_t at = size_t(h ^ (h >> 29)) & mask;
+        while (slots[at] >= 0 && key(firstVertex[size_t(slots[at])]) != bits) at = (at + 1) & mask;
+        return at;
+    }
+    int32_t insert(size_t v) {
+        const size_t at = slot(v);
+        if (slots[at] < 0) {
+            slots[at] = int32_t(firstVertex.size());
+            firstVertex.push_back(uint32_t(v));
+        }
+        return slots[at];
+    }
+    int32_t find(size_t v) const { return slots[slot(v)]; }
+    size_t count() const { return firstVertex.size(); }
+};
+
+} // namespace
+
+std::vector<float> spawnNormals(const TriMesh& mesh) { return spawnNormals(mesh, 0, mesh.vertexCount()); }
+
+std::vector<float> spawnNormals(const TriMesh& mesh, size_t begin, size_t end) {
+    const size_t count = mesh.vertexCount();
+    end = std::min(end, count);
+    begin = std::min(begin, end);
+    // The groups of the range's positions; every vertex at one of them belongs to its group.
+    PositionGroups table(mesh.positions.data(), end - begin);
+    std::vector<int32_t> group(count, -1);
+    for (size_t v = begin; v < end; ++v) group[v] = table.insert(v);
+    if (end - begin < count)
+        for (size_t v = 0; v < count; ++v)
+            if (v < begin || v >= end) group[v] = table.find(v);
+    // Each group's sum over its triangles in triangle order, corner by corner, whatever the range.
+    std::vector<double> sum(3 * table.count(), 0.0);
     for (size_t t = 0; t < mesh.triangleCount(); ++t) {
         const uint32_t* corner = &mesh.indices[3 * t];
+        if (group[corner[0]] < 0 && group[corner[1]] < 0 && group[corner[2]] < 0) continue;
         const float* p0 = &mesh.positions[3 * corner[0]];
         const float* p1 = &mesh.positions[3 * corner[1]];
         const float* p2 = &mesh.positions[3 * corner[2]];
@@ -311,14 +354,16 @@ std::vector<float> spawnNormals(const TriMesh& mesh) {
         for (int c = 0; c < 3; ++c) e1[c] = double(p1[c]) - p0[c], e2[c] = double(p2[c]) - p0[c];
         double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
         for (int k = 0; k < 3; ++k)
-            for (int c = 0; c < 3; ++c) sum[3 * group[corner[k]] + c] += n[c];
+            if (group[corner[k]] >= 0)
+                for (int c = 0; c < 3; ++c) sum[3 * size_t(group[corner[k]]) + c] += n[c];
     }
-    std::vector<float> normals(3 * count);
-    for (size_t v = 0; v < count; ++v) {
-        const double* s = &sum[3 * group[v]];
+    std::vector<float> normals(3 * (end - begin));
+    const bool haveNormal = mesh.normals.size() == mesh.positions.size();
+    for (size_t v = begin; v < end; ++v) {
+        const double* s = &sum[3 * size_t(group[v])];
         double length = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
         double fallback[3] = {0.0, 0.0, 1.0};
-        if (mesh.normals.size() == mesh.positions.size()) {
+        if (haveNormal) {
             const float* n = &mesh.normals[3 * v];
             double nl = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
             if (nl > 0) fallback[0] = n[0] / nl, fallback[1] = n[1] / nl, fallback[2] = n[2] / nl;
@@ -328,11 +373,10 @@ std::vector<float> spawnNormals(const TriMesh& mesh) {
         for (int c = 0; c < 3; ++c) scale += std::fabs(s[c]);
         bool usable = length > 1e-6 * scale && length > 0.0;
         // On the side the rays leave: the shading normal's (an inside-out mesh keeps its rays inside).
-        bool haveNormal = mesh.normals.size() == mesh.positions.size();
         double side = usable && haveNormal ? (s[0] * fallback[0] + s[1] * fallback[1] + s[2] * fallback[2]) / length : 1.0;
         if (std::fabs(side) < 1e-3) usable = false;
         double sign = side < 0.0 ? -1.0 : 1.0;
-        for (int c = 0; c < 3; ++c) normals[3 * v + c] = float(usable ? sign * s[c] / length : fallback[c]);
+        for (int c = 0; c < 3; ++c) normals[3 * (v - begin) + c] = float(usable ? sign * s[c] / length : fallback[c]);
     }
     return normals;
 }

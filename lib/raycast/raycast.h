@@ -132,7 +132,11 @@ inline void spawnRay(RTCRay& ray, const float origin[3], float dx, float dy, flo
 // Per vertex [vertexCount][3]: the unit mean of the area-weighted geometric normals of every triangle that touches
 // a vertex at exactly the same position, split vertices included, turned to the vertex normal's side (where the
 // rays leave). Where they cancel (two-sided sheets), are perpendicular to the vertex normal, or the vertex is on no
-// triangle: the vertex normal (normalised), else +z.
+// triangle: the vertex normal (normalised), else +z. Memory: 4 bytes per vertex, and at most about 40 per vertex of
+// the range (a table of its distinct positions, their sums).
 std::vector<float> spawnNormals(const TriMesh& mesh);
+// The same rows for vertices [begin, end) only ([end - begin][3], bit for bit those of spawnNormals(mesh)): a shard's
+// receivers. Its table holds the range's positions alone; every vertex and triangle is still visited once.
+std::vector<float> spawnNormals(const TriMesh& mesh, size_t begin, size_t end);
 
 } // namespace prt

@@ -96,11 +96,11 @@ void validateMesh(const TriMesh& mesh) {
 }
 
 Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end,
-                          const std::vector<float>& spawn) {
+                          const float* spawn) {
     Receivers receivers;
     receivers.positions = mesh.positions.data() + 3 * begin;
     receivers.normals = mesh.normals.data() + 3 * begin;
-    receivers.spawnNormals = spawn.empty() ? nullptr : spawn.data() + 3 * begin;
+    receivers.spawnNormals = spawn;
     if (!mesh.albedo.empty() && !options.albedoOverride) receivers.albedo = mesh.albedo.data() + 3 * begin;
     receivers.firstKey = begin;
     receivers.count = end - begin;

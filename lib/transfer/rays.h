@@ -38,10 +38,10 @@ Fan fan(const float position[3], const float normal[3], const float* spawnNormal
 
 // The receivers a per-vertex pass works on: vertices [begin, end) of the mesh, keys their indices, albedo the
 // mesh's per-vertex albedo unless it has none or options.albedoOverride (then null: options.albedo).
-// `spawn` is spawnNormals(mesh) (lib/raycast) and must outlive the receivers, or empty for a pass that casts no
-// ray (a bounce gathers at recorded hits): then the receivers have no spawn normals.
+// `spawn` is their spawn normals, spawnNormals(mesh, begin, end) (lib/raycast), and must outlive the receivers, or
+// null for a pass that casts no ray (a bounce gathers at recorded hits).
 Receivers vertexReceivers(const TriMesh& mesh, const TransferOptions& options, size_t begin, size_t end,
-                          const std::vector<float>& spawn);
+                          const float* spawn);
 
 // Receiver i's rotation key.
 inline uint64_t receiverKey(const Receivers& receivers, size_t i) {

@@ -78,8 +78,9 @@ ShardRows computeDirectShard(const TriMesh& mesh, const ShardRun& run, const std
                              TransferStats& stats) {
     checkMesh(mesh, run);
     const TransferOptions options = rangeOptions(run);
-    const std::vector<float> spawn = spawnNormals(mesh);
-    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, run.rowBegin, run.rowEnd, spawn));
+    const std::vector<float> spawn = spawnNormals(mesh, run.rowBegin, run.rowEnd); // its receivers' only
+    Context context =
+        makeContext(mesh, options, rays::vertexReceivers(mesh, options, run.rowBegin, run.rowEnd, spawn.data()));
     const size_t rows = run.rowEnd - run.rowBegin;
 
     ShardRows result;
@@ -121,7 +122,7 @@ ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass,
 
     const TransferOptions options = rangeOptions(run);
     // No ray is cast, so no spawn normals (their sort by position was a fifth of a bounce job at 10 M triangles).
-    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, run.rowBegin, run.rowEnd, {}));
+    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, run.rowBegin, run.rowEnd, nullptr));
     const bool last = pass == run.options.bounces;
     std::vector<float> next(last ? 0 : (run.rowEnd - run.rowBegin) * context.coefficients * run.channels);
     stats.rayOffset = context.offset;

@@ -373,8 +373,8 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
     if (options.bounces > 0 && (begin != 0 || end != mesh.vertexCount()))
         throw Error("", "vertex range", "interreflected bounces gather from every vertex, so they need the whole mesh",
                     kExitUsage);
-    const std::vector<float> spawn = spawnNormals(mesh);
-    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, begin, end, spawn));
+    const std::vector<float> spawn = spawnNormals(mesh, begin, end);
+    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, begin, end, spawn.data()));
 
     Transfer result;
     result.order = options.order;

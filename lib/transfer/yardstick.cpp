@@ -66,8 +66,8 @@ RayThroughput castBareOcclusionRays(const TriMesh& mesh, const TransferOptions& 
     rays::validateMesh(mesh);
     size_t begin, end;
     rays::clipRange(mesh, options, begin, end);
-    const std::vector<float> spawn = spawnNormals(mesh);
-    return castBare(mesh, rays::vertexReceivers(mesh, options, begin, end, spawn), options);
+    const std::vector<float> spawn = spawnNormals(mesh, begin, end);
+    return castBare(mesh, rays::vertexReceivers(mesh, options, begin, end, spawn.data()), options);
 }
 
 RayThroughput castBareOcclusionRaysAt(const TriMesh& geometry, const Receivers& receivers,

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <limits>
 
@@ -111,6 +112,31 @@ TEST(Raycast, SpawnedRaysNeverLeakFromAClosedBoxRoom) {
     EXPECT_GT(escapedOldRule, 0u) << "the test no longer tells the old rule from the new one";
     std::printf("box room: %zu rays, %zu escaped by the shared rule, %zu by the old transfer rule\n", rays, escaped,
                 escapedOldRule);
+}
+
+// A shard's receivers get the rows of the whole mesh's spawn normals bit for bit, though their positions' groups
+// reach outside the range: the box room's corners and edges are split vertices (one per wall), and its copy lies
+// over it at the same positions, so every group spans both halves.
+TEST(Raycast, SpawnNormalsOfARangeAreTheWholeMeshsRows) {
+    const TriMesh room = makeBoxRoom(2.0f, 4);
+    TriMesh twice = mergeMeshes({room, room});
+    for (size_t i = 0; i < room.normals.size(); ++i) twice.normals[room.normals.size() + i] *= -1.0f; // other side
+    const std::vector<float> whole = spawnNormals(twice);
+    ASSERT_EQ(whole.size(), twice.positions.size());
+    const size_t V = twice.vertexCount();
+    for (auto [begin, end] : {std::pair<size_t, size_t>{0, V}, {0, 7}, {5, V / 2 + 3}, {V / 2, V}, {V - 1, V}, {9, 9}}) {
+        const std::vector<float> rows = spawnNormals(twice, begin, end);
+        ASSERT_EQ(rows.size(), 3 * (end - begin));
+        EXPECT_EQ(0, std::memcmp(rows.data(), whole.data() + 3 * begin, rows.size() * sizeof(float)))
+            << "[" << begin << ", " << end << ")";
+    }
+    // The groups matter: a corner vertex's spawn normal leaves all three walls, unlike its own wall's normal.
+    size_t corner = 0;
+    while (corner < room.vertexCount() &&
+           !(std::fabs(whole[3 * corner]) > 0.3f && std::fabs(whole[3 * corner + 1]) > 0.3f &&
+             std::fabs(whole[3 * corner + 2]) > 0.3f))
+        ++corner;
+    EXPECT_LT(corner, room.vertexCount()) << "no vertex of the room has a corner's spawn normal";
 }
 
 TEST(Raycast, AnEmptyMeshIsASceneWithNothingToHit) {
