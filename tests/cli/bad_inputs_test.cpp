@@ -147,9 +147,10 @@ std::function<std::string()> lightsText(const std::function<void(json&)>& edit =
     };
 }
 
-// A shard file of sharded interreflected transfer: "PRTSHARD", version 2 (the format of lib/transfer/shard_files.cpp), the header's length, the header.
+// A shard file of sharded interreflected transfer: "PRTSHARD", version 3 (the format of lib/transfer/shard_files.cpp),
+// the header's length, the header.
 std::function<std::string()> shardFile(std::string header) {
-    return [header] { return "PRTSHARD" + bytesOf({2, uint32_t(header.size())}) + header; };
+    return [header] { return "PRTSHARD" + bytesOf({3, uint32_t(header.size())}) + header; };
 }
 
 // The base sphere with a glossy_lobes layer whose every lobe has sharpness `lambda` (92 views, one triangle).
