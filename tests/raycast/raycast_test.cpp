@@ -127,6 +127,7 @@ TEST(Raycast, SpawnNormalsOfARangeAreTheWholeMeshsRows) {
     for (auto [begin, end] : {std::pair<size_t, size_t>{0, V}, {0, 7}, {5, V / 2 + 3}, {V / 2, V}, {V - 1, V}, {9, 9}}) {
         const std::vector<float> rows = spawnNormals(twice, begin, end);
         ASSERT_EQ(rows.size(), 3 * (end - begin));
+        if (rows.empty()) continue; // (memcmp may not take the null pointer of an empty vector)
         EXPECT_EQ(0, std::memcmp(rows.data(), whole.data() + 3 * begin, rows.size() * sizeof(float)))
             << "[" << begin << ", " << end << ")";
     }
