@@ -363,7 +363,8 @@ std::vector<float> readExitant(const std::string& path, const ShardRun& run, int
     readPass(reader, pass);
     const uint64_t rowFloats = coefficients(run) * uint64_t(run.channels);
     const uint64_t floats = checkedProduct({run.vertexCount, rowFloats}, "exitant values", path, "header");
-    const uint64_t chunkFloats = kChecksumChunk / 4, chunks = std::max<uint64_t>(1, (floats + chunkFloats - 1) / chunkFloats);
+    const uint64_t chunkFloats = kChecksumChunk / 4;
+    const uint64_t chunks = std::max<uint64_t>(1, (floats + chunkFloats - 1) / chunkFloats);
     const size_t digestLength = hashBytes("", 0).size();
     expectPayload(reader, floats * 4 + chunks * digestLength);
     // The digest table first, checked against the header: then each chunk read can be checked on its own.
@@ -393,7 +394,8 @@ std::vector<float> readExitant(const std::string& path, const ShardRun& run, int
         if (hashBytes(piece.data(), count * 4) != table.substr(c * digestLength, digestLength))
             reader.fail("exitant", "chunk " + std::to_string(c) + " does not match its checksum: the file is corrupt");
         for (uint64_t i = 0; i < count; ++i)
-            if (!std::isfinite(piece[i])) reader.fail("exitant", "value " + std::to_string(first + i) + " is not finite");
+            if (!std::isfinite(piece[i]))
+                reader.fail("exitant", "value " + std::to_string(first + i) + " is not finite");
         for (uint64_t f = first; f < first + count;) { // row by row: the part of row f / rowFloats in this chunk
             const uint64_t end = std::min(first + count, (f / rowFloats + 1) * rowFloats);
             if (needed[f / rowFloats]) out = std::copy(piece.data() + (f - first), piece.data() + (end - first), out);

@@ -122,7 +122,8 @@ ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass,
 
     const TransferOptions options = rangeOptions(run);
     // No ray is cast, so no spawn normals (their sort by position was a fifth of a bounce job at 10 M triangles).
-    Context context = makeContext(mesh, options, rays::vertexReceivers(mesh, options, run.rowBegin, run.rowEnd, nullptr));
+    Context context =
+        makeContext(mesh, options, rays::vertexReceivers(mesh, options, run.rowBegin, run.rowEnd, nullptr));
     const bool last = pass == run.options.bounces;
     std::vector<float> next(last ? 0 : (run.rowEnd - run.rowBegin) * context.coefficients * run.channels);
     stats.rayOffset = context.offset;

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 namespace prt {
 namespace {
@@ -124,7 +125,8 @@ TEST(Raycast, SpawnNormalsOfARangeAreTheWholeMeshsRows) {
     const std::vector<float> whole = spawnNormals(twice);
     ASSERT_EQ(whole.size(), twice.positions.size());
     const size_t V = twice.vertexCount();
-    for (auto [begin, end] : {std::pair<size_t, size_t>{0, V}, {0, 7}, {5, V / 2 + 3}, {V / 2, V}, {V - 1, V}, {9, 9}}) {
+    const std::pair<size_t, size_t> ranges[] = {{0, V}, {0, 7}, {5, V / 2 + 3}, {V / 2, V}, {V - 1, V}, {9, 9}};
+    for (auto [begin, end] : ranges) {
         const std::vector<float> rows = spawnNormals(twice, begin, end);
         ASSERT_EQ(rows.size(), 3 * (end - begin));
         if (rows.empty()) continue; // (memcmp may not take the null pointer of an empty vector)

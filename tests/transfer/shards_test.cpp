@@ -273,7 +273,8 @@ TEST_F(TransferShardFiles, AFlippedPayloadByteIsRefusedByItsChecksum) {
     // channel: 4 floats per row), which a bounce skips (it gathers from the joined array; the gather checks it).
     const size_t exitantBytes = shardRows(readBundle(mesh).mesh.vertexCount(), 0, 2).end * 4 * 4;
     writeBytesAtomic(path("p0.flipped"), flipped(readFileBytes(rows(0)), exitantBytes + 4));
-    expectRefused(path("p0.flipped"), rows(0) + ".hits", path("e0"), path("p0.flipped"), "direct: does not match its checksum");
+    expectRefused(path("p0.flipped"), rows(0) + ".hits", path("e0"), path("p0.flipped"),
+                  "direct: does not match its checksum");
     // Hit records: the last sample index's low byte.
     writeBytesAtomic(path("hits.flipped"), flipped(readFileBytes(rows(0) + ".hits"), 2));
     expectRefused(rows(0), path("hits.flipped"), path("e0"), path("hits.flipped"), "samples: does not match its checksum");
