@@ -456,7 +456,7 @@ void runRelight(const RelightOptions& options) {
         model = relightModel(std::move(bundle), options.bundle);
         if (surface) model.albedo.clear(); // the picture multiplies by the materials per pixel
     } else {
-        Bundle bundle = readBundle(options.bundle);
+        Bundle bundle = readRelightBundle(options.bundle); // the layers relight reads, not the bounce layer's values
         if (!options.positions.empty()) mesh.positions = bundle.mesh.positions;
         const Layer* transfer = findLayer(bundle, "transfer");
         nlohmann::json albedo = transfer ? transfer->params.value("albedo", nlohmann::json()) : nlohmann::json();

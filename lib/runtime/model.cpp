@@ -3,10 +3,12 @@
 
 #include "core.h"
 #include "json_input.h"
+#include "bundle_stream.h"
 #include "runtime_internal.h"
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -98,8 +100,33 @@ void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::
     model.albedo = layer->data;
 }
 
+Bundle readRelightBundle(const std::string& bundlePath) {
+    std::optional<BundleHeader> header;
+    try {
+        header = readBundleHeader(bundlePath);
+    } catch (const Error&) {
+        return readBundle(bundlePath); // another layout, or a file readBundle refuses with its own message
+    }
+    Bundle& bundle = header->bundle;
+    if (!findLayer(bundle, "transfer")) return readBundle(bundlePath); // adaptive layers: integers too
+    for (size_t i = 0; i < bundle.layers.size(); ++i) {
+        Layer& layer = bundle.layers[i];
+        if (layer.name != "transfer" && layer.name != "diffuse_albedo") continue;
+        if (layer.componentType != "float32" && layer.componentType != "float16") return readBundle(bundlePath);
+        // readLayerFloats writes the view's bytes as floats: as many as the shape holds (bundleFromModel checks
+        // that for readBundle and readBundleHeader alike; checked again before anything is written).
+        uint64_t elements = 1;
+        for (uint64_t extent : layer.shape) elements *= extent;
+        const uint64_t size = layer.componentType == "float16" ? 2 : 4;
+        if (header->extents[i].byteLength != elements * size) return readBundle(bundlePath);
+        layer.data.resize(elements);
+        readLayerFloats(*header, i, layer.data.data());
+    }
+    return std::move(bundle);
+}
+
 RelightModel loadRelightModel(const std::string& bundlePath) {
-    return relightModel(readBundle(bundlePath), bundlePath);
+    return relightModel(readRelightBundle(bundlePath), bundlePath);
 }
 
 } // namespace prt

@@ -354,6 +354,68 @@ TEST(Runtime, WhiteFurnace) {
         for (int c = 0; c < 3; ++c) ASSERT_NEAR(radiance[v * 3 + c], L[c], quadrature * L[c]) << v << " " << c;
 }
 
+// A bundle as the relight stage reads it: the transfer (float16 here) and the albedo it excludes, with their values,
+// and the other layers (a bounce layer; an integer layer) described but empty; the model is readBundle's bit for
+// bit. A corrupted byte in a layer it skips is still refused: the whole file is checked.
+TEST(Runtime, RelightReadsOnlyTheLayersItUsesAndChecksTheWholeFile) {
+    const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    prt::Bundle bundle = transferBundle(positions, 3, randomValues(3 * 9 * 3, 7));
+    bundle.layers[0].componentType = "float16";
+    bundle.layers[0].params["albedo"] = "excluded";
+    prt::Layer albedo;
+    albedo.name = "diffuse_albedo";
+    albedo.domain = "vertex";
+    albedo.semantic = "diffuse_albedo_rgb";
+    albedo.shape = {3, 3};
+    albedo.data = {0.25f, 0.5f, 0.75f, 1.0f, 0.0f, 0.5f, 0.125f, 0.25f, 0.375f};
+    prt::Layer bounce = bundle.layers[0];
+    bounce.name = "transfer_bounce";
+    bounce.componentType = "float32";
+    bounce.data = randomValues(3 * 9 * 3, 8);
+    prt::Layer codes;
+    codes.name = "labels";
+    codes.domain = "vertex";
+    codes.semantic = "label";
+    codes.shape = {3};
+    codes.componentType = "uint8";
+    codes.integers = {1, 2, 3};
+    bundle.layers.insert(bundle.layers.begin(), bounce); // before the transfer: the kept layers are not the first
+    bundle.layers.push_back(albedo);
+    bundle.layers.push_back(codes);
+    ScratchDir scratch;
+    const std::string path = (scratch.path / "scene.glb").string();
+    prt::writeBundle(path, bundle);
+
+    const prt::Bundle read = prt::readRelightBundle(path);
+    ASSERT_EQ(read.layers.size(), 4u);
+    for (const prt::Layer& layer : read.layers) {
+        const bool kept = layer.name == "transfer" || layer.name == "diffuse_albedo";
+        EXPECT_EQ(layer.data.size(), kept ? (layer.name == "transfer" ? 81u : 9u) : 0u) << layer.name;
+        EXPECT_TRUE(layer.integers.empty()) << layer.name;
+    }
+    const prt::RelightModel model = prt::loadRelightModel(path);
+    const prt::RelightModel whole = prt::relightModel(prt::readBundle(path), path);
+    EXPECT_EQ(model.order, 3);
+    EXPECT_TRUE(model.albedoExcluded);
+    EXPECT_EQ(0, std::memcmp(model.transfer.data(), whole.transfer.data(), 81 * sizeof(float)));
+    EXPECT_EQ(model.albedo, whole.albedo);
+    EXPECT_EQ(model.albedo, albedo.data);
+
+    // One bit of the bounce layer's first value, a layer readRelightBundle does not keep.
+    std::string bytes = prt::readFileBytes(path);
+    float first = bounce.data[0];
+    const size_t at = bytes.find(std::string(reinterpret_cast<const char*>(&first), 4));
+    ASSERT_NE(at, std::string::npos);
+    bytes[at] ^= 0x01;
+    prt::writeBytesAtomic(path, bytes);
+    try {
+        prt::loadRelightModel(path);
+        FAIL() << "a corrupted bundle was read";
+    } catch (const prt::Error& error) {
+        EXPECT_NE(std::string(error.what()).find(path), std::string::npos) << error.what();
+    }
+}
+
 TEST(Runtime, BundleWithoutTransferIsAnErrorNamingTheFile) {
     prt::Bundle bundle = transferBundle({0, 0, 0, 1, 0, 0, 0, 1, 0}, 2, std::vector<float>(36, 0.5f));
     bundle.layers[0].name = "visibility";

@@ -73,8 +73,16 @@ inline constexpr size_t kRelightBlock = 4096;
 // `source` otherwise.
 RelightModel relightModel(Bundle bundle, const std::string& source);
 
-// Reads a bundle file and takes its transfer layer, as relightModel does.
+// Reads a bundle file and takes its transfer layer, as relightModel does, with the file read as readRelightBundle
+// reads it.
 RelightModel loadRelightModel(const std::string& bundlePath);
+
+// A bundle file as relight needs it. With a "transfer" layer in a layout readBundleHeader reads (every bundle prt
+// writes), the whole file is checked as readBundle checks it but only the values of "transfer" and
+// "diffuse_albedo" are kept; the other layers keep their descriptions with no values, so a bundle's bounce layer,
+// lobes or grids cost no memory. Otherwise (adaptive layers, another layout) it is readBundle's bundle. Throws
+// prt::Error naming `bundlePath` as readBundle does.
+Bundle readRelightBundle(const std::string& bundlePath);
 
 // The real-time kernel: radiance[v][c] = sum_j transfer[v][j][c] * lighting[j][c] for v < vertexCount.
 // transfer is [vertexCount][coefficientCount][3], lighting [coefficientCount][3], radiance [vertexCount][3].
