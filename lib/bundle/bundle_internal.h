@@ -80,4 +80,8 @@ TriMesh readGltfMeshAt(const tinygltf::Model& model, int meshIndex, const std::s
 size_t componentSize(const std::string& componentType);
 bool isFloatComponent(const std::string& componentType);
 
+// `count` stored values of `size` bytes each (1, 2 or 4: uint8, uint16, uint32, little-endian) widened into `out`,
+// as Layer::integers holds them. readBundle and readLayerValues decode through it.
+void decodeIntegers(const unsigned char* bytes, size_t count, size_t size, uint32_t* out);
+
 } // namespace prt::detail

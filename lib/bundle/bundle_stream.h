@@ -48,6 +48,11 @@ void streamLayerBytes(const BundleHeader& header, size_t index, const ByteSink& 
 // floats, as readBundle's Layer::data. Throws as streamLayerBytes, and prt::Error(kExitInput) for another type.
 void readLayerFloats(const BundleHeader& header, size_t index, float* values);
 
+// Layer `index` of `header` with its values, as readBundle gives it: `layer` (that layer of header.bundle, or a copy
+// of it) gets its data (float layers) or integers (the others), decoded from the stored bytes read by ranges; a layer
+// without a bufferView stays empty. Throws as streamLayerBytes.
+void readLayerValues(const BundleHeader& header, size_t index, Layer& layer);
+
 // A layer's stored bytes for writeBundleStreamed: `write` passes exactly byteLength of them to its sink, in order.
 struct LayerStream {
     uint64_t byteLength = 0;

@@ -69,5 +69,19 @@ bool isFloatComponent(const std::string& componentType) {
     return componentType == "float32" || componentType == "float16";
 }
 
+void decodeIntegers(const unsigned char* bytes, size_t count, size_t size, uint32_t* out) {
+    for (size_t i = 0; i < count; ++i) {
+        if (size == 1) {
+            out[i] = bytes[i];
+        } else if (size == 2) {
+            uint16_t value;
+            std::memcpy(&value, bytes + 2 * i, 2);
+            out[i] = value;
+        } else {
+            std::memcpy(&out[i], bytes + 4 * i, 4);
+        }
+    }
+}
+
 } // namespace detail
 } // namespace prt

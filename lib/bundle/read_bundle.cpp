@@ -230,17 +230,7 @@ static Layer readLayer(const json& record, const tinygltf::Model& model, const B
         }
     } else {
         layer.integers.resize(count);
-        for (size_t i = 0; i < count; ++i) {
-            if (size == 1) {
-                layer.integers[i] = bytes[i];
-            } else if (size == 2) {
-                uint16_t value;
-                std::memcpy(&value, bytes + 2 * i, 2);
-                layer.integers[i] = value;
-            } else {
-                std::memcpy(&layer.integers[i], bytes + 4 * i, 4);
-            }
-        }
+        detail::decodeIntegers(bytes, count, size, layer.integers.data());
     }
     return layer;
 }

@@ -194,4 +194,24 @@ void readLayerFloats(const BundleHeader& header, size_t index, float* values) {
     });
 }
 
+void readLayerValues(const BundleHeader& header, size_t index, Layer& layer) {
+    const std::string& type = header.bundle.layers.at(index).componentType;
+    const size_t size = detail::componentSize(type);
+    // The validator checked the view against the shape and the type; a layer without a view (params.uri, whose type
+    // it does not check) has no bytes here, and stays empty as readBundle leaves it.
+    const uint64_t bytes = header.extents.at(index).byteLength, count = bytes == 0 ? 0 : bytes / size;
+    if (detail::isFloatComponent(type)) {
+        layer.data.resize(count);
+        readLayerFloats(header, index, layer.data.data());
+        return;
+    }
+    layer.integers.resize(count);
+    uint64_t done = 0; // values decoded; pieces come in whole values (1 MiB each but the last)
+    streamLayerBytes(header, index, [&](const void* bytes, size_t bytesInPiece) {
+        detail::decodeIntegers(static_cast<const unsigned char*>(bytes), bytesInPiece / size, size,
+                               layer.integers.data() + done);
+        done += bytesInPiece / size;
+    });
+}
+
 } // namespace prt

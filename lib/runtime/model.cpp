@@ -1,9 +1,9 @@
 // Loading a bundle's transfer layer into a RelightModel, validated so the kernel can trust its sizes.
 #include "runtime.h"
 
+#include "bundle_stream.h"
 #include "core.h"
 #include "json_input.h"
-#include "bundle_stream.h"
 #include "runtime_internal.h"
 
 #include <cmath>
@@ -108,20 +108,12 @@ Bundle readRelightBundle(const std::string& bundlePath) {
         return readBundle(bundlePath); // another layout, or a file readBundle refuses with its own message
     }
     Bundle& bundle = header->bundle;
-    if (!findLayer(bundle, "transfer")) return readBundle(bundlePath); // adaptive layers: integers too
-    for (size_t i = 0; i < bundle.layers.size(); ++i) {
-        Layer& layer = bundle.layers[i];
-        if (layer.name != "transfer" && layer.name != "diffuse_albedo") continue;
-        if (layer.componentType != "float32" && layer.componentType != "float16") return readBundle(bundlePath);
-        // readLayerFloats writes the view's bytes as floats: as many as the shape holds (bundleFromModel checks
-        // that for readBundle and readBundleHeader alike; checked again before anything is written).
-        uint64_t elements = 1;
-        for (uint64_t extent : layer.shape) elements *= extent;
-        const uint64_t size = layer.componentType == "float16" ? 2 : 4;
-        if (header->extents[i].byteLength != elements * size) return readBundle(bundlePath);
-        layer.data.resize(elements);
-        readLayerFloats(*header, i, layer.data.data());
-    }
+    // With a transfer layer, relightModel reads it and the albedo it may exclude; without one, the adaptive layers
+    // (adaptiveRelightModel), so then every layer has its values, as readBundle gives them.
+    const bool transfer = findLayer(bundle, "transfer") != nullptr;
+    for (size_t i = 0; i < bundle.layers.size(); ++i)
+        if (!transfer || bundle.layers[i].name == "transfer" || bundle.layers[i].name == "diffuse_albedo")
+            readLayerValues(*header, i, bundle.layers[i]);
     return std::move(bundle);
 }
 

@@ -356,7 +356,8 @@ TEST(Runtime, WhiteFurnace) {
 
 // A bundle as the relight stage reads it: the transfer (float16 here) and the albedo it excludes, with their values,
 // and the other layers (a bounce layer; an integer layer) described but empty; the model is readBundle's bit for
-// bit. A corrupted byte in a layer it skips is still refused: the whole file is checked.
+// bit. Without a transfer layer every layer has readBundle's values. A corrupted byte in a layer it skips is still
+// refused: the whole file is checked.
 TEST(Runtime, RelightReadsOnlyTheLayersItUsesAndChecksTheWholeFile) {
     const std::vector<float> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     prt::Bundle bundle = transferBundle(positions, 3, randomValues(3 * 9 * 3, 7));
@@ -400,6 +401,19 @@ TEST(Runtime, RelightReadsOnlyTheLayersItUsesAndChecksTheWholeFile) {
     EXPECT_EQ(0, std::memcmp(model.transfer.data(), whole.transfer.data(), 81 * sizeof(float)));
     EXPECT_EQ(model.albedo, whole.albedo);
     EXPECT_EQ(model.albedo, albedo.data);
+
+    // Without a "transfer" layer (an adaptive bundle's case) every layer comes with readBundle's values.
+    prt::Bundle noTransfer = bundle;
+    noTransfer.layers.erase(noTransfer.layers.begin() + 1);
+    const std::string other = (scratch.path / "other.glb").string();
+    prt::writeBundle(other, noTransfer);
+    const prt::Bundle all = prt::readRelightBundle(other), expected = prt::readBundle(other);
+    ASSERT_EQ(all.layers.size(), 3u);
+    for (size_t i = 0; i < all.layers.size(); ++i) {
+        EXPECT_EQ(all.layers[i].data, expected.layers[i].data) << all.layers[i].name;
+        EXPECT_EQ(all.layers[i].integers, expected.layers[i].integers) << all.layers[i].name;
+    }
+    EXPECT_EQ(all.layers[2].integers, (std::vector<uint32_t>{1, 2, 3}));
 
     // One bit of the bounce layer's first value, a layer readRelightBundle does not keep.
     std::string bytes = prt::readFileBytes(path);

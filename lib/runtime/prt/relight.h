@@ -77,11 +77,11 @@ RelightModel relightModel(Bundle bundle, const std::string& source);
 // reads it.
 RelightModel loadRelightModel(const std::string& bundlePath);
 
-// A bundle file as relight needs it. With a "transfer" layer in a layout readBundleHeader reads (every bundle prt
-// writes), the whole file is checked as readBundle checks it but only the values of "transfer" and
-// "diffuse_albedo" are kept; the other layers keep their descriptions with no values, so a bundle's bounce layer,
-// lobes or grids cost no memory. Otherwise (adaptive layers, another layout) it is readBundle's bundle. Throws
-// prt::Error naming `bundlePath` as readBundle does.
+// A bundle file as relight needs it. In a layout readBundleHeader reads (every bundle prt writes), the whole file
+// is checked as readBundle checks it, and with a "transfer" layer only the values of "transfer" and
+// "diffuse_albedo" are kept: the other layers keep their descriptions with no values, so a bundle's bounce layer,
+// lobes or grids cost no memory. Without one (adaptive layers) every layer has its values, and in another layout
+// it is readBundle's bundle. Throws prt::Error naming `bundlePath` as readBundle does.
 Bundle readRelightBundle(const std::string& bundlePath);
 
 // The real-time kernel: radiance[v][c] = sum_j transfer[v][j][c] * lighting[j][c] for v < vertexCount.
