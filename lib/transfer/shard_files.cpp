@@ -447,31 +447,22 @@ Reader openShardRows(const std::string& path, const ShardRun& run, int pass, Sha
 
 } // namespace
 
-ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, ShardSections sections) {
+ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass) {
     ShardRows rows;
     uint64_t totalFloats = 0, exitantFloats = 0;
     bool hasExitant = false;
     Reader reader = openShardRows(path, run, pass, rows, totalFloats, exitantFloats, hasExitant);
-    if (sections == ShardSections::Exitant && !hasExitant)
-        reader.fail("header", "holds no exitant rows (the last pass writes none)");
-    if (sections == ShardSections::Exitant) {
-        reader.skip(2 * totalFloats * 4);
-    } else {
-        rows.total.resize(totalFloats);
-        rows.direct.resize(totalFloats);
-        reader.readFinite(rows.total.data(), totalFloats, "total");
-        reader.readFinite(rows.direct.data(), totalFloats, "direct");
-    }
-    if (sections == ShardSections::TotalAndDirect) return rows;
-    rows.exitant.resize(exitantFloats);
-    reader.readFinite(rows.exitant.data(), exitantFloats, "exitant");
+    rows.total.resize(totalFloats);
+    rows.direct.resize(totalFloats);
+    reader.readFinite(rows.total.data(), totalFloats, "total");
+    reader.readFinite(rows.direct.data(), totalFloats, "direct");
     return rows;
 }
 
 // Streams: the shards' headers are checked first (which shard each file is, the pass), then each shard's exitant
 // section is copied into the output in shard order, 1 MiB at a time, and checked at its end against its checksum,
-// then for finite values, as readShardRows checks (a failure removes the unfinished output: writeShardFile is
-// atomic). Memory: 1 MiB and the headers, whatever the vertex count.
+// then for finite values, as readShardRows checks its sections (a failure removes the unfinished output:
+// writeShardFile is atomic). Memory: 1 MiB and the headers, whatever the vertex count.
 int gatherExitant(const std::vector<std::string>& parts, const ShardRun& run, const std::string& output) {
     if (parts.size() != size_t(run.shardCount) || parts.empty())
         throw Error("", "--gather", "needs the " + std::to_string(run.shardCount) + " shards of one pass, got " +

@@ -113,7 +113,7 @@ ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass,
     if (pass < 1 || pass > run.options.bounces)
         throw Error("", "--pass", std::to_string(pass) + " outside 1.." + std::to_string(run.options.bounces),
                     kExitUsage);
-    ShardRows rows = readShardRows(previousPath, run, pass - 1, ShardSections::TotalAndDirect);
+    ShardRows rows = readShardRows(previousPath, run, pass - 1);
     const std::vector<HitBlock> hitBlocks = readHitRecords(hitsPath, run);
     // Only the rows its hits gather from: around the shard's own part of a large scene, a fraction of the array.
     const std::vector<uint8_t> needed = hitCorners(mesh, hitBlocks);

@@ -163,11 +163,9 @@ ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass,
 
 // Writes a shard's rows (atomically: temporary name, then rename) for the next pass.
 void writeShardRows(const std::string& path, const ShardRun& run, const ShardRows& rows);
-// Which sections of shard rows readShardRows reads (and checks); the others are skipped, and left empty.
-enum class ShardSections { All, TotalAndDirect, Exitant };
-// Reads them back, checked against the run, the shard and the pass. A bounce reads TotalAndDirect: it gathers
-// from the pass's joined exitant array instead.
-ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass, ShardSections sections);
+// Reads back their total and direct sections, checked against the run, the shard and the pass; `exitant` stays
+// empty. A bounce gathers from the pass's joined exitant array instead; gatherExitant reads that section.
+ShardRows readShardRows(const std::string& path, const ShardRun& run, int pass);
 
 // Joins the exitant rows of one pass's shards (files in any order, one per shard of run.shardCount, each checked
 // against the run) into the whole array, written atomically to `output` for the next pass. Returns the pass.

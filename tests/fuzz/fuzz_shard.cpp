@@ -1,6 +1,7 @@
 // libFuzzer harness: the files between the passes of sharded interreflected transfer (hit records, a shard's
-// rows, a pass's exitant array; layout in lib/transfer/shard_files.cpp). The first byte picks the reader, the rest
-// is the file. The run they are checked against is fixed (below), so seeds written for it get past the identity
+// rows, a pass's exitant array; layout in lib/transfer/shard_files.cpp), through the readers the passes use: hit
+// records, rows (total and direct), the exitant array, and the gather (a rows file's exitant section). The first
+// byte picks the reader, the rest is the file. The run they are checked against is fixed (below), so seeds written for it get past the identity
 // check to the payload. PRT_FUZZ_WRITE_SEEDS=DIR writes those seeds (tests/fuzz/corpus/shard) and exits.
 #include "fuzz_util.h"
 #include "passes.h"
@@ -52,8 +53,8 @@ void writeSeeds(const std::string& dir) {
     prt::writeShardRows(work + "/rows", run, rows);
     prt::gatherExitant({work + "/rows"}, run, work + "/exitant");
     // One seed per reader: the reader byte, then the file.
-    const char* files[] = {"hits", "rows", "exitant", "rows", "rows"};
-    for (int reader = 0; reader < 5; ++reader) {
+    const char* files[] = {"hits", "rows", "exitant", "rows"};
+    for (int reader = 0; reader < 4; ++reader) {
         std::string bytes(1, char(reader));
         bytes += prt::readFileBytes(work + "/" + files[reader]);
         prt::writeBytesAtomic(dir + "/" + std::to_string(reader) + "-" + files[reader], bytes);
@@ -76,12 +77,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const prt::ShardRun run = fuzzRun();
     std::string path = prt::fuzz::writeInput(data + 1, size - 1, "shard");
     prt::fuzz::expectOnlyErrors([&] {
-        switch (data[0] % 5) {
+        switch (data[0] % 4) {
         case 0: prt::passes::readHitRecords(path, run); break;
-        case 1: prt::readShardRows(path, run, 1, prt::ShardSections::All); break;
+        case 1: prt::readShardRows(path, run, 1); break;
         case 2: prt::passes::readExitant(path, run, 1, {1, 0, 1, 1}); break; // rows 0, 2 and 3 kept
-        case 3: prt::readShardRows(path, run, 1, prt::ShardSections::Exitant); break;
-        default: prt::readShardRows(path, run, 1, prt::ShardSections::TotalAndDirect); break;
+        default: prt::gatherExitant({path}, run, prt::fuzz::folder() + "/gathered"); break; // their exitant section
         }
     });
     return 0;
