@@ -46,6 +46,13 @@ VARIANTS = {
     # Lighting-aware: the relit held-out error under the six training maps (never courtyard or sunrise), 8 turns each.
     "nested_lit": (["--nested", "--nested-lighting", TRAINING_LIGHTING], None, {}),
     "nested_pv_lit": (["--nested", "--nested-per-vertex", "--nested-lighting", TRAINING_LIGHTING], None, {}),
+    # From below: lobe k fitted alone on what lobes < k leave, an overshoot weighted 1 + rho (docs/glossy.md,
+    # "Fit from below").
+    "below": (["--from-below", "--overshoot", 100], None, {}),
+    "below_r1": (["--from-below", "--overshoot", 1], None, {}),
+    "below_r3": (["--from-below", "--overshoot", 3], None, {}),
+    "below_r10": (["--from-below"], None, {}),  # the default rho, 10
+    "below_r1000": (["--from-below", "--overshoot", 1000], None, {}),
     # The same bundles relit without blending lobe parameters across the 3 views around the eye: the radiance of
     # each view's own lobes, blended (radiance), or the nearest view's alone (nearest).
     "base_radiance": ([], "base", {"PRT_GLOSSY_BLEND": "radiance"}),
@@ -128,8 +135,10 @@ def main():
                         ref = oracle[(env, eye)][0 if part == "total" else 1]
                         row[f"{env}/{eye}/{part}"] = rmse(np.load(path), ref)
             results[name] = row
-    old = json.load(open(o("lobes.json"))) if os.path.exists(o("lobes.json")) else {}
-    json.dump({**old, **results}, open(o("lobes.json"), "w"), indent=1)
+    merged = json.load(open(o("lobes.json"))) if os.path.exists(o("lobes.json")) else {}
+    for name, row in results.items():  # per row, so runs over other --envs keep their cells
+        merged[name] = {**merged.get(name, {}), **row}
+    json.dump(merged, open(o("lobes.json"), "w"), indent=1)
     for variant in opts.variants.split(","):
         print(f"\n{variant}: glossy part / total, relative RMSE against the oracle")
         print("| env | eye | " + " | ".join(f"{n} lobes" for n in opts.lobes.split(",")) + " |")

@@ -43,6 +43,8 @@ struct GlossyArgs {
     std::vector<std::string> nestedLighting;
     int nestedRotations = 8;
     bool nestedMax = false;
+    bool fromBelow = false;
+    double overshoot = 10.0; // docs/glossy.md, "Fit from below"
     int threads = 0;
     int iterations = 100;
     std::string stats;
@@ -155,6 +157,11 @@ void runGlossy(const GlossyArgs& args) {
     }
     if (args.nested && args.warmStart)
         throw Error("", "--nested", "already starts each stage from the previous one: drop --warm-start", kExitUsage);
+    if (args.fromBelow && (args.nested || args.warmStart))
+        throw usage("--from-below", "fits each lobe on what the earlier ones leave: not with --nested or --warm-start");
+    if (!(args.overshoot > 0.0 && args.overshoot <= 1e6)) throw usage("--overshoot", "must lie in (0, 1e6]");
+    options.fromBelow = args.fromBelow;
+    options.fromBelowOvershoot = args.overshoot;
     options.solverOptions.threads = resolveThreads(args.threads);
     options.solverOptions.maxIterations = args.iterations;
     options.progress = !logOptions().quiet;
@@ -305,6 +312,12 @@ void addGlossyCommand(CLI::App& app) {
                       "With --nested: keep a lobe where it lowers the largest held-out residual (a sun's worst case)");
     command->add_option("--nested-rotations", args->nestedRotations,
                         "With --nested-lighting: turns of each map about y, 1..64 (default 8)");
+    command->add_flag("--from-below", args->fromBelow,
+                      "Fit lobe 1, 2, ..., N one at a time on what the earlier lobes leave, each from below (an "
+                      "overshoot costs --overshoot times more), so more lobes never relight darker and, under the "
+                      "kernel, never worse");
+    command->add_option("--overshoot", args->overshoot,
+                        "With --from-below: the one-sided weight rho, (0, 1e6] (default 10)");
     command->add_option("--iterations", args->iterations, "LM iteration limit per fit (default 100)");
     command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
     command->add_option("--stats", args->stats, "Also write the fit statistics as JSON to this file");

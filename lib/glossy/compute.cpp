@@ -53,6 +53,11 @@ void checkOptions(const TriMesh& mesh, const GlossyOptions& options) {
         throw Error("", "--nested-lighting", "needs --nested and rows of the held-out grid's size", kExitUsage);
     if (options.nestedMaxNorm && (!options.nested || !options.nestedLighting.empty()))
         throw Error("", "--nested-max", "needs --nested and not --nested-lighting", kExitUsage);
+    if (options.fromBelow && (options.nested || options.warmStart))
+        throw Error("", "--from-below", "fits each lobe on what the earlier ones leave: not with --nested or --warm-start",
+                    kExitUsage);
+    if (!(options.fromBelowOvershoot > 0.0 && options.fromBelowOvershoot <= 1e6))
+        throw Error("", "--overshoot", "must lie in (0, 1e6]", kExitUsage);
     if (mesh.normals.size() != mesh.positions.size())
         throw Error("", "mesh", "has no vertex normals (prt meshprep adds them)");
     if (!options.indirectTransfer.empty() &&
@@ -436,6 +441,62 @@ std::vector<float> nestedFit(const DirectionGrid& grid, const DirectionGrid& hel
 
 } // namespace
 
+double fromBelowSharpnessMax(const GlossyOptions& options) {
+    const double resolution = options.gridResolution;
+    return std::min(options.bounds.lambdaMax, std::max(resolution * resolution, options.phong.exponent));
+}
+
+namespace {
+
+// The fit from below of one chunk (GlossyOptions::fromBelow): for k = 1..lobes a 1-lobe batch on the residual
+// kernel (the kernel minus lobes < k, on the grid), started by the shared greedy start, pass 1 and the coherence
+// pass with the one-sided data weight and sharpness at most fromBelowSharpnessMax; lobe k is then subtracted from
+// the residual. Returns the output form as
+// coherencePass (lobe k of problem p at (p lobes + k) kLobeParams); leaves batch with the whole kernel, the
+// solver-form lobes, and as cost the plain data cost (dataCost) of all lobes on the grid.
+std::vector<float> fromBelowFit(const DirectionGrid& grid, Chunk& tabulated, const GlossyOptions& options,
+                                bool coherence) {
+    FitBatch& batch = tabulated.batch;
+    const int lobes = batch.lobes, width = lobes * kLobeParams;
+    const size_t problems = batch.problems, count = grid.count();
+    const std::vector<float> kernel = batch.kernel;
+    GlossyOptions stage = options;
+    stage.weights.overshoot = options.fromBelowOvershoot;
+    stage.bounds.lambdaMax = fromBelowSharpnessMax(options);
+    std::vector<float> lobesOut(problems * width);
+    for (int k = 0; k < lobes; ++k) {
+        batch.lobes = 1;
+        batch.prior.clear();
+        batch.hasPrior.clear();
+        batch.params.assign(problems * kLobeParams, 0.0f);
+        for (size_t p = 0; p < problems; ++p)
+            initialise(grid, &batch.kernel[p * count], 1, options.phong.exponent, options.bounds,
+                       &batch.params[p * kLobeParams]);
+        solve(grid, batch, FitWeights{0.0, 0.0, 0.0, stage.weights.overshoot}, stage);
+        std::vector<float> fitted = coherencePass(grid, tabulated, stage, coherence);
+        for (size_t p = 0; p < problems; ++p) {
+            const float* lobe = &fitted[p * kLobeParams];
+            std::copy_n(lobe, kLobeParams, &lobesOut[p * width + size_t(k) * kLobeParams]);
+            float* residual = &batch.kernel[p * count];
+            for (size_t i = 0; i < count; ++i) {
+                const float* w = &grid.directions[i * 3];
+                double cosine = double(lobe[1]) * w[0] + double(lobe[2]) * w[1] + double(lobe[3]) * w[2];
+                residual[i] = float(residual[i] - double(lobe[0]) * std::exp(double(lobe[4]) * (cosine - 1.0)));
+            }
+        }
+    }
+    batch.lobes = lobes;
+    batch.kernel = kernel;
+    batch.params.resize(problems * width);
+    for (size_t p = 0; p < problems; ++p) {
+        toSolver(&lobesOut[p * width], &batch.params[p * width], lobes);
+        batch.cost[p] = float(dataCost(grid, &kernel[p * count], lobes, &batch.params[p * width]));
+    }
+    return lobesOut;
+}
+
+} // namespace
+
 GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options) {
     checkOptions(mesh, options);
     const ViewSet& views = viewSet();
@@ -488,6 +549,8 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
                     result.heldOutError[(chunkBegin - result.vertexBegin + i) * kViewCount + size_t(v)] =
                         float(energy > 0 ? heldCost[p] / energy : 0.0);
                 }
+        } else if (options.fromBelow) {
+            fitted = fromBelowFit(grid, tabulated, options, coherence);
         } else {
             if (options.warmStart && lobes > 1)
                 warmStartFit(grid, batch, options);

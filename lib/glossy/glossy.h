@@ -9,7 +9,8 @@
 //   [1..3] m     unnormalised mean; the model uses mu = m / |m| and a gauge residual keeps |m| near 1
 //   [4] s        log sharpness, lambda = exp(s), s in [log lambdaMin, log lambdaMax]
 // Objective (sum of squared residuals, E = sum_i dw_i T_i^2 the problem's data energy):
-//   data     sqrt(dw_i) (F(w_i) - T_i)                       every grid direction i
+//   data     sqrt(dw_i) (F(w_i) - T_i) o_i                   every grid direction i; o_i = sqrt(1 + rho) where
+//                                                            F(w_i) > T_i, else 1 (rho = FitWeights::overshoot)
 //   gauge    sqrt(E) (|m_k|^2 - 1)                           every lobe
 //   mean     sqrt(beta E) (mu_k - priorMean_k)               3 per lobe, when the problem has a prior
 //   width    sqrt(gamma E) (s_k - priorLogSharpness_k)       per lobe, with a prior
@@ -92,6 +93,9 @@ struct FitWeights {
     double beta = 0.0;  // mean coherence
     double gamma = 0.0; // width coherence
     double delta = 0.0; // no-flip
+    // One-sided data weight rho >= 0: a direction where the model lies above the kernel counts 1 + rho times, so a
+    // large rho fits from below (GlossyOptions::fromBelow). 0: the plain least-squares data term.
+    double overshoot = 0.0;
 };
 
 struct FitBounds {
@@ -207,6 +211,16 @@ struct GlossyOptions {
     // Nested: the keep criterion is the largest held-out residual (maxResidual: the error under one small source,
     // such as a sun, in the worst direction) in place of the held-out data cost; not with nestedLighting.
     bool nestedMaxNorm = false;
+    // Fit from below (issue 19, "N + 1 lobes never worse than N"): lobes 1, 2, ..., N fitted one at a time, lobe
+    // k a 1-lobe fit (pass 1, then the coherence pass) of the kernel minus lobes < k, which stay as they are, with
+    // the one-sided data weight FitWeights::overshoot = fromBelowOvershoot, so each lobe lies (nearly) under what
+    // is left. Every lobe is >= 0, so the model and any relit radiance never fall as lobes are added; while the
+    // model stays under the kernel, the relit error under any lighting >= 0 never grows. Not with nested or
+    // warmStart.
+    // Its lobes are no sharper than fromBelowSharpnessMax: a lobe narrower than the grid's spacing could sit between
+    // its directions, where the one-sided weight does not see it.
+    bool fromBelow = false;
+    double fromBelowOvershoot = 10.0; // rho of the one-sided data weight, > 0 (chosen on training maps: docs/glossy.md)
     size_t vertexBegin = 0, vertexEnd = SIZE_MAX;
     bool progress = true;
     std::string lobeType = "float16"; // the bundle layer's componentType: "float16" or "float32"
@@ -216,6 +230,11 @@ struct GlossyOptions {
     int indirectOrder = 0;
     int indirectSamples = 0; // recorded in the layer's params
 };
+
+// The sharpest lobe of a fit from below: min(bounds.lambdaMax, max(gridResolution^2, the Phong exponent)). At
+// lambda = resolution^2 a lobe still holds e^-1 of its peak at the ~1.4 / resolution rad to the nearest grid
+// direction; the exponent keeps the Phong lobe itself within reach on coarse grids.
+double fromBelowSharpnessMax(const GlossyOptions& options);
 
 // The held-out grid's resolution a nested stage uses: options.heldOutResolution, or 0: min(64, 2 x gridResolution).
 int heldOutResolution(const GlossyOptions& options);

@@ -47,6 +47,10 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
         layer.params["nested"]["score"] = "relit held-out error under " +
                                           std::to_string(options.nestedLighting.size() / heldOutGrid(heldOutResolution(options)).count()) +
                                           " training lightings";
+    if (options.fromBelow) // absent when off, so other bundles keep their bytes
+        layer.params["from_below"] = {{"fit", "lobe k fitted alone on the kernel minus lobes < k"},
+                                      {"overshoot", options.fromBelowOvershoot},
+                                      {"lambda_max", fromBelowSharpnessMax(options)}};
     if (!options.indirectTransfer.empty()) // absent when off, so bundles without it keep their bytes
         layer.params["indirect"] = {{"bounce", "one diffuse bounce off the mesh (shadowed SH transfer at the hit)"},
                                     {"order", options.indirectOrder}, {"samples", options.indirectSamples}};

@@ -28,6 +28,10 @@ typedef struct {
     int live[NL][CACHED];
 } Values;
 
+// The one-sided data weight of glossy.h per direction: `over` (1 + FitWeights::overshoot) where the model lies
+// above the kernel (d > 0), else 1; with over = 1 every product by it is exact, so the plain fit keeps its bits.
+inline real8 oneSided(real8 d, real over) { return select((real8)(1), (real8)(over), d > (real8)(0)); }
+
 inline real hsum(real8 v) { return ((v.s0 + v.s1) + (v.s2 + v.s3)) + ((v.s4 + v.s5) + (v.s6 + v.s7)); }
 
 // Adds a residual r with Jacobian row j (NP values) to J^T r and J^T J (its square is in costAt).
@@ -61,7 +65,7 @@ inline real8 chunkValues(const real* x, const Values* v, int i, __global const d
 real costAt(const real* x, int count, int p, __global const float* table, __global const double* dirX,
             __global const double* dirY, __global const double* dirZ, __global const double* moments, real energy,
             __global const float* prior, real priorWeight, real weightMean, real weightWidth, real weightFlip,
-            Values* v) {
+            real over, Values* v) {
     for (int k = 0; k < NL; ++k) {
         const real* q = x + k * 5;
         v->len[k] = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
@@ -80,7 +84,7 @@ real costAt(const real* x, int count, int p, __global const float* table, __glob
             v->d[c] = d;
         }
         real8 solidAngle = vload8(0, moments + (size_t)i * 10);
-        costv = fma(solidAngle * d, d, costv);
+        costv = fma(solidAngle * oneSided(d, over) * d, d, costv);
     }
     real cost = hsum(costv);
     real rootEnergy = sqrt(energy);
@@ -128,7 +132,7 @@ __constant int kMoment[4][4] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6,
 void normalAt(const real* x, int count, int p, __global const float* table, __global const double* dirX,
               __global const double* dirY, __global const double* dirZ, __global const double* moments, real energy,
               __global const float* prior, real priorWeight, real weightMean, real weightWidth, real weightFlip,
-              const Values* v, Normal* n) {
+              real over, const Values* v, Normal* n) {
     for (int a = 0; a < NP * NP; ++a) n->jtj[a] = 0;
     for (int a = 0; a < NP; ++a) n->g[a] = 0;
     const int chunks = count / 8;
@@ -170,7 +174,7 @@ void normalAt(const real* x, int count, int p, __global const float* table, __gl
                 const int i = 8 * (c0 + b);
                 real8 w0 = vload8(0, dirX + i), w1 = vload8(0, dirY + i), w2 = vload8(0, dirZ + i);
                 real8 cosine = mean[0] * w0 + mean[1] * w1 + mean[2] * w2;
-                real8 ed = vload8(0, moments + (size_t)i * 10) * e[k][b] * d[b];
+                real8 ed = vload8(0, moments + (size_t)i * 10) * e[k][b] * (oneSided(d[b], over) * d[b]);
                 acc[0] += ed;
                 acc[1] += ed * (w0 - cosine * mean[0]);
                 acc[2] += ed * (w1 - cosine * mean[1]);
@@ -188,7 +192,7 @@ void normalAt(const real* x, int count, int p, __global const float* table, __gl
                 for (int m = 0; m < 10; ++m) acc[m] = sv[pair][m];
                 for (int b = 0; b < size; ++b) {
                     if (!(live[k][b] && live[l][b])) continue;
-                    real8 s = e[k][b] * e[l][b];
+                    real8 s = e[k][b] * e[l][b] * oneSided(d[b], over);
                     #pragma unroll
                     for (int m = 0; m < 10; ++m) acc[m] = fma(s, vload8(m, moments + (size_t)(c0 + b) * 80), acc[m]);
                 }
@@ -349,7 +353,7 @@ __kernel void fitLobes(int problems, int count, __global const float* table, __g
                        __global const double* moments,
                        __global const double* energies, __global const float* amplitudeMaxima,
                        __global const float* priors, __global const float* priorWeights, double weightMean,
-                       double weightWidth, double weightFlip, double logMin, double logMax, int maxIterations,
+                       double weightWidth, double weightFlip, double over, double logMin, double logMax, int maxIterations,
                        double functionTolerance, double parameterTolerance, double gradientTolerance,
                        __global float* params, __global double* costs, __global int* iterations,
                        __global double* normals) {
@@ -369,9 +373,9 @@ __kernel void fitLobes(int problems, int count, __global const float* table, __g
     Values v;
     project(x, amplitudeMax, logMin, logMax);
     n.cost = costAt(x, count, p, table, dirX, dirY, dirZ, moments, energy, prior, priorWeight, weightMean,
-                    weightWidth, weightFlip, &v);
+                    weightWidth, weightFlip, over, &v);
     normalAt(x, count, p, table, dirX, dirY, dirZ, moments, energy, prior, priorWeight, weightMean, weightWidth,
-             weightFlip, &v, &n);
+             weightFlip, over, &v, &n);
     for (int a = 0; a < NP; ++a) scale[a] = 1 / (1 + sqrt(n.jtj[a * NP + a])); // Jacobi scaling, fixed at the start
     real radius = 1e4, decreaseFactor = 2;
     int it = 0, invalid = 0;
@@ -404,7 +408,7 @@ __kernel void fitLobes(int problems, int count, __global const float* table, __g
         // The cost at the candidate; its normal equations only once it is accepted, from the lobe values the
         // cost pass kept (so neither pass takes an exp twice, and a rejected step costs only the cost pass).
         real trialCost = costAt(trial, count, p, table, dirX, dirY, dirZ, moments, energy, prior, priorWeight,
-                                weightMean, weightWidth, weightFlip, &v);
+                                weightMean, weightWidth, weightFlip, over, &v);
         real decrease = n.cost - trialCost;
         if (fabs(decrease) <= functionTolerance * n.cost) { --it; break; }
         real rho = decrease / modelDecrease;
@@ -412,7 +416,7 @@ __kernel void fitLobes(int problems, int count, __global const float* table, __g
             for (int a = 0; a < NP; ++a) x[a] = trial[a];
             n.cost = trialCost;
             normalAt(x, count, p, table, dirX, dirY, dirZ, moments, energy, prior, priorWeight, weightMean,
-                     weightWidth, weightFlip, &v, &n);
+                     weightWidth, weightFlip, over, &v, &n);
             real q = 2 * rho - 1;
             radius = fmin(radius / fmax(1.0 / 3.0, 1 - q * q * q), 1e16);
             decreaseFactor = 2;
@@ -436,7 +440,7 @@ __kernel void normalEquations(int problems, int count, __global const float* tab
                               __global const double* moments,
                               __global const double* energies, __global const float* amplitudeMaxima,
                               __global const float* priors, __global const float* priorWeights, double weightMean,
-                              double weightWidth, double weightFlip, double logMin, double logMax, int maxIterations,
+                              double weightWidth, double weightFlip, double over, double logMin, double logMax, int maxIterations,
                               double functionTolerance, double parameterTolerance, double gradientTolerance,
                               __global float* params, __global double* costs, __global int* iterations,
                               __global double* normals) {
@@ -449,9 +453,9 @@ __kernel void normalEquations(int problems, int count, __global const float* tab
     Values v;
     __global const float* prior = priors + (size_t)p * NL * 4;
     n.cost = costAt(x, count, p, table, dirX, dirY, dirZ, moments, energies[p], prior, priorWeights[p], weightMean,
-                    weightWidth, weightFlip, &v);
+                    weightWidth, weightFlip, over, &v);
     normalAt(x, count, p, table, dirX, dirY, dirZ, moments, energies[p], prior, priorWeights[p], weightMean,
-             weightWidth, weightFlip, &v, &n);
+             weightWidth, weightFlip, over, &v, &n);
     __global double* out = normals + (size_t)p * (1 + NP + NP * NP);
     out[0] = n.cost;
     for (int a = 0; a < NP; ++a) {

@@ -85,25 +85,29 @@ void evaluateResiduals(const DirectionGrid& grid, const ProblemView& problem, co
         for (int c = 0; c < 3; ++c) mean[k][c] = p[1 + c] / length[k];
         sharpness[k] = std::exp(p[4]);
     }
+    const double rootOver = std::sqrt(1.0 + weights.overshoot);
     for (size_t i = 0; i < count; ++i) {
         const float* w = &grid.directions[i * 3];
-        double root = std::sqrt(double(grid.solidAngle[i]));
         double model = 0.0;
-        double* row = jacobian ? jacobian + i * width : nullptr;
+        double e[kMaxLobes], cosine[kMaxLobes];
         for (int k = 0; k < lobes; ++k) {
-            double cosine = mean[k][0] * w[0] + mean[k][1] * w[1] + mean[k][2] * w[2];
-            double e = std::exp(sharpness[k] * (cosine - 1.0));
-            double g = params[k * kLobeParams] * e;
-            model += g;
-            if (row) {
-                double* r = row + k * kLobeParams;
-                r[0] = root * e;
-                double along = root * g * sharpness[k] / length[k];
-                for (int c = 0; c < 3; ++c) r[1 + c] = along * (w[c] - cosine * mean[k][c]);
-                r[4] = root * g * sharpness[k] * (cosine - 1.0);
-            }
+            cosine[k] = mean[k][0] * w[0] + mean[k][1] * w[1] + mean[k][2] * w[2];
+            e[k] = std::exp(sharpness[k] * (cosine[k] - 1.0));
+            model += params[k * kLobeParams] * e[k];
         }
-        residuals[i] = root * (model - double(problem.kernel[i]));
+        // The one-sided data weight (FitWeights::overshoot) where the model lies above the kernel.
+        const double difference = model - double(problem.kernel[i]);
+        const double root = std::sqrt(double(grid.solidAngle[i])) * (difference > 0.0 ? rootOver : 1.0);
+        residuals[i] = root * difference;
+        double* row = jacobian ? jacobian + i * width : nullptr;
+        for (int k = 0; row && k < lobes; ++k) {
+            double g = params[k * kLobeParams] * e[k];
+            double* r = row + k * kLobeParams;
+            r[0] = root * e[k];
+            double along = root * g * sharpness[k] / length[k];
+            for (int c = 0; c < 3; ++c) r[1 + c] = along * (w[c] - cosine[k] * mean[k][c]);
+            r[4] = root * g * sharpness[k] * (cosine[k] - 1.0);
+        }
     }
     size_t next = count;
     const double rootEnergy = std::sqrt(problem.energy);

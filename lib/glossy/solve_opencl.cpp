@@ -178,7 +178,7 @@ void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, cons
     Buffer normalBuffer(dev.context, CL_MEM_WRITE_ONLY, normalsOut ? padded * normalSize * 8 : 8, nullptr);
 
     cl_int problemCount = cl_int(padded), gridCount = cl_int(stride);
-    double beta = weights.beta, gamma = weights.gamma, delta = weights.delta;
+    double beta = weights.beta, gamma = weights.gamma, delta = weights.delta, over = 1.0 + weights.overshoot;
     double logMin = std::log(bounds.lambdaMin), logMax = std::log(bounds.lambdaMax);
     cl_int maxIterations = options.maxIterations;
     int arg = 0;
@@ -188,7 +188,7 @@ void runBatch(const char* name, const DirectionGrid& grid, FitBatch& batch, cons
     for (Buffer* b : {&kernelBuffer, &dirXBuffer, &dirYBuffer, &dirZBuffer, &momentBuffer, &energyBuffer, &amplitudeBuffer,
                       &priorBuffer, &priorWeightBuffer})
         set(sizeof(cl_mem), &b->mem);
-    for (const double* value : {&beta, &gamma, &delta, &logMin, &logMax}) set(sizeof(double), value);
+    for (const double* value : {&beta, &gamma, &delta, &over, &logMin, &logMax}) set(sizeof(double), value);
     set(sizeof(cl_int), &maxIterations);
     for (const double* value : {&options.functionTolerance, &options.parameterTolerance, &options.gradientTolerance})
         set(sizeof(double), value);

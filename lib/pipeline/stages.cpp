@@ -187,6 +187,8 @@ StageSpec glossyStage() {
                      {"indirect-glossy", ParamType::Boolean},
                      {"warm-start", ParamType::Boolean},
                      {"nested", ParamType::Boolean},
+                     {"from-below", ParamType::Boolean},
+                     {"overshoot", ParamType::Number, 1e-9, 1e6},
                      {"held-out-grid", ParamType::Integer, 0.0, 64.0}};
     glossy.takesThreads = true;
     glossy.shardable = true;

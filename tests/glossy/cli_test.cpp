@@ -75,6 +75,17 @@ TEST_F(GlossyCli, BadInputsFailWithoutOutput) {
         EXPECT_EQ(keep.exitCode, 2) << flags;
         EXPECT_NE(keep.text.find("--nested"), std::string::npos) << flags << ": " << keep.text;
     }
+    // The fit from below: not with the staged fits that refit earlier lobes, and a one-sided weight in (0, 1e6].
+    for (const char* flags : {"--from-below --nested", "--from-below --warm-start"}) {
+        PrtRun below = prt(base + "--brdf phong:8,0.5 --lobes 2 " + flags, dir);
+        EXPECT_EQ(below.exitCode, 2) << flags;
+        EXPECT_NE(below.text.find("--from-below"), std::string::npos) << flags << ": " << below.text;
+    }
+    for (const char* weight : {"0", "-1", "1e7", "nan"}) {
+        PrtRun over = prt(base + "--brdf phong:8,0.5 --lobes 2 --from-below --overshoot " + weight, dir);
+        EXPECT_EQ(over.exitCode, 2) << weight;
+        EXPECT_NE(over.text.find("--overshoot"), std::string::npos) << weight << ": " << over.text;
+    }
     // No OpenCL platform: an empty ICD vendor folder.
     fs::create_directories(dir / "no_vendors");
     PrtRun platform = prt(base + "--brdf phong:8,0.5", dir, "OCL_ICD_VENDORS=" + path("no_vendors"));
@@ -139,6 +150,27 @@ TEST_F(GlossyCli, NestedFitRecordsItsHeldOutGridAndZeroLobes) {
         dropped += lobes->data[row] > 0.0f && lobes->data[row + 5] == 0.0f;
     EXPECT_GE(dropped, problems - kept);
     EXPECT_GT(dropped, 0u);
+}
+
+// `--from-below` records its one-sided weight and sharpness bound in the lobe layer, and no lobe is sharper than
+// the bound (grid 4: max(4^2, exponent 8) = 16).
+TEST_F(GlossyCli, FitFromBelowRecordsItsWeightAndBoundsItsLobes) {
+    PrtRun fit = prt("glossy " + path("sphere.glb") + " -o " + path("b.glb") + " --brdf phong:8,0.5 --lobes 2 --grid 4 " +
+                         "--samples 16 --from-below --overshoot 20 --shard 0/40 --quiet",
+                     dir);
+    ASSERT_EQ(fit.exitCode, 0) << fit.text;
+    prt::Bundle bundle = prt::readBundle(path("b.glb"));
+    const prt::Layer* lobes = prt::findLayer(bundle, "glossy_lobes");
+    ASSERT_NE(lobes, nullptr);
+    EXPECT_EQ(lobes->params["from_below"]["overshoot"].get<double>(), 20.0);
+    EXPECT_EQ(lobes->params["from_below"]["lambda_max"].get<double>(), 16.0);
+    size_t lit = 0;
+    for (size_t lobe = 0; lobe + 5 <= lobes->data.size(); lobe += 5) {
+        if (lobes->data[lobe] == 0.0f) continue; // no fit (below the horizon): the exponent
+        ++lit;
+        EXPECT_LE(lobes->data[lobe + 4], 16.0f * (1 + 1e-3f)) << lobe; // float16 rounding
+    }
+    EXPECT_GT(lit, 0u);
 }
 
 // `prt relight --image`: the glossy bundle's radiance toward the camera's eye, per vertex, drawn by the renderer of

@@ -1,5 +1,5 @@
 // The two solvers against each other and against finite differences: the analytic Jacobian of every term of the
-// objective (data, gauge, mean and width coherence, no-flip) against central differences, the OpenCL kernel's own
+// objective (data, plain and one-sided, gauge, mean and width coherence, no-flip) against central differences, the OpenCL kernel's own
 // normal equations against the host's (also with sharp lobes, where the kernel skips negligible directions), and
 // 2- and 3-lobe problems, with and without priors, solved by both to the same cost within 1%.
 #include "glossy.h"
@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -74,7 +76,9 @@ void crossedPriors(FitBatch& batch) {
         }
 }
 
-TEST(GlossySolvers, AnalyticJacobianMatchesFiniteDifferencesForEveryTerm) {
+// With overshoot > 0 the data rows of directions where the model lies above the kernel carry sqrt(1 + rho): the
+// test point has rows on both sides, and no data residual within the difference step of its kink at zero.
+void expectJacobianMatchesFiniteDifferences(double overshoot) {
     const DirectionGrid grid = cubeGrid(6);
     const int lobes = 3, width = lobes * kLobeParams;
     FitBatch batch = shadowedBatch(grid, lobes, 1, 16.0);
@@ -82,11 +86,12 @@ TEST(GlossySolvers, AnalyticJacobianMatchesFiniteDifferencesForEveryTerm) {
     // A point off the start: means not unit (the gauge term is nonzero), amplitudes and widths moved.
     std::vector<double> x(batch.params.begin(), batch.params.end());
     for (int k = 0; k < lobes; ++k) {
-        x[k * kLobeParams] = 0.5 * batch.amplitudeMax[0] / (k + 1.0);
+        // One-sided: lower amplitudes, so that the model lies under the kernel near its peak and above it elsewhere.
+        x[k * kLobeParams] = (overshoot > 0 ? 0.1 : 0.5) * batch.amplitudeMax[0] / (k + 1.0);
         x[k * kLobeParams + 1] *= 1.1, x[k * kLobeParams + 2] *= 0.95, x[k * kLobeParams + 3] += 0.05;
         x[k * kLobeParams + 4] -= 0.3 * k;
     }
-    const FitWeights weights{0.2, 0.3, 0.5};
+    const FitWeights weights{0.2, 0.3, 0.5, overshoot};
     ProblemView view = problemView(grid, batch, 0);
     const int rows = residualCount(grid.count(), lobes);
     std::vector<double> r(rows), jacobian(size_t(rows) * width), plus(rows), minus(rows);
@@ -95,6 +100,7 @@ TEST(GlossySolvers, AnalyticJacobianMatchesFiniteDifferencesForEveryTerm) {
     const int count = int(grid.count());
     const int blocks[6] = {0, count, count + lobes, count + 4 * lobes, count + 5 * lobes, rows};
     double blockNorm[5] = {}, blockError[5] = {};
+    int crossings = 0; // data rows whose side of the kernel a difference step changes
     for (int j = 0; j < width; ++j) {
         const double h = 1e-6 * std::max(1.0, std::abs(x[j]));
         std::vector<double> y = x;
@@ -102,6 +108,7 @@ TEST(GlossySolvers, AnalyticJacobianMatchesFiniteDifferencesForEveryTerm) {
         evaluateResiduals(grid, view, weights, y.data(), plus.data(), nullptr);
         y[j] = x[j] - h;
         evaluateResiduals(grid, view, weights, y.data(), minus.data(), nullptr);
+        for (int i = 0; i < count; ++i) crossings += (plus[i] > 0) != (r[i] > 0) || (minus[i] > 0) != (r[i] > 0);
         for (int b = 0; b < 5; ++b)
             for (int i = blocks[b]; i < blocks[b + 1]; ++i) {
                 double numeric = (plus[i] - minus[i]) / (2 * h), analytic = jacobian[size_t(i) * width + j];
@@ -120,6 +127,27 @@ TEST(GlossySolvers, AnalyticJacobianMatchesFiniteDifferencesForEveryTerm) {
     }
     // Some lobe pair is crossed against its priors, so the no-flip term has a residual.
     EXPECT_GT(*std::max_element(r.begin() + blocks[4], r.end()), 0.0);
+    if (overshoot > 0) {
+        // Data rows above and below the kernel, none crossing the kink within a difference step.
+        int above = 0, below = 0;
+        for (int i = 0; i < count; ++i) above += r[i] > 0, below += r[i] < 0;
+        EXPECT_EQ(crossings, 0);
+        EXPECT_GT(above, 10);
+        EXPECT_GT(below, 10);
+        // The one-sided weight acts: an above-kernel row is sqrt(1 + rho) times the plain residual.
+        std::vector<double> plain(rows);
+        evaluateResiduals(grid, view, FitWeights{0.2, 0.3, 0.5}, x.data(), plain.data(), nullptr);
+        for (int i = 0; i < count; ++i)
+            EXPECT_NEAR(r[i], plain[i] * (plain[i] > 0 ? std::sqrt(1 + overshoot) : 1.0), 1e-12 * std::abs(r[i])) << i;
+    }
+}
+
+TEST(GlossySolvers, AnalyticJacobianMatchesFiniteDifferencesForEveryTerm) {
+    expectJacobianMatchesFiniteDifferences(0.0);
+}
+
+TEST(GlossySolvers, OneSidedDataWeightHasItsJacobianOnBothSidesOfTheKernel) {
+    expectJacobianMatchesFiniteDifferences(50.0);
 }
 
 // The kernel's normal equations of one problem ([cost, J^T r (width), J^T J (width^2)]) against the host's double
@@ -152,14 +180,17 @@ TEST(GlossySolvers, KernelNormalEquationsMatchTheHostJacobian) {
         crossedPriors(batch);
         batch.hasPrior[1] = 0; // one problem without a prior
         for (size_t i = 1; i < batch.params.size(); i += kLobeParams) batch.params[i] *= 1.05f; // gauge active
-        const FitWeights weights{0.2, 0.3, 0.5};
-        std::vector<double> normals = openClNormalEquations(grid, batch, weights, FitBounds{});
-        ASSERT_EQ(normals.size(), batch.problems * size_t(1 + width + width * width));
-        for (size_t p = 0; p < batch.problems; ++p) {
-            ProblemView view = problemView(grid, batch, p);
-            std::vector<double> x(batch.params.begin() + p * width, batch.params.begin() + (p + 1) * width);
-            SCOPED_TRACE(std::to_string(lobes) + " lobes, problem " + std::to_string(p));
-            expectNormalsMatchHost(grid, view, weights, x, &normals[p * (1 + width + width * width)], 1e-9);
+        for (double overshoot : {0.0, 30.0}) { // the plain data term, and one-sided (the kernel's select)
+            const FitWeights weights{0.2, 0.3, 0.5, overshoot};
+            std::vector<double> normals = openClNormalEquations(grid, batch, weights, FitBounds{});
+            ASSERT_EQ(normals.size(), batch.problems * size_t(1 + width + width * width));
+            for (size_t p = 0; p < batch.problems; ++p) {
+                ProblemView view = problemView(grid, batch, p);
+                std::vector<double> x(batch.params.begin() + p * width, batch.params.begin() + (p + 1) * width);
+                SCOPED_TRACE(std::to_string(lobes) + " lobes, problem " + std::to_string(p) + ", overshoot " +
+                             std::to_string(overshoot));
+                expectNormalsMatchHost(grid, view, weights, x, &normals[p * (1 + width + width * width)], 1e-9);
+            }
         }
     }
 }
@@ -247,6 +278,34 @@ TEST(GlossySolvers, TwoAndThreeLobeProblemsReachTheSameCostWithBothSolvers) {
     for (int lobes : {2, 3}) {
         FitBatch batch = shadowedBatch(grid, lobes, 24, 32.0);
         expectSameCosts(grid, batch, FitWeights{});
+    }
+}
+
+// The fit from below's objective (GlossyOptions::fromBelow: one lobe at a time, rho 100) and a milder rho at two
+// lobes: both solvers reach the same cost, and the one-sided fits end with less of the kernel overshot than the
+// plain ones.
+TEST(GlossySolvers, OneSidedProblemsReachTheSameCostWithBothSolvers) {
+    const DirectionGrid grid = cubeGrid(8);
+    for (auto [lobes, overshoot] : {std::pair{1, 100.0}, std::pair{2, 3.0}}) {
+        SCOPED_TRACE(std::to_string(lobes) + " lobes, overshoot " + std::to_string(overshoot));
+        FitBatch batch = shadowedBatch(grid, lobes, 24, 32.0);
+        expectSameCosts(grid, batch, FitWeights{0.0, 0.0, 0.0, overshoot});
+        FitBatch plain = batch, below = batch;
+        solveOpenCl(grid, plain, FitWeights{}, FitBounds{}, SolverOptions{});
+        solveOpenCl(grid, below, FitWeights{0.0, 0.0, 0.0, overshoot}, FitBounds{}, SolverOptions{});
+        auto overshot = [&](const FitBatch& fit) { // sum over problems of sum_i dw_i max(0, F_i - T_i)^2
+            double sum = 0.0;
+            for (size_t p = 0; p < fit.problems; ++p) {
+                ProblemView view = problemView(grid, fit, p);
+                std::vector<double> x(fit.params.begin() + p * lobes * kLobeParams,
+                                      fit.params.begin() + (p + 1) * lobes * kLobeParams);
+                std::vector<double> r(residualCount(grid.count(), lobes));
+                evaluateResiduals(grid, view, FitWeights{}, x.data(), r.data(), nullptr);
+                for (size_t i = 0; i < grid.count(); ++i) sum += r[i] > 0 ? r[i] * r[i] : 0.0;
+            }
+            return sum;
+        };
+        EXPECT_LT(overshot(below), (lobes == 1 ? 0.05 : 0.5) * overshot(plain));
     }
 }
 
