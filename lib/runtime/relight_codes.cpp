@@ -1,9 +1,11 @@
-// The fused code kernel: u8 / u16 transfer codes of 1..8 bands relit straight from the codes, with no decoded row
-// in memory (relight_encoded.cpp keeps the decode tile for other band counts).
+// The fused code kernels: u8 / u16 transfer codes of 1..8 bands relit straight from the codes, with no decoded row
+// in memory, row by row or, for vertex-blocked codes, 8 vertices at a time (relight_encoded.cpp keeps the decode
+// tile for other band counts).
 #include "runtime.h"
 
 #include "runtime_internal.h"
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <utility>
@@ -72,8 +74,11 @@ namespace codes_avx2 {
 #if PRT_HAVE_AVX2_CLONE
 #define PRT_CODES(N) \
     (processorHasAvx2() ? codes_avx2::relightCodesKernel<Code, N> : codes_base::relightCodesKernel<Code, N>)
+#define PRT_BLOCKED(N) \
+    (processorHasAvx2() ? codes_avx2::relightBlockedKernel<Code, N> : codes_base::relightBlockedKernel<Code, N>)
 #else
 #define PRT_CODES(N) codes_base::relightCodesKernel<Code, N>
+#define PRT_BLOCKED(N) codes_base::relightBlockedKernel<Code, N>
 #endif
 
 // Every n in 1..8: n = 1..3 took the decode tile until the fused kernel (with prefetch) measured 1.4-3.6x its rate
@@ -95,7 +100,34 @@ bool relightCodesOf(const RelightModel& model, const std::vector<Code>& codes, i
     }
 }
 
+template <class Code>
+bool relightBlockedOf(const RelightModel& model, const std::vector<Code>& codes, size_t first, size_t last,
+                      const float* lighting, float* radiance) {
+    const float* scales = model.bandScales.data();
+    switch (model.order) {
+    case 1: PRT_BLOCKED(1)(codes.data(), scales, first, last, lighting, radiance); return true;
+    case 2: PRT_BLOCKED(2)(codes.data(), scales, first, last, lighting, radiance); return true;
+    case 3: PRT_BLOCKED(3)(codes.data(), scales, first, last, lighting, radiance); return true;
+    case 4: PRT_BLOCKED(4)(codes.data(), scales, first, last, lighting, radiance); return true;
+    case 5: PRT_BLOCKED(5)(codes.data(), scales, first, last, lighting, radiance); return true;
+    case 6: PRT_BLOCKED(6)(codes.data(), scales, first, last, lighting, radiance); return true;
+    case 7: PRT_BLOCKED(7)(codes.data(), scales, first, last, lighting, radiance); return true;
+    case 8: PRT_BLOCKED(8)(codes.data(), scales, first, last, lighting, radiance); return true;
+    default: return false;
+    }
+}
+
 } // namespace
+
+bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting,
+                         float* radiance) {
+    if (!model.codesBlocked) return false;
+    if (model.storage == TransferStorage::Uint8)
+        return relightBlockedOf(model, model.codes8, first, last, lighting, radiance);
+    if (model.storage == TransferStorage::Uint16)
+        return relightBlockedOf(model, model.codes16, first, last, lighting, radiance);
+    return false;
+}
 
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                   float* radiance) {

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 namespace prt {
 
@@ -109,6 +110,7 @@ void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t fir
 } // namespace
 
 void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out) {
+    if (relightBlockedCodes(model, first, last, lighting, out)) return;
     const uint32_t* offsets = model.offsets.data();
     const bool coded = model.storage == TransferStorage::Uint8 || model.storage == TransferStorage::Uint16;
     size_t band = coded && model.scaleCluster.empty() ? bandStart(model, first) : 0;
@@ -224,6 +226,41 @@ void relightCpcaRange(const RelightModel& model, const float* projections, size_
     }
 }
 
+namespace {
+
+// Vertex v's row of blocked codes (RelightModel::codesBlocked) as decodeBody writes it: value j of band l is
+// float(int(q_j) - C) * sigma_l. Fills rows [vertexCount][order^2][3].
+template <class Code>
+void decodeBlockedCodes(const RelightModel& model, const Code* codes, float* rows) {
+    constexpr int C = sizeof(Code) == 1 ? 127 : 32767;
+    const size_t n = size_t(model.order), values = n * n * 3;
+    for (size_t v = 0; v < model.vertexCount; ++v) {
+        const size_t b = v / kCodeBlock, i = v % kCodeBlock;
+        for (size_t l = 0; l < n; ++l) {
+            const float sigma = model.bandScales[(b * n + l) * kCodeBlock + i];
+            for (size_t j = l * l * 3; j < (l + 1) * (l + 1) * 3; ++j)
+                rows[v * values + j] = float(int(codes[(b * values + j) * kCodeBlock + i]) - C) * sigma;
+        }
+    }
+}
+
+template <class Code>
+void blockCodesOf(std::vector<Code>& codes, std::vector<float>& scales, size_t vertices, size_t n) {
+    constexpr Code C = sizeof(Code) == 1 ? 127 : 32767;
+    const size_t values = n * n * 3, blocks = (vertices + kCodeBlock - 1) / kCodeBlock;
+    std::vector<Code> blocked(blocks * values * kCodeBlock, C);
+    std::vector<float> blockedScales(blocks * n * kCodeBlock, 0.0f);
+    for (size_t v = 0; v < vertices; ++v) {
+        const size_t b = v / kCodeBlock, i = v % kCodeBlock;
+        for (size_t j = 0; j < values; ++j) blocked[(b * values + j) * kCodeBlock + i] = codes[v * values + j];
+        for (size_t l = 0; l < n; ++l) blockedScales[(b * n + l) * kCodeBlock + i] = scales[v * n + l];
+    }
+    codes = std::move(blocked);
+    scales = std::move(blockedScales);
+}
+
+} // namespace
+
 std::vector<float> decodedTransfer(const RelightModel& model) {
     const size_t dim = size_t(model.order) * model.order * 3;
     switch (model.storage) {
@@ -236,6 +273,11 @@ std::vector<float> decodedTransfer(const RelightModel& model) {
     case TransferStorage::Uint8:
     case TransferStorage::Uint16: {
         std::vector<float> rows(size_t(model.offsets[model.vertexCount]) * 3);
+        if (model.codesBlocked) {
+            if (model.storage == TransferStorage::Uint8) decodeBlockedCodes(model, model.codes8.data(), rows.data());
+            else decodeBlockedCodes(model, model.codes16.data(), rows.data());
+            return rows;
+        }
         size_t band = 0;
         for (size_t v = 0; v < model.vertexCount; ++v) {
             const int n = int(std::lround(std::sqrt(double(model.offsets[v + 1] - model.offsets[v]))));
@@ -265,8 +307,25 @@ std::vector<float> decodedTransfer(const RelightModel& model) {
     return {};
 }
 
+bool blockCodes(RelightModel& model) {
+    const bool coded = model.storage == TransferStorage::Uint8 || model.storage == TransferStorage::Uint16;
+    if (!coded || model.codesBlocked || !model.scaleCluster.empty() || model.order < 1 || model.order > 8 ||
+        model.offsets.size() != size_t(model.vertexCount) + 1)
+        return false;
+    const size_t n = size_t(model.order), count = n * n;
+    for (size_t v = 0; v <= model.vertexCount; ++v)
+        if (model.offsets[v] != v * count) return false; // not every vertex at the full order
+    if (model.bandScales.size() != size_t(model.vertexCount) * n) return false;
+    if (model.storage == TransferStorage::Uint8) blockCodesOf(model.codes8, model.bandScales, model.vertexCount, n);
+    else blockCodesOf(model.codes16, model.bandScales, model.vertexCount, n);
+    model.codesBlocked = true;
+    return true;
+}
+
 size_t relightBytes(const RelightModel& model) {
     auto bytes = [](const auto& array) { return array.size() * sizeof(array[0]); };
+    if (model.codesBlocked) // the blocked kernel reads neither offsets nor the block table
+        return bytes(model.codes8) + bytes(model.codes16) + bytes(model.bandScales) + bytes(model.albedo);
     size_t total = bytes(model.offsets) + bytes(model.albedo) + bytes(model.bandBlockStarts);
     switch (model.storage) {
     case TransferStorage::Float32: return total + bytes(model.transfer);

@@ -71,6 +71,9 @@ void relightCpcaRange(const RelightModel& model, const float* projections, size_
 // for other storages or n outside 1..8 (those take the decode tile).
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                   float* out);
+// The blocked code kernel (relight_codes.cpp): vertices [first, last) of a model with codesBlocked, relit from its
+// blocks into out. False, with nothing written, for other models.
+bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting, float* out);
 // The fused half kernel (relight_vector.cpp): vertices [first, last) of a Float16 model, all of `count` coefficients
 // (count = n^2, n in 1..8), relit from their halves into out, bit for bit the float kernel on decodedTransfer's
 // rows. Returns how many leading vertices it relit: 0 (nothing written) where the processor lacks AVX2 or F16C or

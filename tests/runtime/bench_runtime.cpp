@@ -1,5 +1,5 @@
 // Relighting throughput at orders 3, 5 and 8 (or those of --orders) for every storage the runtime relights from
-// (float32, half, u16 and u8 codes, clustered PCA), each next to a memory yardstick measured in the same run: a
+// (float32, half, u16 and u8 codes, vertex-blocked and row by row, clustered PCA), each next to a memory yardstick measured in the same run: a
 // plain read (64-bit word sum) of exactly the bytes that relight reads (relightBytes). The table at the end gives bytes per vertex, Mvert/s,
 // each storage against float32, and each relight against streaming its own bytes. Single-threaded: relight()
 // runs on the calling thread without a job system. Run by hand:
@@ -20,7 +20,8 @@ namespace {
 
 size_t gVertices = 1000000;
 
-constexpr const char* kStorages[] = {"float32", "half", "u16", "u8", "cpca"};
+// u16 / u8: vertex-blocked codes, as the loader holds them (blockCodes); "-rows": the same codes row by row.
+constexpr const char* kStorages[] = {"float32", "half", "u16", "u16-rows", "u8", "u8-rows", "cpca"};
 
 // A fast deterministic fill (the values do not matter to the speed, only that they are not all alike).
 struct Lcg {
@@ -65,9 +66,10 @@ prt::RelightModel makeModel(const std::string& storage, int order) {
         for (uint16_t& half : model.halves) half = uint16_t(random.next() & 0xbbff); // finite, mixed signs
         return model;
     }
-    const uint32_t C = storage == "u8" ? 127 : 32767;
-    model.storage = storage == "u8" ? prt::TransferStorage::Uint8 : prt::TransferStorage::Uint16;
-    if (storage == "u8") {
+    const bool u8 = storage.rfind("u8", 0) == 0;
+    const uint32_t C = u8 ? 127 : 32767;
+    model.storage = u8 ? prt::TransferStorage::Uint8 : prt::TransferStorage::Uint16;
+    if (u8) {
         model.codes8.resize(values);
         for (uint8_t& code : model.codes8) code = uint8_t(random.next() % (2 * C + 1));
     } else {
@@ -78,6 +80,7 @@ prt::RelightModel makeModel(const std::string& storage, int order) {
     for (float& sigma : model.bandScales) sigma = (1.0f + random.unit()) / float(C);
     for (size_t v = 0; v < gVertices; v += prt::kRelightBlock) model.bandBlockStarts.push_back(uint32_t(v * order));
     model.bandBlockStarts.push_back(uint32_t(gVertices * order));
+    if (storage.find("-rows") == std::string::npos) prt::blockCodes(model);
     return model;
 }
 
@@ -107,7 +110,8 @@ Workload& workload(const std::string& storage, int order) {
             if (!array.empty()) w.buffers.push_back({array.data(), array.size() * sizeof(array[0])});
         };
         add(m.transfer), add(m.halves), add(m.codes8), add(m.codes16), add(m.bandScales), add(m.scaleCluster);
-        add(m.offsets), add(m.bandBlockStarts), add(m.cpcaBasis), add(m.cpcaWeights), add(m.cpcaCluster);
+        if (!m.codesBlocked) add(m.offsets), add(m.bandBlockStarts); // the blocked kernel reads neither
+        add(m.cpcaBasis), add(m.cpcaWeights), add(m.cpcaCluster);
     }
     return *current;
 }

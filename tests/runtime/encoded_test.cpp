@@ -421,7 +421,8 @@ TEST(EncodedRelight, CodesAtEveryOrderOddCountsAndMidBufferRangesWithinBoundOfTh
 }
 
 // Uniform orders 1..8 built directly, so the fused kernel runs long runs of vertices and a run ends at the codes'
-// last row (read through its zero-padded copy), under lighting spanning many magnitudes (bands falling 16x each,
+// last row (read through its zero-padded copy), then with per-vertex scales the same codes vertex-blocked (blockCodes:
+// 4099 vertices end in a padded block; ranges and the job hook), under lighting spanning many magnitudes (bands falling 16x each,
 // one (band, channel) all zero, one at 1e-30). Each channel is within gamma_{n+2} sum_j |x_j L_j| of the exact
 // E = sum_j x_j L_j, x_j = (q_j - C) sigma_l (in double: q - C and sigma are exact there; the products and their
 // sum of at most 64 terms per channel stay within 2^-45 sum |x L| of it, which the check allows).
@@ -458,24 +459,50 @@ TEST(EncodedRelight, FusedCodesOfLongRunsWithinRoundingOfTheExactSum) {
                         if (l == 2 && c == 1) lighting[k * 3 + c] = 0;
                         if (l == 3 && c == 2) lighting[k * 3 + c] *= 1e-30f;
                     }
-                std::vector<float> radiance = relightAll(model, lighting.data());
-                size_t failures = 0, exact = 0;
-                for (size_t v = 0; v < V; ++v) {
-                    const float* sigma = model.bandScales.data() + (perCluster ? model.scaleCluster[v] * n : v * n);
-                    for (int c = 0; c < 3; ++c) {
-                        double E = 0, magnitude = 0;
-                        for (int k = 0; k < n * n; ++k) {
-                            const double x = (double(codes[v * values + k * 3 + c]) - C) * double(sigma[int(std::sqrt(double(k)))]);
-                            E += x * double(lighting[k * 3 + c]);
-                            magnitude += std::fabs(x * double(lighting[k * 3 + c]));
-                        }
-                        const double error = std::fabs(double(radiance[v * 3 + c]) - E);
-                        if (error > (roundingGamma(double(n * n + 2)) + std::ldexp(1.0, -45)) * magnitude) ++failures;
-                        if (error == 0) ++exact;
+                const std::vector<float> sigmas = model.bandScales;
+                // The row kernel, then (per-vertex scales) the same codes vertex-blocked, each against the exact sum.
+                for (bool blocked : {false, true}) {
+                    if (blocked) {
+                        const std::vector<float> rows = decodedTransfer(model);
+                        ASSERT_EQ(blockCodes(model), !perCluster);
+                        if (perCluster) continue;
+                        ASSERT_TRUE(model.codesBlocked);
+                        EXPECT_TRUE(sameBits(decodedTransfer(model), rows)) << "the blocked rows decode as the rows did";
                     }
+                    SCOPED_TRACE(blocked ? "blocked" : "rows");
+                    std::vector<float> radiance = relightAll(model, lighting.data());
+                    size_t failures = 0, exact = 0;
+                    for (size_t v = 0; v < V; ++v) {
+                        const float* sigma = sigmas.data() + (perCluster ? model.scaleCluster[v] * n : v * n);
+                        for (int c = 0; c < 3; ++c) {
+                            double E = 0, magnitude = 0;
+                            for (int k = 0; k < n * n; ++k) {
+                                const double x = (double(codes[v * values + k * 3 + c]) - C) * double(sigma[int(std::sqrt(double(k)))]);
+                                E += x * double(lighting[k * 3 + c]);
+                                magnitude += std::fabs(x * double(lighting[k * 3 + c]));
+                            }
+                            const double error = std::fabs(double(radiance[v * 3 + c]) - E);
+                            if (error > (roundingGamma(double(n * n + 2)) + std::ldexp(1.0, -45)) * magnitude) ++failures;
+                            if (error == 0) ++exact;
+                        }
+                    }
+                    EXPECT_EQ(failures, 0u);
+                    EXPECT_LT(exact, V * 3) << "float rounding shows: the check is not vacuous";
+                    if (!blocked) continue;
+                    // Ranges that start and end inside blocks, one inside a single block, and the scrambled job
+                    // hook: each vertex's bits as in the whole call.
+                    for (auto [begin, end] : {std::pair<size_t, size_t>{1237, 4090}, {3, 6}, {4093, V}, {0, 1}}) {
+                        std::vector<float> part((end - begin) * 3);
+                        relight(model, lighting.data(), begin, end, part.data());
+                        EXPECT_TRUE(sameBits(part, std::vector<float>(radiance.begin() + std::ptrdiff_t(begin * 3),
+                                                                      radiance.begin() + std::ptrdiff_t(end * 3))))
+                            << begin << ".." << end;
+                    }
+                    size_t calls = 0;
+                    EXPECT_TRUE(sameBits(relightAll(model, lighting.data(), JobSystem{scrambledParallelFor, &calls}),
+                                         radiance));
+                    EXPECT_EQ(calls, 1u);
                 }
-                EXPECT_EQ(failures, 0u);
-                EXPECT_LT(exact, V * 3) << "float rounding shows: the check is not vacuous";
             }
 }
 

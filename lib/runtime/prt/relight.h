@@ -49,6 +49,11 @@ struct RelightModel {
     std::vector<float> bandScales;
     std::vector<uint32_t> bandBlockStarts;
     std::vector<uint32_t> scaleCluster;
+    // Vertex-blocked codes (blockCodes): blocks of kCodeBlock vertices, block b holding value j (= 3 coefficient +
+    // channel) of its vertices side by side, codes[(b 3 order^2 + j) kCodeBlock + i] for vertex b kCodeBlock + i, and
+    // sigma_l at bandScales[(b order + l) kCodeBlock + i]; the last block padded with code C and sigma 0. offsets and
+    // bandBlockStarts are kept; the rows are the same values in another order.
+    bool codesBlocked = false;
     // Cpca: T[v] = mean[k] + sum_i cpcaWeights[v][i] basis[k][i], k = cpcaCluster[v]; cpcaBasis is [K][M + 1]
     // [order^2][3] (row 0 the mean), cpcaWeights [vertexCount][M].
     int cpcaComponents = 0;
@@ -65,6 +70,16 @@ struct RelightModel {
 
 // Vertices per task of relight(model, ...): the split is fixed, so results never depend on the job system.
 inline constexpr size_t kRelightBlock = 4096;
+
+// Vertices per block of vertex-blocked codes (RelightModel::codesBlocked): one per lane of an 8-float vector.
+inline constexpr size_t kCodeBlock = 8;
+
+// Puts a u8 / u16 model whose vertices all have model.order bands (1..8) and per-vertex scales into the
+// vertex-blocked layout (RelightModel::codesBlocked), which relight() reads 8 vertices per vector instruction, with
+// no per-value scale: per band and channel sum_j (q_j - C) L_j over the band's values, times sigma_l, summed over
+// the bands, each vertex in its own lane (about 2.3x the row kernel's rate at order 5; docs/results.md, issue 21).
+// Returns whether it did; other models are left as they are. decodedTransfer gives the same rows bit for bit.
+bool blockCodes(RelightModel& model);
 
 // Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying), or, in a bundle without
 // one, the adaptive layers `prt adapt` writes (adaptiveRelightModel, prt/adaptive.h), kept encoded. `source` names
@@ -96,7 +111,8 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 // empty, in tasks of kRelightBlock vertices run through `jobs` (default: in order on the calling thread).
 // Float32 and Float16 rows are bit-identical to the kernel on decodedTransfer(model); u8 / u16 codes of 1..8
 // bands are relit by a fused kernel straight from the codes (q - C times sigma_l L_j), within (gamma_{n+2} +
-// gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows (tests/runtime); Cpca projects each
+// gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows (tests/runtime), blocked codes
+// (blockCodes) by the blocked kernel within the same bound; Cpca projects each
 // cluster's mean and directions on the lighting once per call, then sums M weights per vertex, which agrees
 // with the kernel on the decoded rows within float rounding (tests/runtime). Bit-identical for every job system.
 // Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
