@@ -54,8 +54,8 @@ void checkOptions(const TriMesh& mesh, const GlossyOptions& options) {
     if (options.nestedMaxNorm && (!options.nested || !options.nestedLighting.empty()))
         throw Error("", "--nested-max", "needs --nested and not --nested-lighting", kExitUsage);
     if (options.fromBelow && (options.nested || options.warmStart))
-        throw Error("", "--from-below", "fits each lobe on what the earlier ones leave: not with --nested or --warm-start",
-                    kExitUsage);
+        throw Error("", "--from-below",
+                    "fits each lobe on what the earlier ones leave: not with --nested or --warm-start", kExitUsage);
     if (!(options.fromBelowOvershoot > 0.0 && options.fromBelowOvershoot <= 1e6))
         throw Error("", "--overshoot", "must lie in (0, 1e6]", kExitUsage);
     if (mesh.normals.size() != mesh.positions.size())

@@ -353,7 +353,8 @@ __kernel void fitLobes(int problems, int count, __global const float* table, __g
                        __global const double* moments,
                        __global const double* energies, __global const float* amplitudeMaxima,
                        __global const float* priors, __global const float* priorWeights, double weightMean,
-                       double weightWidth, double weightFlip, double over, double logMin, double logMax, int maxIterations,
+                       double weightWidth, double weightFlip, double over, double logMin, double logMax,
+                       int maxIterations,
                        double functionTolerance, double parameterTolerance, double gradientTolerance,
                        __global float* params, __global double* costs, __global int* iterations,
                        __global double* normals) {
@@ -440,7 +441,8 @@ __kernel void normalEquations(int problems, int count, __global const float* tab
                               __global const double* moments,
                               __global const double* energies, __global const float* amplitudeMaxima,
                               __global const float* priors, __global const float* priorWeights, double weightMean,
-                              double weightWidth, double weightFlip, double over, double logMin, double logMax, int maxIterations,
+                              double weightWidth, double weightFlip, double over, double logMin, double logMax,
+                              int maxIterations,
                               double functionTolerance, double parameterTolerance, double gradientTolerance,
                               __global float* params, __global double* costs, __global int* iterations,
                               __global double* normals) {

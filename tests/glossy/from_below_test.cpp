@@ -1,7 +1,8 @@
 // The fit from below (GlossyOptions::fromBelow): lobe k is fitted alone on what lobes < k leave, so a fit of N
 // lobes starts with the fit of N - 1 bit for bit; every lobe lies (nearly) under what is left and is no sharper
-// than fromBelowSharpnessMax, so the model stays under the kernel; and then the relit error under any lighting >= 0 never grows with the lobe count. Checked on a
-// sphere (convex: V = 1 above the tangent plane, so the kernel is known without rays), recomputed from the output.
+// than fromBelowSharpnessMax, so the model stays under the kernel; and then the relit error under any lighting
+// >= 0 never grows with the lobe count. Checked on a sphere (convex: V = 1 above the tangent plane, so the kernel
+// is known without rays), recomputed from the output.
 #include "glossy.h"
 
 #include "scene.h"
@@ -150,7 +151,7 @@ TEST(GlossyFromBelow, RelitErrorUnderAnyPositiveLightingFallsWithTheLobeCount) {
                         sum[k] += error[k] * error[k];
                     }
                     cases += 2;
-                    rises += (std::abs(error[1]) > std::abs(error[0]) + 1e-9) + (std::abs(error[2]) > std::abs(error[1]) + 1e-9);
+                    for (int k = 1; k < 3; ++k) rises += std::abs(error[k]) > std::abs(error[k - 1]) + 1e-9;
                 }
             }
         SCOPED_TRACE(solver == Solver::Ceres ? "ceres" : "pocl");

@@ -1,6 +1,7 @@
 // The two solvers against each other and against finite differences: the analytic Jacobian of every term of the
-// objective (data, plain and one-sided, gauge, mean and width coherence, no-flip) against central differences, the OpenCL kernel's own
-// normal equations against the host's (also with sharp lobes, where the kernel skips negligible directions), and
+// objective (data, plain and one-sided, gauge, mean and width coherence, no-flip) against central differences, the
+// OpenCL kernel's own normal equations against the host's (also with sharp lobes, where the kernel skips
+// negligible directions), and
 // 2- and 3-lobe problems, with and without priors, solved by both to the same cost within 1%.
 #include "glossy.h"
 #include "glossy_internal.h"
@@ -195,6 +196,16 @@ TEST(GlossySolvers, KernelNormalEquationsMatchTheHostJacobian) {
     }
 }
 
+// The residuals of problem p of `batch` at its params, in double.
+std::vector<double> problemResiduals(const DirectionGrid& grid, const FitBatch& batch, size_t p,
+                                     const FitWeights& weights) {
+    const size_t width = size_t(batch.lobes) * kLobeParams;
+    std::vector<double> x(&batch.params[p * width], &batch.params[p * width] + width);
+    std::vector<double> r(residualCount(grid.count(), batch.lobes));
+    evaluateResiduals(grid, problemView(grid, batch, p), weights, x.data(), r.data(), nullptr);
+    return r;
+}
+
 // Both solvers from one start reach the same cost within 1% on every problem (or both lie at the float floor,
 // 1e-7 of the problem's energy), without priors and with crossed priors, and each reports its own objective.
 void expectSameCosts(const DirectionGrid& grid, const FitBatch& start, const FitWeights& weights) {
@@ -296,11 +307,7 @@ TEST(GlossySolvers, OneSidedProblemsReachTheSameCostWithBothSolvers) {
         auto overshot = [&](const FitBatch& fit) { // sum over problems of sum_i dw_i max(0, F_i - T_i)^2
             double sum = 0.0;
             for (size_t p = 0; p < fit.problems; ++p) {
-                ProblemView view = problemView(grid, fit, p);
-                std::vector<double> x(fit.params.begin() + p * lobes * kLobeParams,
-                                      fit.params.begin() + (p + 1) * lobes * kLobeParams);
-                std::vector<double> r(residualCount(grid.count(), lobes));
-                evaluateResiduals(grid, view, FitWeights{}, x.data(), r.data(), nullptr);
+                const std::vector<double> r = problemResiduals(grid, fit, p, FitWeights{});
                 for (size_t i = 0; i < grid.count(); ++i) sum += r[i] > 0 ? r[i] * r[i] : 0.0;
             }
             return sum;
@@ -319,11 +326,7 @@ TEST(GlossySolvers, PriorAndNoFlipTermsSolvedAlikeByBothSolvers) {
         // point the prior terms carry a share of the objective.
         double startFlip = 0.0;
         for (size_t p = 0; p < batch.problems; ++p) {
-            ProblemView view = problemView(grid, batch, p);
-            std::vector<double> x(batch.params.begin() + p * lobes * kLobeParams,
-                                  batch.params.begin() + (p + 1) * lobes * kLobeParams);
-            std::vector<double> r(residualCount(grid.count(), lobes));
-            evaluateResiduals(grid, view, weights, x.data(), r.data(), nullptr);
+            const std::vector<double> r = problemResiduals(grid, batch, p, weights);
             for (size_t i = grid.count() + 5 * lobes; i < r.size(); ++i) startFlip = std::max(startFlip, r[i]);
         }
         EXPECT_GT(startFlip, 0.0);

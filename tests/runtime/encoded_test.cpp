@@ -477,7 +477,8 @@ TEST(EncodedRelight, FusedCodesOfLongRunsWithinRoundingOfTheExactSum) {
                         for (int c = 0; c < 3; ++c) {
                             double E = 0, magnitude = 0;
                             for (int k = 0; k < n * n; ++k) {
-                                const double x = (double(codes[v * values + k * 3 + c]) - C) * double(sigma[int(std::sqrt(double(k)))]);
+                                const double x = (double(codes[v * values + k * 3 + c]) - C) *
+                                                 double(sigma[int(std::sqrt(double(k)))]);
                                 E += x * double(lighting[k * 3 + c]);
                                 magnitude += std::fabs(x * double(lighting[k * 3 + c]));
                             }
