@@ -451,9 +451,9 @@ namespace {
 // The fit from below of one chunk (GlossyOptions::fromBelow): for k = 1..lobes a 1-lobe batch on the residual
 // kernel (the kernel minus lobes < k, on the grid), started by the shared greedy start, pass 1 and the coherence
 // pass with the one-sided data weight and sharpness at most fromBelowSharpnessMax; lobe k is then subtracted from
-// the residual. Returns the output form as
-// coherencePass (lobe k of problem p at (p lobes + k) kLobeParams); leaves batch with the whole kernel, the
-// solver-form lobes, and as cost the plain data cost (dataCost) of all lobes on the grid.
+// the residual. Returns the output form as coherencePass does (lobe k of problem p at (p lobes + k) kLobeParams);
+// leaves batch with the whole kernel, the solver-form lobes, and as cost the plain data cost (dataCost) of all
+// lobes on the grid.
 std::vector<float> fromBelowFit(const DirectionGrid& grid, Chunk& tabulated, const GlossyOptions& options,
                                 bool coherence) {
     FitBatch& batch = tabulated.batch;
@@ -470,7 +470,7 @@ std::vector<float> fromBelowFit(const DirectionGrid& grid, Chunk& tabulated, con
         batch.hasPrior.clear();
         batch.params.assign(problems * kLobeParams, 0.0f);
         for (size_t p = 0; p < problems; ++p)
-            initialise(grid, &batch.kernel[p * count], 1, options.phong.exponent, options.bounds,
+            initialise(grid, &batch.kernel[p * count], 1, options.phong.exponent, stage.bounds,
                        &batch.params[p * kLobeParams]);
         solve(grid, batch, FitWeights{0.0, 0.0, 0.0, stage.weights.overshoot}, stage);
         std::vector<float> fitted = coherencePass(grid, tabulated, stage, coherence);

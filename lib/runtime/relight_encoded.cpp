@@ -315,7 +315,9 @@ bool blockCodes(RelightModel& model) {
     const size_t n = size_t(model.order), count = n * n;
     for (size_t v = 0; v <= model.vertexCount; ++v)
         if (model.offsets[v] != v * count) return false; // not every vertex at the full order
-    if (model.bandScales.size() != size_t(model.vertexCount) * n) return false;
+    const size_t codes = model.storage == TransferStorage::Uint8 ? model.codes8.size() : model.codes16.size();
+    if (model.bandScales.size() != size_t(model.vertexCount) * n || codes != size_t(model.vertexCount) * count * 3)
+        return false; // codes or scales not of the size the offsets describe: left as they are
     if (model.storage == TransferStorage::Uint8) blockCodesOf(model.codes8, model.bandScales, model.vertexCount, n);
     else blockCodesOf(model.codes16, model.bandScales, model.vertexCount, n);
     model.codesBlocked = true;
