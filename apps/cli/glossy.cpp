@@ -113,8 +113,8 @@ void indirectTransfer(const GlossyArgs& args, const TriMesh& mesh, const std::ar
     options.indirectSamples = args.samples;
 }
 
-void runGlossy(const GlossyArgs& args) {
-    double start = nowSeconds();
+// The fit's options from the flags, each checked for range and for combinations that do not go together.
+glossy::GlossyOptions glossyOptions(const GlossyArgs& args) {
     glossy::GlossyOptions options;
     if (args.brdf.empty()) throw usage("--brdf", "is required: phong:EXPONENT,KS");
     parsePhongBrdf(args.brdf, options.phong.exponent, options.phong.ks);
@@ -168,6 +168,35 @@ void runGlossy(const GlossyArgs& args) {
     if (args.lobeType != "float16" && args.lobeType != "float32")
         throw usage("--lobe-type", "must be float16 or float32");
     options.lobeType = args.lobeType;
+    return options;
+}
+
+// `--compare-solvers N`: both solvers on the first N problems of the mesh, reported as an event and to --stats.
+void reportSolverComparison(const GlossyArgs& args, const TriMesh& mesh, const glossy::GlossyOptions& options) {
+    glossy::SolverComparison c = glossy::compareSolvers(mesh, options, args.compareSolvers);
+    nlohmann::json record = {{"problems", c.problems}, {"lobes", args.lobes}, {"grid", args.grid},
+                             {"brdf", args.brdf}, {"threads", options.solverOptions.threads},
+                             {"pocl_seconds", c.openClSeconds}, {"ceres_seconds", c.ceresSeconds},
+                             {"pocl_ms_per_fit", 1e3 * c.openClSeconds / double(c.problems)},
+                             {"ceres_ms_per_fit", 1e3 * c.ceresSeconds / double(c.problems)},
+                             {"speed_ratio", c.ceresSeconds / c.openClSeconds},
+                             {"pocl_cpu_seconds", c.openClCpuSeconds}, {"ceres_cpu_seconds", c.ceresCpuSeconds},
+                             {"cpu_time_ratio", c.ceresCpuSeconds / c.openClCpuSeconds},
+                             {"initial_cost", c.initialCost}, {"pocl_cost", c.openClCost},
+                             {"ceres_cost", c.ceresCost}, {"share_within_1pct", c.shareWithinOnePercent},
+                             {"share_agreeing_1pct", c.shareAgreeing},
+                             {"pocl_mean_iterations", c.openClMeanIterations},
+                             {"ceres_mean_iterations", c.ceresMeanIterations},
+                             {"pocl_costs", c.openClCosts}, {"ceres_costs", c.ceresCosts}};
+    nlohmann::json summary = record;
+    summary.erase("pocl_costs"), summary.erase("ceres_costs");
+    logEvent("glossy_solver_comparison", summary.dump());
+    if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
+}
+
+void runGlossy(const GlossyArgs& args) {
+    double start = nowSeconds();
+    glossy::GlossyOptions options = glossyOptions(args);
     std::array<double, 3> albedo = parseAlbedo(args.albedo);
     if (args.indirectGlossy && (albedo[0] != albedo[1] || albedo[1] != albedo[2]))
         throw usage("--indirect-glossy", "needs a grey --albedo: the glossy kernel has one channel");
@@ -186,28 +215,7 @@ void runGlossy(const GlossyArgs& args) {
     if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
     logInfo("glossy: " + args.input + " (" + std::to_string(mesh.vertexCount()) + " vertices), " + args.brdf + ", " +
             std::to_string(args.lobes) + " lobes, " + args.solver + ", grid 6x" + std::to_string(args.grid) + "^2");
-    if (args.compareSolvers > 0) {
-        glossy::SolverComparison c = glossy::compareSolvers(mesh, options, args.compareSolvers);
-        nlohmann::json record = {{"problems", c.problems}, {"lobes", args.lobes}, {"grid", args.grid},
-                                 {"brdf", args.brdf}, {"threads", options.solverOptions.threads},
-                                 {"pocl_seconds", c.openClSeconds}, {"ceres_seconds", c.ceresSeconds},
-                                 {"pocl_ms_per_fit", 1e3 * c.openClSeconds / double(c.problems)},
-                                 {"ceres_ms_per_fit", 1e3 * c.ceresSeconds / double(c.problems)},
-                                 {"speed_ratio", c.ceresSeconds / c.openClSeconds},
-                                 {"pocl_cpu_seconds", c.openClCpuSeconds}, {"ceres_cpu_seconds", c.ceresCpuSeconds},
-                                 {"cpu_time_ratio", c.ceresCpuSeconds / c.openClCpuSeconds},
-                                 {"initial_cost", c.initialCost}, {"pocl_cost", c.openClCost},
-                                 {"ceres_cost", c.ceresCost}, {"share_within_1pct", c.shareWithinOnePercent},
-                                 {"share_agreeing_1pct", c.shareAgreeing},
-                                 {"pocl_mean_iterations", c.openClMeanIterations},
-                                 {"ceres_mean_iterations", c.ceresMeanIterations},
-                                 {"pocl_costs", c.openClCosts}, {"ceres_costs", c.ceresCosts}};
-        nlohmann::json summary = record;
-        summary.erase("pocl_costs"), summary.erase("ceres_costs");
-        logEvent("glossy_solver_comparison", summary.dump());
-        if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
-        return;
-    }
+    if (args.compareSolvers > 0) return reportSolverComparison(args, mesh, options);
     // Shards are vertex ranges: every row is computed as the whole run computes it (lib/glossy and lib/transfer
     // guarantee rows independent of the range), so `prt merge` joins them bit for bit.
     RowRange range = shardRows(mesh.vertexCount(), shardIndex, shardCount);

@@ -66,7 +66,8 @@ void checkOptions(const TriMesh& mesh, const GlossyOptions& options) {
         throw Error("", "--indirect-glossy", "the indirect transfer has not V x order^2 values", kExitFailure);
 }
 
-// Solver form (a, m, log lambda) to output form (a, unit mu, lambda) and back.
+} // namespace
+
 void toOutput(const float* solver, float* out, int lobes) {
     for (int k = 0; k < lobes; ++k) {
         const float* s = solver + k * kLobeParams;
@@ -92,45 +93,7 @@ void solve(const DirectionGrid& grid, FitBatch& batch, const FitWeights& weights
         solveCeres(grid, batch, weights, options.bounds, options.solverOptions);
 }
 
-// The independent pass with a warm start (GlossyOptions::warmStart): fits of 1, 2, ..., batch.lobes lobes, each
-// from the previous fit plus one greedy lobe (initialiseFrom); where a fit ends above the previous fit's cost,
-// the previous fit plus a zero-amplitude lobe is kept. Leaves batch.params, cost and iterations as solve() does.
-void warmStartFit(const DirectionGrid& grid, FitBatch& batch, const GlossyOptions& options) {
-    const int lobes = batch.lobes;
-    FitBatch step;
-    step.problems = batch.problems;
-    step.kernel = std::move(batch.kernel);
-    step.amplitudeMax = batch.amplitudeMax;
-    std::vector<float> previous, previousCost; // the last fit, [problems][(k - 1) * kLobeParams], and its costs
-    for (int k = 1; k <= lobes; ++k) {
-        const size_t width = size_t(k) * kLobeParams, before = width - kLobeParams;
-        step.lobes = k;
-        step.params.assign(step.problems * width, 0.0f);
-        for (size_t p = 0; p < step.problems; ++p) {
-            float* x = &step.params[p * width];
-            std::copy_n(previous.begin() + std::ptrdiff_t(p * before), before, x);
-            initialiseFrom(grid, &step.kernel[p * grid.count()], k - 1, k, options.phong.exponent, options.bounds, x);
-        }
-        solve(grid, step, FitWeights{}, options);
-        for (size_t p = 0; k > 1 && p < step.problems; ++p) {
-            if (!(step.cost[p] > previousCost[p])) continue;
-            float* x = &step.params[p * width];
-            std::copy_n(previous.begin() + std::ptrdiff_t(p * before), before, x);
-            float* extra = x + before; // a zero lobe along the first lobe, at the exponent
-            extra[0] = 0.0f;
-            double length = std::sqrt(double(x[1]) * x[1] + double(x[2]) * x[2] + double(x[3]) * x[3]);
-            for (int c = 0; c < 3; ++c) extra[1 + c] = float(x[1 + c] / length);
-            extra[4] = float(std::log(std::clamp(options.phong.exponent, options.bounds.lambdaMin, options.bounds.lambdaMax)));
-            step.cost[p] = previousCost[p];
-        }
-        previous = step.params;
-        previousCost = step.cost;
-    }
-    batch.kernel = std::move(step.kernel);
-    batch.params = std::move(step.params);
-    batch.cost = std::move(step.cost);
-    batch.iterations = std::move(step.iterations);
-}
+namespace {
 
 // Views of one vertex in breadth-first order over the view graph from the fitted view nearest the normal; each
 // entry's parent is an earlier fitted view (or -1 for the root of a component).
@@ -159,17 +122,6 @@ std::vector<std::pair<int, int>> viewOrder(const std::vector<int>& slot, const f
         }
     }
 }
-
-// One chunk's problems: kernels of every view above each vertex's horizon with a nonzero kernel, started from
-// the shared initialisation. slot[i][view] is the problem's index among vertex i's, or -1.
-struct Chunk {
-    FitBatch batch;
-    std::vector<std::vector<int>> slot;
-    std::vector<size_t> first; // [chunk + 1]: vertex i's problems are first[i] .. first[i + 1]
-    std::vector<std::array<float, 3>> normals;
-    std::vector<float> visibleShare; // [chunk]: visible solid angle over the upper hemisphere's
-    std::vector<float> heldKernel;   // [problems][heldOut.count()] in batch order, nested fits only
-};
 
 Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const DirectionGrid* heldOut,
                     const GlossyOptions& options, const EmbreeScene& embree, float offset,
@@ -293,9 +245,8 @@ Chunk tabulateChunk(const TriMesh& mesh, const DirectionGrid& grid, const Direct
     return result;
 }
 
-// The fit after pass 1 (batch.params hold its result, solver form): with `coherence`, lobe order aligned across
-// each vertex's views, priors from the aligned neighbours, and pass 2 from there. Returns the output form
-// [problems][batch.lobes * kLobeParams]; batch.params, cost and iterations hold the final fit.
+} // namespace
+
 std::vector<float> coherencePass(const DirectionGrid& grid, Chunk& tabulated, const GlossyOptions& options,
                                  bool coherence) {
     const ViewSet& views = viewSet();
@@ -347,155 +298,6 @@ std::vector<float> coherencePass(const DirectionGrid& grid, Chunk& tabulated, co
     }
     return fitted;
 }
-
-} // namespace
-
-// Which problems keep stage k of the nested fit: every one at k = 1; else where the held-out cost `held` is below
-// (1 - options.nestedMargin) times the kept cost `previous`, per problem, or with options.nestedPerVertex per
-// vertex (problems first[i] .. first[i + 1]) by the sums over its problems. Needs held, previous of the same size.
-std::vector<uint8_t> keepStage(const std::vector<size_t>& first, const std::vector<double>& held,
-                               const std::vector<double>& previous, int k, const GlossyOptions& options) {
-    const size_t problems = held.size();
-    std::vector<uint8_t> keep(problems, 1);
-    if (k == 1) return keep;
-    const double factor = 1.0 - options.nestedMargin;
-    if (!options.nestedPerVertex) {
-        for (size_t p = 0; p < problems; ++p) keep[p] = held[p] < factor * previous[p];
-        return keep;
-    }
-    for (size_t i = 0; i + 1 < first.size(); ++i) {
-        double now = 0.0, before = 0.0;
-        for (size_t p = first[i]; p < first[i + 1]; ++p) now += held[p], before += previous[p];
-        for (size_t p = first[i]; p < first[i + 1]; ++p) keep[p] = now < factor * before;
-    }
-    return keep;
-}
-
-namespace {
-
-// The nested fit of one chunk (GlossyOptions::nested): stages 1..lobes, stage k from stage k - 1's kept fit plus
-// one greedy lobe on its residual (initialiseFrom), pass 1 and the coherence pass as the plain fit; a problem keeps
-// stage k where keepStage says (its held-out data cost, dataCost on `heldOut`, tabulated.heldKernel, against
-// stage k - 1's: by options.nestedMargin, per view or per vertex), else
-// stage k - 1's lobes and a zero lobe (amplitude 0, along the first lobe, the exponent's sharpness). Returns the
-// output form as coherencePass; heldCost[p] is the kept fit's held-out data cost; keptStage[k - 1] counts the
-// problems that kept stage k.
-std::vector<float> nestedFit(const DirectionGrid& grid, const DirectionGrid& heldOut, Chunk& tabulated,
-                             const GlossyOptions& options, bool coherence, std::vector<double>& heldCost,
-                             std::vector<uint64_t>& keptStage) {
-    FitBatch& batch = tabulated.batch;
-    const int lobes = batch.lobes;
-    const size_t problems = batch.problems, heldCount = heldOut.count();
-    std::vector<float> kept, keptCost; // output form [problems][(k - 1) * kLobeParams], and its costs
-    std::vector<int> keptIterations;
-    heldCost.assign(problems, 0.0);
-    std::vector<double> keptScore(problems, 0.0); // the kept fit's keep score: litCost, or without lighting heldCost
-    const size_t rows = options.nestedLighting.size() / std::max<size_t>(heldCount, 1);
-    if (keptStage.size() < size_t(lobes)) keptStage.resize(size_t(lobes), 0);
-    const float zeroSharpness = float(std::clamp(options.phong.exponent, options.bounds.lambdaMin, options.bounds.lambdaMax));
-    for (int k = 1; k <= lobes; ++k) {
-        const size_t width = size_t(k) * kLobeParams, before = width - kLobeParams;
-        batch.lobes = k;
-        batch.prior.clear();
-        batch.hasPrior.clear();
-        batch.params.assign(problems * width, 0.0f);
-        for (size_t p = 0; p < problems; ++p) {
-            float* x = &batch.params[p * width];
-            toSolver(&kept[p * before], x, k - 1);
-            initialiseFrom(grid, &batch.kernel[p * grid.count()], k - 1, k, options.phong.exponent, options.bounds, x);
-        }
-        solve(grid, batch, FitWeights{}, options);
-        std::vector<float> fitted = coherencePass(grid, tabulated, options, coherence);
-        std::vector<double> held(problems), score(problems);
-        for (size_t p = 0; p < problems; ++p) {
-            const float* kernel = &tabulated.heldKernel[p * heldCount];
-            held[p] = dataCost(heldOut, kernel, k, &batch.params[p * width]);
-            score[p] = rows ? litCost(heldOut, kernel, k, &batch.params[p * width], options.nestedLighting.data(), rows)
-                       : options.nestedMaxNorm ? maxResidual(heldOut, kernel, k, &batch.params[p * width])
-                                               : held[p];
-        }
-        std::vector<uint8_t> keep = keepStage(tabulated.first, score, keptScore, k, options);
-        for (size_t p = 0; p < problems; ++p) {
-            if (keep[p]) {
-                heldCost[p] = held[p];
-                keptScore[p] = score[p];
-                ++keptStage[size_t(k) - 1];
-                continue;
-            }
-            float* row = &fitted[p * width];
-            std::copy_n(&kept[p * before], before, row);
-            float* extra = row + before;
-            extra[0] = 0.0f;
-            std::copy_n(row + 1, 3, extra + 1);
-            extra[4] = zeroSharpness;
-            toSolver(row, &batch.params[p * width], k);
-            batch.cost[p] = keptCost[p];
-            batch.iterations[p] = keptIterations[p];
-        }
-        kept = std::move(fitted);
-        keptCost = batch.cost;
-        keptIterations = batch.iterations;
-    }
-    return kept;
-}
-
-} // namespace
-
-double fromBelowSharpnessMax(const GlossyOptions& options) {
-    const double resolution = options.gridResolution;
-    return std::min(options.bounds.lambdaMax, std::max(resolution * resolution, options.phong.exponent));
-}
-
-namespace {
-
-// The fit from below of one chunk (GlossyOptions::fromBelow): for k = 1..lobes a 1-lobe batch on the residual
-// kernel (the kernel minus lobes < k, on the grid), started by the shared greedy start, pass 1 and the coherence
-// pass with the one-sided data weight and sharpness at most fromBelowSharpnessMax; lobe k is then subtracted from
-// the residual. Returns the output form as coherencePass does (lobe k of problem p at (p lobes + k) kLobeParams);
-// leaves batch with the whole kernel, the solver-form lobes, and as cost the plain data cost (dataCost) of all
-// lobes on the grid.
-std::vector<float> fromBelowFit(const DirectionGrid& grid, Chunk& tabulated, const GlossyOptions& options,
-                                bool coherence) {
-    FitBatch& batch = tabulated.batch;
-    const int lobes = batch.lobes, width = lobes * kLobeParams;
-    const size_t problems = batch.problems, count = grid.count();
-    const std::vector<float> kernel = batch.kernel;
-    GlossyOptions stage = options;
-    stage.weights.overshoot = options.fromBelowOvershoot;
-    stage.bounds.lambdaMax = fromBelowSharpnessMax(options);
-    std::vector<float> lobesOut(problems * width);
-    for (int k = 0; k < lobes; ++k) {
-        batch.lobes = 1;
-        batch.prior.clear();
-        batch.hasPrior.clear();
-        batch.params.assign(problems * kLobeParams, 0.0f);
-        for (size_t p = 0; p < problems; ++p)
-            initialise(grid, &batch.kernel[p * count], 1, options.phong.exponent, stage.bounds,
-                       &batch.params[p * kLobeParams]);
-        solve(grid, batch, FitWeights{0.0, 0.0, 0.0, stage.weights.overshoot}, stage);
-        std::vector<float> fitted = coherencePass(grid, tabulated, stage, coherence);
-        for (size_t p = 0; p < problems; ++p) {
-            const float* lobe = &fitted[p * kLobeParams];
-            std::copy_n(lobe, kLobeParams, &lobesOut[p * width + size_t(k) * kLobeParams]);
-            float* residual = &batch.kernel[p * count];
-            for (size_t i = 0; i < count; ++i) {
-                const float* w = &grid.directions[i * 3];
-                double cosine = double(lobe[1]) * w[0] + double(lobe[2]) * w[1] + double(lobe[3]) * w[2];
-                residual[i] = float(residual[i] - double(lobe[0]) * std::exp(double(lobe[4]) * (cosine - 1.0)));
-            }
-        }
-    }
-    batch.lobes = lobes;
-    batch.kernel = kernel;
-    batch.params.resize(problems * width);
-    for (size_t p = 0; p < problems; ++p) {
-        toSolver(&lobesOut[p * width], &batch.params[p * width], lobes);
-        batch.cost[p] = float(dataCost(grid, &kernel[p * count], lobes, &batch.params[p * width]));
-    }
-    return lobesOut;
-}
-
-} // namespace
 
 GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options) {
     checkOptions(mesh, options);
