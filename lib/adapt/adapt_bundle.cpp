@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <utility>
 
 namespace prt::adapt {
@@ -70,8 +71,21 @@ std::vector<uint32_t> gridTriangles(int width, int height) {
     return triangles;
 }
 
-AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& inputLightings, const AdaptOptions& options,
-                       const std::string& source) {
+namespace {
+
+// The layer adaptBundle works on, taken out of the bundle and checked: a per-vertex "transfer" or a bake's
+// "texel_transfer" [rows, L*L, 3] of finite floats held in the bundle.
+struct TransferInput {
+    Layer layer;
+    bool texels = false;     // rows are texels of a width x height grid, else the mesh's vertices
+    std::string domain;      // "vertex" or "texel"
+    int width = 0, height = 0;
+    size_t rows = 0;
+    int order = 0;
+    std::vector<uint32_t> triangles; // the rows' neighbourhood: the mesh's triangles, or the texel grid's
+};
+
+TransferInput takeTransferInput(Bundle& bundle, const std::string& source) {
     auto found = std::find_if(bundle.layers.begin(), bundle.layers.end(), [](const Layer& l) { return l.name == "transfer"; });
     if (found == bundle.layers.end())
         found = std::find_if(bundle.layers.begin(), bundle.layers.end(),
@@ -79,35 +93,214 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
     if (found == bundle.layers.end())
         throw Error(source, "PRT_bundle", "no full-order \"transfer\" (or \"texel_transfer\") layer to adapt (run `prt "
                                           "transfer` or `prt bake` to make one)");
-    Layer input = std::move(*found);
+    TransferInput in;
+    in.layer = std::move(*found);
     bundle.layers.erase(found);
+    const Layer& input = in.layer;
     // Rows are vertices, whose neighbours are the mesh's edges, or texels of a bake, neighbours on the texel grid.
-    const bool texels = input.name == "texel_transfer";
-    const std::string domain = texels ? "texel" : "vertex";
+    in.texels = input.name == "texel_transfer";
+    in.domain = in.texels ? "texel" : "vertex";
     const std::string place = "layer \"" + input.name + "\"";
     // The bounce part of the full-order transfer (hybrid lighting's) no longer matches what is stored: dropped.
-    const char* bounceLayer = texels ? "texel_transfer_bounce" : "transfer_bounce";
+    const char* bounceLayer = in.texels ? "texel_transfer_bounce" : "transfer_bounce";
     std::erase_if(bundle.layers, [&](const Layer& l) { return l.name == bounceLayer; });
-    int width = 0, height = 0;
-    if (texels) {
+    if (in.texels) {
         auto side = [&](const char* key) {
             const nlohmann::json& value = input.params.contains(key) ? input.params[key] : nlohmann::json();
             if (!value.is_number_integer() || value.get<int64_t>() < 1 || value.get<int64_t>() > 65536)
                 throw Error(source, place + ", params." + key, "is missing or not a size in 1..65536");
             return int(value.get<int64_t>());
         };
-        width = side("width"), height = side("height");
+        in.width = side("width"), in.height = side("height");
     }
-    const size_t V = texels ? size_t(width) * height : bundle.mesh.vertexCount();
-    const std::vector<uint32_t> triangles = texels ? gridTriangles(width, height) : bundle.mesh.indices;
-    int order = input.shape.size() == 3 ? int(std::lround(std::sqrt(double(input.shape[1])))) : 0;
-    if (input.domain != domain || input.semantic != "sh_transfer_rgb" || input.shape.size() != 3 ||
+    const size_t V = in.texels ? size_t(in.width) * in.height : bundle.mesh.vertexCount();
+    in.rows = V;
+    in.triangles = in.texels ? gridTriangles(in.width, in.height) : bundle.mesh.indices;
+    const int order = input.shape.size() == 3 ? int(std::lround(std::sqrt(double(input.shape[1])))) : 0;
+    if (input.domain != in.domain || input.semantic != "sh_transfer_rgb" || input.shape.size() != 3 ||
         input.shape[0] != V || input.shape[2] != 3 || order < 1 || order > sh::kMaxOrder ||
         uint64_t(order) * order != input.shape[1] || input.data.size() != V * input.shape[1] * 3)
-        throw Error(source, place, "is not a " + domain + " sh_transfer_rgb layer [rows, L*L, 3] of float values held in "
-                                   "the bundle (a bake's texture must be read into it first)");
+        throw Error(source, place, "is not a " + in.domain + " sh_transfer_rgb layer [rows, L*L, 3] of float values "
+                                   "held in the bundle (a bake's texture must be read into it first)");
     for (float value : input.data)
         if (!std::isfinite(value)) throw Error(source, place, "holds a value that is not finite");
+    in.order = order;
+    return in;
+}
+
+// Relative RMSE under the prior `lightings` (of inputOrder) of `dense` rows at `order` <= inputOrder against the
+// input rows `inputFull` at inputOrder; the bands past `order` count as zero.
+double errorAgainstInput(const std::vector<float>& dense, int order, const std::vector<float>& inputFull, int inputOrder,
+                         size_t V, const std::vector<std::vector<float>>& lightings) {
+    std::vector<float> padded(inputFull.size(), 0.0f);
+    const size_t from = size_t(order) * order * 3, to = size_t(inputOrder) * inputOrder * 3;
+    for (size_t v = 0; v < V; ++v) std::copy_n(dense.begin() + v * from, from, padded.begin() + v * to);
+    return priorRelativeRmse(padded.data(), inputFull.data(), V, inputOrder, lightings);
+}
+
+// The CPCA layers of rows `full` [V][order^2][3]: options.components, or with none the fewest (doubling) whose
+// error against the input is within options.maxError. `error(dense)` is that error; fills the stats' error and
+// order fields and params' CPCA keys (basis layer's params are params).
+std::vector<Layer> cpcaLayers(const std::vector<float>& full, size_t V, int order, const std::string& domain,
+                              const AdaptOptions& options, const std::function<double(const std::vector<float>&)>& error,
+                              nlohmann::json& params, AdaptStats& stats) {
+    const size_t dim = size_t(order) * order * 3;
+    const int clusters = std::clamp<int>(options.clusters, 1, int(V));
+    Cpca cpca;
+    if (options.components > 0) {
+        cpca = clusteredPca(full.data(), V, dim, clusters, std::min<int>(options.components, int(dim)));
+    } else { // the fewest components (doubling) whose relative RMSE under the prior is within max_error
+        for (int m = 1;; m = std::min<int>(m * 2, int(dim))) {
+            cpca = clusteredPca(full.data(), V, dim, clusters, m);
+            if (m == int(dim) || error(reconstruct(cpca)) <= options.maxError) break;
+        }
+    }
+    stats.relativeRmse = error(reconstruct(cpca));
+    stats.components = cpca.components;
+    stats.meanOrder = order;
+    stats.meanCoefficients = double(order) * order;
+    stats.orderHistogram[order] = int(V);
+    params["clusters"] = clusters;
+    params["components"] = cpca.components;
+    params["cluster_layer"] = "transfer_cpca_cluster";
+    params["weights_layer"] = "transfer_cpca_weights";
+    Layer cluster = makeLayer("transfer_cpca_cluster", domain, "cluster_index", {V},
+                              clusters <= 65536 ? "uint16" : "uint32");
+    cluster.integers = cpca.cluster;
+    Layer weights = makeLayer("transfer_cpca_weights", domain, "cpca_weights", {V, uint64_t(cpca.components)},
+                              "float32");
+    weights.data = std::move(cpca.weights);
+    Layer basis = makeLayer("transfer_cpca_basis", "cluster", "cpca_mean_basis",
+                            {uint64_t(clusters), uint64_t(cpca.components) + 1, uint64_t(order) * order, 3},
+                            "float32");
+    basis.data = std::move(cpca.basis);
+    basis.params = params;
+    std::vector<Layer> layers;
+    layers.push_back(std::move(cluster));
+    layers.push_back(std::move(weights));
+    layers.push_back(std::move(basis));
+    return layers;
+}
+
+// Each row's order under the prior `lightings`: options.perVertexBudget's per-row bound, else the rms budget,
+// graded across `triangles` to options.maxStep; counts the rows the grading raised into the stats.
+std::vector<uint8_t> adaptiveOrders(const std::vector<float>& full, size_t V, int order,
+                                    const std::vector<uint32_t>& triangles,
+                                    const std::vector<std::vector<float>>& lightings, const AdaptOptions& options,
+                                    AdaptStats& stats) {
+    std::vector<uint8_t> orders;
+    if (options.perVertexBudget) {
+        std::vector<float> error = truncationError(full.data(), V, order, lightings, options.prior);
+        orders = selectOrders(error, V, order, options.maxError);
+        stats.raisedBySmoothing = smoothOrdersWithinBound(triangles, orders, error, order, options.maxError, options.maxStep);
+        return orders;
+    }
+    // Truncation error is not monotone in the order (bands can cancel), so grading can overshoot the budget: then
+    // spend a smaller one until the graded field fits (at worst the full order, exact).
+    std::vector<double> error = truncationErrorSquared(full.data(), V, order, lightings, options.prior);
+    for (double budget = options.maxError;; budget *= 0.9) {
+        orders = budgetOrders(error, lightings.size(), V, order, budget < 1e-4 * options.maxError ? 0.0 : budget);
+        stats.raisedBySmoothing = smoothOrders(triangles, orders, options.maxStep);
+        std::vector<float> truncated = denseTransfer(raggedTransfer(full.data(), V, order, orders));
+        if (budget < 1e-4 * options.maxError ||
+            priorRelativeRmse(truncated.data(), full.data(), V, order, lightings) <= options.maxError)
+            break;
+    }
+    return orders;
+}
+
+// The stored layers of ragged rows (offsets, then the values as float or half, or codes and band scales, with
+// per-cluster scales their cluster layer); `stored` receives the values as the runtime reads them back. The data
+// layer's params are params plus the storage's keys.
+std::vector<Layer> raggedLayers(const RaggedTransfer& ragged, const std::vector<float>& full, size_t V, int order,
+                                const std::string& domain, const AdaptOptions& options, nlohmann::json& params,
+                                std::vector<float>& stored) {
+    params["offsets"] = "transfer_offsets";
+    params["max_step"] = options.maxStep;
+    Layer offsets = makeLayer("transfer_offsets", domain + "_offsets", "sh_coefficient_offsets", {V + 1}, "uint32");
+    offsets.integers = ragged.offsets;
+    const uint64_t rows = ragged.offsets[V];
+    std::vector<Layer> layers;
+    if (options.format == Format::Float || options.format == Format::Half) {
+        Layer data = makeLayer("transfer_ragged", domain + "_ragged", "sh_transfer_rgb", {rows, 3},
+                               options.format == Format::Float ? "float32" : "float16");
+        data.data = ragged.values;
+        if (options.format == Format::Half)
+            for (float& value : data.data) value = halfToFloat(floatToHalf(value));
+        stored = data.data;
+        data.params = params;
+        layers.push_back(std::move(offsets));
+        layers.push_back(std::move(data));
+        return layers;
+    }
+    const int bits = options.format == Format::U8 ? 8 : 16;
+    std::vector<uint32_t> cluster;
+    int clusters = 0;
+    if (options.perClusterScales) {
+        clusters = std::clamp<int>(options.clusters, 1, int(V));
+        // Clusters of similar transfer magnitude share scales: k-means on the per-band norms.
+        std::vector<float> norms(V * order);
+        for (size_t v = 0; v < V; ++v) {
+            std::vector<double> energy = sh::bandEnergy(order, full.data() + v * order * order * 3, 3);
+            for (int l = 0; l < order; ++l) norms[v * order + l] = float(std::sqrt(energy[l]));
+        }
+        cluster = kMeans(norms.data(), V, order, clusters, 12);
+    }
+    QuantisedTransfer q = quantise(ragged, bits, cluster, clusters);
+    stored = dequantise(ragged, q);
+    params["bits"] = bits;
+    params["scales"] = options.perClusterScales ? "per-cluster" : "per-vertex";
+    params["scale_layer"] = "transfer_band_scales";
+    Layer data = makeLayer("transfer_ragged", domain + "_ragged", "sh_transfer_rgb_quantised", {rows, 3},
+                           bits == 8 ? "uint8" : "uint16");
+    data.integers = std::move(q.codes);
+    Layer scales = options.perClusterScales
+                       ? makeLayer("transfer_band_scales", "cluster", "sh_band_scales",
+                                   {uint64_t(clusters), uint64_t(order)}, "float16")
+                       : makeLayer("transfer_band_scales", domain + "_bands", "sh_band_scales",
+                                   {uint64_t(q.scales.size())}, "float16");
+    scales.data = std::move(q.scales);
+    if (options.perClusterScales) {
+        params["cluster_layer"] = "transfer_scale_cluster";
+        params["clusters"] = clusters;
+        Layer clusterLayer = makeLayer("transfer_scale_cluster", domain, "cluster_index", {V},
+                                       clusters <= 65536 ? "uint16" : "uint32");
+        clusterLayer.integers = std::move(cluster);
+        layers.push_back(std::move(clusterLayer));
+    }
+    data.params = params;
+    layers.push_back(std::move(offsets));
+    layers.push_back(std::move(scales));
+    layers.push_back(std::move(data));
+    return layers;
+}
+
+// The seam measure of the stored rows `dense` against the full rows under one lighting (both [V][order^2][3]).
+SeamMeasure seamUnder(const std::vector<uint32_t>& triangles, const std::vector<uint8_t>& orders,
+                    const std::vector<float>& dense, const std::vector<float>& full, size_t V, int order,
+                    const std::vector<float>& lighting) {
+    const size_t coefficients = size_t(order) * order;
+    std::vector<float> a(V * 3, 0.0f), f(V * 3, 0.0f);
+    for (size_t v = 0; v < V; ++v)
+        for (int c = 0; c < 3; ++c) {
+            double sa = 0.0, sf = 0.0;
+            for (size_t j = 0; j < coefficients; ++j) {
+                sa += double(dense[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
+                sf += double(full[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
+            }
+            a[v * 3 + c] = float(sa), f[v * 3 + c] = float(sf);
+        }
+    return seamMeasure(triangles, orders, a.data(), f.data());
+}
+
+} // namespace
+
+AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& inputLightings, const AdaptOptions& options,
+                       const std::string& source) {
+    TransferInput in = takeTransferInput(bundle, source);
+    Layer& input = in.layer;
+    const size_t V = in.rows;
+    int order = in.order;
     const uint64_t inputBytes = uint64_t(input.data.size()) * 4;
     const std::vector<float> inputFull = input.data;
     const int inputOrder = order;
@@ -127,11 +320,8 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
     std::vector<std::vector<float>> lightings;
     for (const std::vector<float>& lighting : inputLightings)
         lightings.push_back(std::vector<float>(lighting.begin(), lighting.begin() + size_t(order) * order * 3));
-    auto errorAgainstInput = [&](const std::vector<float>& dense) {
-        std::vector<float> padded(inputFull.size(), 0.0f);
-        const size_t from = size_t(order) * order * 3, to = size_t(inputOrder) * inputOrder * 3;
-        for (size_t v = 0; v < V; ++v) std::copy_n(dense.begin() + v * from, from, padded.begin() + v * to);
-        return priorRelativeRmse(padded.data(), inputFull.data(), V, inputOrder, inputLightings);
+    auto error = [&](const std::vector<float>& dense) {
+        return errorAgainstInput(dense, order, inputFull, inputOrder, V, inputLightings);
     };
 
     AdaptStats stats;
@@ -149,146 +339,25 @@ AdaptStats adaptBundle(Bundle& bundle, const std::vector<std::vector<float>>& in
                              {"budget", options.perVertexBudget ? "vertex" : "rms"},
                              {"lightings", options.lightingNames},
                              {"transfer", input.params}};
-    if (texels) params["width"] = width, params["height"] = height;
+    if (in.texels) params["width"] = in.width, params["height"] = in.height;
     std::vector<Layer> added;
-
     if (options.format == Format::Cpca) {
-        const size_t dim = size_t(order) * order * 3;
-        const int clusters = std::clamp<int>(options.clusters, 1, int(V));
-        Cpca cpca;
-        if (options.components > 0) {
-            cpca = clusteredPca(full.data(), V, dim, clusters, std::min<int>(options.components, int(dim)));
-        } else { // the fewest components (doubling) whose relative RMSE under the prior is within max_error
-            for (int m = 1;; m = std::min<int>(m * 2, int(dim))) {
-                cpca = clusteredPca(full.data(), V, dim, clusters, m);
-                std::vector<float> approx = reconstruct(cpca);
-                if (m == int(dim) || errorAgainstInput(approx) <= options.maxError)
-                    break;
-            }
-        }
-        std::vector<float> approx = reconstruct(cpca);
-        stats.relativeRmse = errorAgainstInput(approx);
-        stats.components = cpca.components;
-        stats.meanOrder = order;
-        stats.meanCoefficients = double(order) * order;
-        stats.orderHistogram[order] = int(V);
-        params["clusters"] = clusters;
-        params["components"] = cpca.components;
-        params["cluster_layer"] = "transfer_cpca_cluster";
-        params["weights_layer"] = "transfer_cpca_weights";
-        Layer cluster = makeLayer("transfer_cpca_cluster", domain, "cluster_index", {V},
-                                  clusters <= 65536 ? "uint16" : "uint32");
-        cluster.integers = cpca.cluster;
-        Layer weights = makeLayer("transfer_cpca_weights", domain, "cpca_weights", {V, uint64_t(cpca.components)},
-                                  "float32");
-        weights.data = std::move(cpca.weights);
-        Layer basis = makeLayer("transfer_cpca_basis", "cluster", "cpca_mean_basis",
-                                {uint64_t(clusters), uint64_t(cpca.components) + 1, uint64_t(order) * order, 3},
-                                "float32");
-        basis.data = std::move(cpca.basis);
-        basis.params = params;
-        added = {std::move(cluster), std::move(weights), std::move(basis)};
+        added = cpcaLayers(full, V, order, in.domain, options, error, params, stats);
     } else {
-        std::vector<uint8_t> orders(V, uint8_t(order));
-        if (adaptive) {
-            if (options.perVertexBudget) {
-                std::vector<float> error = truncationError(full.data(), V, order, lightings, options.prior);
-                orders = selectOrders(error, V, order, options.maxError);
-                stats.raisedBySmoothing =
-                    smoothOrdersWithinBound(triangles, orders, error, order, options.maxError, options.maxStep);
-            } else {
-                // Truncation error is not monotone in the order (bands can cancel), so grading can overshoot the
-                // budget: then spend a smaller one until the graded field fits (at worst the full order, exact).
-                std::vector<double> error = truncationErrorSquared(full.data(), V, order, lightings, options.prior);
-                for (double budget = options.maxError;; budget *= 0.9) {
-                    orders = budgetOrders(error, lightings.size(), V, order, budget < 1e-4 * options.maxError ? 0.0 : budget);
-                    stats.raisedBySmoothing = smoothOrders(triangles, orders, options.maxStep);
-                    std::vector<float> truncated = denseTransfer(raggedTransfer(full.data(), V, order, orders));
-                    if (budget < 1e-4 * options.maxError ||
-                        priorRelativeRmse(truncated.data(), full.data(), V, order, lightings) <= options.maxError)
-                        break;
-                }
-            }
-        }
+        std::vector<uint8_t> orders =
+            adaptive ? adaptiveOrders(full, V, order, in.triangles, lightings, options, stats)
+                     : std::vector<uint8_t>(V, uint8_t(order));
         RaggedTransfer ragged = raggedTransfer(full.data(), V, order, orders);
-        for (uint8_t n : orders) ++stats.orderHistogram[n];
         double orderSum = 0.0;
-        for (uint8_t n : orders) orderSum += n;
+        for (uint8_t n : orders) ++stats.orderHistogram[n], orderSum += n;
         stats.meanOrder = V ? orderSum / double(V) : 0.0;
         stats.meanCoefficients = V ? double(ragged.offsets[V]) / double(V) : 0.0;
-        params["offsets"] = "transfer_offsets";
-        params["max_step"] = options.maxStep;
-
-        Layer offsets = makeLayer("transfer_offsets", domain + "_offsets", "sh_coefficient_offsets", {V + 1}, "uint32");
-        offsets.integers = ragged.offsets;
-        const uint64_t rows = ragged.offsets[V];
         std::vector<float> stored;
-        if (options.format == Format::Float || options.format == Format::Half) {
-            Layer data = makeLayer("transfer_ragged", domain + "_ragged", "sh_transfer_rgb", {rows, 3},
-                                   options.format == Format::Float ? "float32" : "float16");
-            data.data = ragged.values;
-            if (options.format == Format::Half)
-                for (float& value : data.data) value = halfToFloat(floatToHalf(value));
-            stored = data.data;
-            data.params = params;
-            added = {std::move(offsets), std::move(data)};
-        } else {
-            const int bits = options.format == Format::U8 ? 8 : 16;
-            std::vector<uint32_t> cluster;
-            int clusters = 0;
-            if (options.perClusterScales) {
-                clusters = std::clamp<int>(options.clusters, 1, int(V));
-                // Clusters of similar transfer magnitude share scales: k-means on the per-band norms.
-                std::vector<float> norms(V * order);
-                for (size_t v = 0; v < V; ++v) {
-                    std::vector<double> energy = sh::bandEnergy(order, full.data() + v * order * order * 3, 3);
-                    for (int l = 0; l < order; ++l) norms[v * order + l] = float(std::sqrt(energy[l]));
-                }
-                cluster = kMeans(norms.data(), V, order, clusters, 12);
-            }
-            QuantisedTransfer q = quantise(ragged, bits, cluster, clusters);
-            stored = dequantise(ragged, q);
-            params["bits"] = bits;
-            params["scales"] = options.perClusterScales ? "per-cluster" : "per-vertex";
-            params["scale_layer"] = "transfer_band_scales";
-            Layer data = makeLayer("transfer_ragged", domain + "_ragged", "sh_transfer_rgb_quantised", {rows, 3},
-                                   bits == 8 ? "uint8" : "uint16");
-            data.integers = std::move(q.codes);
-            Layer scales = options.perClusterScales
-                               ? makeLayer("transfer_band_scales", "cluster", "sh_band_scales",
-                                           {uint64_t(clusters), uint64_t(order)}, "float16")
-                               : makeLayer("transfer_band_scales", domain + "_bands", "sh_band_scales",
-                                           {uint64_t(q.scales.size())}, "float16");
-            scales.data = std::move(q.scales);
-            if (options.perClusterScales) {
-                params["cluster_layer"] = "transfer_scale_cluster";
-                params["clusters"] = clusters;
-                Layer clusterLayer = makeLayer("transfer_scale_cluster", domain, "cluster_index", {V},
-                                               clusters <= 65536 ? "uint16" : "uint32");
-                clusterLayer.integers = std::move(cluster);
-                added.push_back(std::move(clusterLayer));
-            }
-            data.params = params;
-            added.push_back(std::move(offsets));
-            added.push_back(std::move(scales));
-            added.push_back(std::move(data));
-        }
+        added = raggedLayers(ragged, full, V, order, in.domain, options, params, stored);
         std::vector<float> dense = denseTransfer(ragged, &stored);
-        stats.relativeRmse = errorAgainstInput(dense);
-        const size_t coefficients = size_t(order) * order;
-        for (const std::vector<float>& lighting : lightings) {
-            std::vector<float> a(V * 3, 0.0f), f(V * 3, 0.0f);
-            for (size_t v = 0; v < V; ++v)
-                for (int c = 0; c < 3; ++c) {
-                    double sa = 0.0, sf = 0.0;
-                    for (size_t j = 0; j < coefficients; ++j) {
-                        sa += double(dense[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
-                        sf += double(full[(v * coefficients + j) * 3 + c]) * lighting[j * 3 + c];
-                    }
-                    a[v * 3 + c] = float(sa), f[v * 3 + c] = float(sf);
-                }
-            stats.seams.push_back(seamMeasure(triangles, orders, a.data(), f.data()));
-        }
+        stats.relativeRmse = error(dense);
+        for (const std::vector<float>& lighting : lightings)
+            stats.seams.push_back(seamUnder(in.triangles, orders, dense, full, V, order, lighting));
     }
     for (Layer& layer : added) {
         stats.layerBytes += layerBytes(layer);
