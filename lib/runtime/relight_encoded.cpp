@@ -239,7 +239,8 @@ void decodeBlockedCodes(const RelightModel& model, const Code* codes, float* row
         for (size_t l = 0; l < n; ++l) {
             const float sigma = model.bandScales[(b * n + l) * kCodeBlock + i];
             for (size_t j = l * l * 3; j < (l + 1) * (l + 1) * 3; ++j)
-                rows[v * values + j] = float(int(codes[(b * values + j) * kCodeBlock + i]) - C) * sigma;
+                rows[v * values + j] =
+                    float(int(codes[b * values * kCodeBlock + blockedCodeIndex(sizeof(Code) == 1, j, i)]) - C) * sigma;
         }
     }
 }
@@ -252,7 +253,8 @@ void blockCodesOf(std::vector<Code>& codes, std::vector<float>& scales, size_t v
     std::vector<float> blockedScales(blocks * n * kCodeBlock, 0.0f);
     for (size_t v = 0; v < vertices; ++v) {
         const size_t b = v / kCodeBlock, i = v % kCodeBlock;
-        for (size_t j = 0; j < values; ++j) blocked[(b * values + j) * kCodeBlock + i] = codes[v * values + j];
+        for (size_t j = 0; j < values; ++j)
+            blocked[b * values * kCodeBlock + blockedCodeIndex(sizeof(Code) == 1, j, i)] = codes[v * values + j];
         for (size_t l = 0; l < n; ++l) blockedScales[(b * n + l) * kCodeBlock + i] = scales[v * n + l];
     }
     codes = std::move(blocked);

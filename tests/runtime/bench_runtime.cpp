@@ -1,13 +1,17 @@
 // Relighting throughput at orders 3, 5 and 8 (or those of --orders) for every storage the runtime relights from
-// (float32, half, u16 and u8 codes, vertex-blocked and row by row, clustered PCA), each next to a memory yardstick measured in the same run: a
-// plain read (64-bit word sum) of exactly the bytes that relight reads (relightBytes). The table at the end gives bytes per vertex, Mvert/s,
-// each storage against float32, and each relight against streaming its own bytes. Single-threaded: relight()
+// (float32, half, u16 and u8 codes, vertex-blocked and row by row, clustered PCA), each next to two memory
+// yardsticks measured in the same run: a plain read (64-bit word sum) of exactly the bytes that relight reads
+// (relightBytes), and that read plus the radiance writes. The table at the end gives bytes per vertex, Mvert/s,
+// each storage against float32, each relight against both yardsticks, and the second yardstick against the first
+// ("write bound": about the most a relight that writes its radiance can reach against the read alone; not a strict
+// bound where the data sit in cache). Single-threaded: relight()
 // runs on the calling thread without a job system. Run by hand:
 // build/tests/runtime/bench_runtime [--vertices N] [--orders 1,2,3].
 #include "prt/relight.h"
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -127,28 +131,56 @@ void relightStorage(benchmark::State& state, std::string storage, int order) {
     state.counters["bytes_per_vertex"] = double(prt::relightBytes(w.model)) / double(gVertices);
 }
 
-// The yardstick: every byte relight reads, read once as 64-bit words and summed in independent lanes.
+// The bytes of every buffer relight reads that vertices [first, last) own, read once as 64-bit words and summed
+// into 8 independent lanes.
+uint64_t sumBuffers(const Workload& w, size_t first, size_t last) {
+    uint64_t lanes[8] = {}; // local, so that they live in registers
+    for (const auto& [data, bytes] : w.buffers) {
+        // The share of this buffer that vertices [first, last) own, in whole 64-byte lines.
+        const size_t begin = bytes * first / gVertices / 64 * 64;
+        const size_t end = last == gVertices ? bytes : bytes * last / gVertices / 64 * 64;
+        const unsigned char* p = static_cast<const unsigned char*>(data);
+        size_t i = begin;
+        for (; i + 64 <= end; i += 64) {
+            uint64_t words[8];
+            std::memcpy(words, p + i, 64);
+            for (int k = 0; k < 8; ++k) lanes[k] += words[k];
+        }
+        for (; i < end; ++i) lanes[0] += p[i];
+    }
+    uint64_t sum = 0;
+    for (uint64_t lane : lanes) sum += lane;
+    return sum;
+}
+
+// The yardstick of the goal: every byte relight reads, read once (sumBuffers).
 void streamStorage(benchmark::State& state, std::string storage, int order) {
     Workload& w = workload(storage, order);
     for (auto _ : state) {
         benchmark::ClobberMemory(); // the arrays may have changed, so the sums cannot be hoisted
-        uint64_t lanes[8] = {};
-        for (const auto& [data, bytes] : w.buffers) {
-            const unsigned char* p = static_cast<const unsigned char*>(data);
-            size_t i = 0;
-            for (; i + 64 <= bytes; i += 64) {
-                uint64_t words[8];
-                std::memcpy(words, p + i, 64);
-                for (int k = 0; k < 8; ++k) lanes[k] += words[k];
-            }
-            for (; i < bytes; ++i) lanes[0] += p[i];
-        }
-        uint64_t sum = 0;
-        for (uint64_t lane : lanes) sum += lane;
-        benchmark::DoNotOptimize(sum);
+        benchmark::DoNotOptimize(sumBuffers(w, 0, gVertices));
     }
     state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(gVertices));
     state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(prt::relightBytes(w.model)));
+}
+
+// A second yardstick, for where the time goes: the same read, and the 12 bytes of radiance per vertex that relight
+// writes, written through the cache as relight writes them, interleaved with the reads in runs of 1,024 vertices.
+// The ratio of the two yardsticks is about the most a relight that writes its radiance can reach against the
+// first; a relight well below the second is bound by its own instructions, not by memory.
+void streamWriteStorage(benchmark::State& state, std::string storage, int order) {
+    Workload& w = workload(storage, order);
+    constexpr size_t kRun = 1024;
+    for (auto _ : state) {
+        benchmark::ClobberMemory();
+        for (size_t first = 0; first < gVertices; first += kRun) {
+            const size_t last = std::min(gVertices, first + kRun);
+            const float value = float(sumBuffers(w, first, last) & 0xff);
+            std::fill(w.radiance.begin() + first * 3, w.radiance.begin() + last * 3, value);
+        }
+        benchmark::ClobberMemory();
+    }
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(gVertices));
 }
 
 // Console output as usual, plus vertices/s and bytes per vertex kept for the table.
@@ -203,12 +235,16 @@ int main(int argc, char** argv) {
             benchmark::RegisterBenchmark(("stream/" + name).c_str(), streamStorage, storage, order)
                 ->Unit(benchmark::kMillisecond)
                 ->MinTime(0.3);
+            benchmark::RegisterBenchmark(("stream+write/" + name).c_str(), streamWriteStorage, storage, order)
+                ->Unit(benchmark::kMillisecond)
+                ->MinTime(0.3);
         }
     benchmark::Initialize(&argc, argv);
     RatioReporter reporter;
     benchmark::RunSpecifiedBenchmarks(&reporter);
-    std::printf("\n%zu vertices, single thread\n%-6s %-8s %10s %12s %14s %14s %12s %14s\n", gVertices, "order",
-                "storage", "B/vertex", "MB/relight", "relight Mv/s", "stream Mv/s", "vs float32", "relight/stream");
+    std::printf("\n%zu vertices, single thread\n%-6s %-8s %10s %12s %14s %14s %12s %14s %14s %12s\n", gVertices,
+                "order", "storage", "B/vertex", "MB/relight", "relight Mv/s", "stream Mv/s", "vs float32",
+                "relight/stream", "/stream+write", "write bound");
     for (int order : orders)
         for (const char* storage : kStorages) {
             const std::string name = std::string(storage) + "/" + std::to_string(order);
@@ -216,12 +252,15 @@ int main(int argc, char** argv) {
                 auto found = table.find(key);
                 return found == table.end() ? 0.0 : found->second;
             };
-            const double relightRate = get(reporter.rate, "relight/" + name), streamRate = get(reporter.rate, "stream/" + name),
+            const double relightRate = get(reporter.rate, "relight/" + name);
+            const double streamRate = get(reporter.rate, "stream/" + name),
                          floatRate = get(reporter.rate, "relight/float32/" + std::to_string(order));
             const double bytesPerVertex = get(reporter.bytesPerVertex, "relight/" + name);
-            std::printf("%-6d %-8s %10.1f %12.1f %14.1f %14.1f %12.2f %14.2f\n", order, storage, bytesPerVertex,
-                        bytesPerVertex * double(gVertices) / 1e6, relightRate / 1e6, streamRate / 1e6,
-                        floatRate > 0 ? relightRate / floatRate : 0.0, streamRate > 0 ? relightRate / streamRate : 0.0);
+            const double writeRate = get(reporter.rate, "stream+write/" + name);
+            std::printf("%-6d %-8s %10.1f %12.1f %14.1f %14.1f %12.2f %14.2f %14.2f %12.2f\n", order, storage,
+                        bytesPerVertex, bytesPerVertex * double(gVertices) / 1e6, relightRate / 1e6, streamRate / 1e6,
+                        floatRate > 0 ? relightRate / floatRate : 0.0, streamRate > 0 ? relightRate / streamRate : 0.0,
+                        writeRate > 0 ? relightRate / writeRate : 0.0, streamRate > 0 ? writeRate / streamRate : 0.0);
         }
     benchmark::Shutdown();
     return 0;

@@ -49,10 +49,14 @@ struct RelightModel {
     std::vector<float> bandScales;
     std::vector<uint32_t> bandBlockStarts;
     std::vector<uint32_t> scaleCluster;
-    // Vertex-blocked codes (blockCodes): blocks of kCodeBlock vertices, block b holding value j (= 3 coefficient +
-    // channel) of its vertices side by side, codes[(b 3 order^2 + j) kCodeBlock + i] for vertex b kCodeBlock + i, and
-    // sigma_l at bandScales[(b order + l) kCodeBlock + i]; the last block padded with code C and sigma 0. offsets and
-    // bandBlockStarts are kept; the rows are the same values in another order.
+    // Vertex-blocked codes (blockCodes): blocks of kCodeBlock vertices, block b holding the 3 order^2 values of its
+    // vertices, value j (= 3 coefficient + channel) of vertex b kCodeBlock + i at codes[b 3 order^2 kCodeBlock +
+    // position]. u16: position j kCodeBlock + i (value j's codes side by side). u8, which the integer kernel reads
+    // 16 codes at a time: band l and channel c own (2l + 1) kCodeBlock positions from kCodeBlock (3 l^2 + (2l + 1)
+    // c), coefficients l^2 + 2p and l^2 + 2p + 1 (p < l) at 2 kCodeBlock p + 2i and + 1 within them, the band's
+    // last coefficient at 2 kCodeBlock l + i. sigma_l at bandScales[(b order + l) kCodeBlock + i]; the last block
+    // padded with code C and sigma 0. offsets and bandBlockStarts are kept; the rows are the same values in another
+    // order.
     bool codesBlocked = false;
     // Cpca: T[v] = mean[k] + sum_i cpcaWeights[v][i] basis[k][i], k = cpcaCluster[v]; cpcaBasis is [K][M + 1]
     // [order^2][3] (row 0 the mean), cpcaWeights [vertexCount][M].
@@ -77,8 +81,9 @@ inline constexpr size_t kCodeBlock = 8;
 // Puts a u8 / u16 model whose vertices all have model.order bands (1..8) and per-vertex scales into the
 // vertex-blocked layout (RelightModel::codesBlocked), which relight() reads 8 vertices per vector instruction, with
 // no per-value scale: per band and channel sum_j (q_j - C) L_j over the band's values, times sigma_l, summed over
-// the bands, each vertex in its own lane (about 2.3x the row kernel's rate at order 5; docs/results.md, issue 21).
-// Returns whether it did; other models are left as they are. decodedTransfer gives the same rows bit for bit.
+// the bands, each vertex in its own lane; for u8 the band sums are exact integer sums against the lighting
+// quantised per channel to int16 (see relight). docs/results.md, issue 21, gives the rates. Returns whether it
+// did; other models are left as they are. decodedTransfer gives the same rows bit for bit.
 bool blockCodes(RelightModel& model);
 
 // Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying), or, in a bundle without
@@ -111,8 +116,11 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 // empty, in tasks of kRelightBlock vertices run through `jobs` (default: in order on the calling thread).
 // Float32 and Float16 rows are bit-identical to the kernel on decodedTransfer(model); u8 / u16 codes of 1..8
 // bands are relit by a fused kernel straight from the codes (q - C times sigma_l L_j), within (gamma_{n+2} +
-// gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows (tests/runtime), blocked codes
-// (blockCodes) by the blocked kernel within the same bound; Cpca projects each
+// gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows (tests/runtime), blocked u16
+// codes (blockCodes) by the blocked kernel within the same bound, blocked u8 codes against the lighting quantised
+// per channel c to steps of s_c = max_j |L_jc| / 32767, within 0.51 s_c sum_j |x_j| + gamma_{n+3} sum_j |x_j|
+// (|L_j| + 0.51 s_c) of the exact sum over the decoded values x_j (n bands; the same bits on every x86-64 build,
+// the sums being exact integers); Cpca projects each
 // cluster's mean and directions on the lighting once per call, then sums M weights per vertex, which agrees
 // with the kernel on the decoded rows within float rounding (tests/runtime). Bit-identical for every job system.
 // Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
