@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <utility>
 
 #include <emmintrin.h>
@@ -52,7 +53,9 @@ struct CodeLayout {
 // 32767 and each value as an int16 Lq_j = round(L_j / s_c), |s_c Lq_j - L_j| <= 0.51 s_c. Per band l and channel c
 // (index 3 l + c): the band's coefficients m = l^2 .. l^2 + 2l taken in pairs (l^2 + 2p, l^2 + 2p + 1), p < l, each
 // pair as one int32 (Lq of the first in its low 16 bits, of the second in its high 16), then the last coefficient
-// alone (Lq in the low 16 bits, 0 in the high), and the offset -C sum_m Lq_m (C = 127) that centres the codes.
+// alone (Lq in the low 16 bits, 0 in the high), and the offset -C sum_m Lq_m (C = 127) that centres the codes. A
+// channel with a value that is not finite gets scale NaN and zero codes, so its radiance is NaN, as the float
+// kernels' would be (or infinite).
 struct U8Lighting {
     float scale[3] = {};
     int32_t pairs[3 * 28] = {};  // (l, c) -> from pairStart(l) + c l: at most 3 * (0 + 1 + ... + 7)
@@ -68,11 +71,15 @@ U8Lighting quantiseU8Lighting(const float* lighting, int order) {
     const int n = order * order;
     for (int c = 0; c < 3; ++c) {
         float largest = 0.0f;
-        for (int m = 0; m < n; ++m) largest = std::max(largest, std::fabs(lighting[m * 3 + c]));
-        q.scale[c] = largest / 32767.0f;
+        bool finite = true;
+        for (int m = 0; m < n; ++m) {
+            finite = finite && std::isfinite(lighting[m * 3 + c]);
+            largest = std::max(largest, std::fabs(lighting[m * 3 + c]));
+        }
+        q.scale[c] = finite ? largest / 32767.0f : std::numeric_limits<float>::quiet_NaN();
     }
     auto code = [&](int m, int c) -> int32_t {
-        if (!(q.scale[c] > 0.0f)) return 0;
+        if (!(q.scale[c] > 0.0f)) return 0; // zero lighting, or not finite
         return int32_t(std::clamp(std::lrint(lighting[m * 3 + c] / q.scale[c]), -32767L, 32767L));
     };
     auto pack = [](int32_t low, int32_t high) {

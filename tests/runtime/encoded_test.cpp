@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <thread>
 
@@ -519,6 +520,22 @@ TEST(EncodedRelight, FusedCodesOfLongRunsWithinRoundingOfTheExactSum) {
                     EXPECT_TRUE(sameBits(relightAll(model, lighting.data(), JobSystem{scrambledParallelFor, &calls}),
                                          radiance));
                     EXPECT_EQ(calls, 1u);
+                    // Lighting that is not finite in one channel (NaN, or infinity) is not quantised into finite
+                    // garbage: that channel is not finite, the others are as before.
+                    for (float bad :
+                         {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+                        std::vector<float> broken = lighting;
+                        broken[(n * n - 1) * 3 + 1] = bad;
+                        std::vector<float> out = relightAll(model, broken.data());
+                        size_t finiteGreen = 0, changedOthers = 0;
+                        for (size_t v = 0; v < V; ++v) {
+                            finiteGreen += std::isfinite(out[v * 3 + 1]) ? 1 : 0;
+                            changedOthers += std::memcmp(&out[v * 3], &radiance[v * 3], 4) != 0 ||
+                                             std::memcmp(&out[v * 3 + 2], &radiance[v * 3 + 2], 4) != 0;
+                        }
+                        EXPECT_EQ(finiteGreen, 0u) << bad;
+                        EXPECT_EQ(changedOthers, 0u) << bad;
+                    }
                 }
             }
 }

@@ -120,7 +120,7 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 // codes (blockCodes) by the blocked kernel within the same bound, blocked u8 codes against the lighting quantised
 // per channel c to steps of s_c = max_j |L_jc| / 32767, within 0.51 s_c sum_j |x_j| + gamma_{n+3} sum_j |x_j|
 // (|L_j| + 0.51 s_c) of the exact sum over the decoded values x_j (n bands; the same bits on every x86-64 build,
-// the sums being exact integers); Cpca projects each
+// the sums being exact integers; a channel whose lighting is not finite gives NaN); Cpca projects each
 // cluster's mean and directions on the lighting once per call, then sums M weights per vertex, which agrees
 // with the kernel on the decoded rows within float rounding (tests/runtime). Bit-identical for every job system.
 // Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
