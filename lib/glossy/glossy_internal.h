@@ -1,4 +1,5 @@
-// Internal to prt_glossy: one problem's view of a batch, and the residuals both solvers share.
+// Internal to prt_glossy: one problem's view of a batch, the residuals both solvers share, and the per-chunk fit's
+// pieces that the fits adding lobes one at a time (warm start, nested, from below) build on.
 #pragma once
 
 #include "glossy.h"
