@@ -164,38 +164,75 @@ std::vector<float> cpcaProjections(const RelightModel& model, const float* light
 namespace {
 
 typedef float V4f __attribute__((vector_size(16)));
+typedef float V8f __attribute__((vector_size(32)));
 
-// Per vertex and channel: the mean's projection, then + w_i * direction i's for i = 0, 1, ... in order, each
-// product rounded then added, in the lanes of one 4-float vector (the fourth lane, 0, unused): per channel the
-// same operations in the same order as one scalar sum per channel, so the bits depend neither on the vector width
-// nor on kM (M known at compile time, 0: take it from `components`). Every vertex but the last stores all 4 lanes,
-// the fourth into the next vertex's first channel, which that vertex then writes.
+template <size_t... k, class F>
+PRT_ALWAYS_INLINE inline void unrolledPairs(std::index_sequence<k...>, F&& f) {
+    (f(std::integral_constant<size_t, k>{}), ...);
+}
+
+// Per vertex and channel two sums in the two halves of an 8-float vector (lanes 0..2 and 4..6; lanes 3 and 7 hold
+// 0): the even one from the mean's projection over directions i = 0, 2, 4, ..., the odd one from 0 over i = 1,
+// 3, 5, ..., each product w_i * p_i rounded then added in that order, then the result even + odd. Directions i and
+// i + 1 lie side by side in the projections, so one 32-byte load and one multiply-add serve both halves, and the
+// chain of additions per half is M / 2 long. Per channel these are the same operations in the same order as
+// scalar sums (the kernel on 4-float halves in the baseline build, on 8-float vectors in the AVX2 clone), so the
+// bits depend neither on the vector width nor on kM (M known at compile time, 0: take it from `components`). Every
+// vertex but the last stores all 4 lanes of its result, the fourth into the next vertex's first channel, which
+// that vertex then writes.
 template <int kM>
 PRT_ALWAYS_INLINE inline void cpcaBody(const float* __restrict projections, const uint32_t* __restrict cluster,
                                        const float* __restrict weights, size_t components, size_t count,
                                        float* __restrict out) {
     if constexpr (kM != 0) components = kM;
     const size_t M = components;
+    auto load4 = [](const float* p) {
+        V4f x;
+        std::memcpy(&x, p, sizeof x);
+        return x;
+    };
     for (size_t v = 0; v < count; ++v) {
         const float* p = projections + size_t(cluster[v]) * (M + 1) * 4;
         const float* w = weights + v * M;
-        V4f sum, direction;
-        std::memcpy(&sum, p, sizeof sum);
-        for (size_t i = 0; i < M; ++i) {
-            std::memcpy(&direction, p + (i + 1) * 4, sizeof direction);
-            sum += w[i] * direction;
-        }
-        if (v + 1 < count) {
-            std::memcpy(out + v * 3, &sum, sizeof sum);
+        // The mean's projection in the even half, 0 in the odd.
+        V8f sum = __builtin_shufflevector(load4(p), V4f{}, 0, 1, 2, 3, 4, 5, 6, 7);
+        if constexpr (kM != 0 && kM % 8 == 0) { // weights 8 at a time, each pair's spread by a fixed shuffle
+            for (size_t chunk = 0; chunk < M; chunk += 8) {
+                V8f w8;
+                std::memcpy(&w8, w + chunk, sizeof w8);
+                unrolledPairs(std::make_index_sequence<4>{}, [&](auto qc) PRT_ALWAYS_INLINE {
+                    constexpr int a = 2 * int(decltype(qc)::value), b = a + 1;
+                    V8f direction;
+                    std::memcpy(&direction, p + (chunk + size_t(a) + 1) * 4, sizeof direction);
+                    sum += __builtin_shufflevector(w8, w8, a, a, a, a, b, b, b, b) * direction;
+                });
+            }
         } else {
-            out[v * 3] = sum[0];
-            out[v * 3 + 1] = sum[1];
-            out[v * 3 + 2] = sum[2];
+            size_t i = 0;
+            for (; i + 1 < M; i += 2) {
+                V8f direction;
+                std::memcpy(&direction, p + (i + 1) * 4, sizeof direction);
+                const V8f pair = {w[i], w[i], w[i], w[i], w[i + 1], w[i + 1], w[i + 1], w[i + 1]};
+                sum += pair * direction;
+            }
+            if (i < M) { // an odd M's last direction, into the even half (the odd one adds 0 * 0)
+                const V8f direction = __builtin_shufflevector(load4(p + (i + 1) * 4), V4f{}, 0, 1, 2, 3, 4, 5, 6, 7);
+                const V8f single = {w[i], w[i], w[i], w[i], 0.0f, 0.0f, 0.0f, 0.0f};
+                sum += single * direction;
+            }
+        }
+        const V4f result = __builtin_shufflevector(sum, sum, 0, 1, 2, 3) + __builtin_shufflevector(sum, sum, 4, 5, 6, 7);
+        if (v + 1 < count) {
+            std::memcpy(out + v * 3, &result, sizeof result);
+        } else {
+            out[v * 3] = result[0];
+            out[v * 3 + 1] = result[1];
+            out[v * 3 + 2] = result[2];
         }
     }
 }
 
-// Baseline and AVX2 (a broadcast load and a multiply from memory per term; no FMA, so the same bits).
+// Baseline and AVX2 (no FMA, so the same bits).
 template <int kM>
 void cpcaBase(const float* projections, const uint32_t* cluster, const float* weights, size_t components,
               size_t count, float* out) {

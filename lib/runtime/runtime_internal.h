@@ -62,7 +62,8 @@ void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::
 // without the albedo. relightRaggedRange: a model with offsets, any storage but Cpca, each row bit-identical to
 // the float kernel on decodedTransfer. cpcaProjections: [clusters][components + 1][4] (RGB, then 0), each
 // cluster's mean and directions dotted with the lighting by the float kernel; relightCpcaRange sums them with the
-// vertex's weights, per channel in the order mean, direction 0, 1, ...
+// vertex's weights, per channel in two sums, each in order: the mean + w_0 p_0 + w_2 p_2 + ... and 0 + w_1 p_1 +
+// w_3 p_3 + ... (+ 0 * 0 after an odd M's last even term), then the first + the second.
 void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out);
 std::vector<float> cpcaProjections(const RelightModel& model, const float* lighting);
 void relightCpcaRange(const RelightModel& model, const float* projections, size_t first, size_t last, float* out);

@@ -15,6 +15,7 @@
 #include <limits>
 #include <random>
 #include <thread>
+#include <tuple>
 
 #include <unistd.h>
 
@@ -279,23 +280,50 @@ TEST(EncodedRelight, CpcaRelightsInItsBasisWithinRoundingOfItsReconstruction) {
             if (std::fabs(double(radiance[v * 3 + c]) - viaDecode[v * 3 + c]) > 2 * roundingGamma(double(n + M + 1)) * S) ++failures;
         }
     EXPECT_EQ(failures, 0u);
-    // And bit for bit the documented order: each basis row projected by the float kernel, then per channel the
-    // mean's projection + w_0 p_0 + w_1 p_1 + ... in float, one scalar sum per channel (the runtime sums in vector
-    // lanes), for the whole buffer and a range ending at its end.
-    std::vector<float> projections(K * (M + 1) * 3);
-    relight(b.data(), K * (M + 1), int(n), lighting.data(), projections.data());
-    std::vector<float> expected(V * 3);
-    for (size_t v = 0; v < V; ++v)
-        for (int c = 0; c < 3; ++c) {
-            const float* p = projections.data() + k[v] * (M + 1) * 3;
-            float sum = p[c];
-            for (size_t i = 0; i < M; ++i) sum += w[v * M + i] * p[(i + 1) * 3 + c];
-            expected[v * 3 + c] = sum;
-        }
-    EXPECT_TRUE(sameBits(radiance, expected));
-    std::vector<float> tail(7 * 3);
-    relight(model, lighting.data(), V - 7, V, tail.data());
-    EXPECT_EQ(std::memcmp(tail.data(), expected.data() + (V - 7) * 3, tail.size() * sizeof(float)), 0);
+    // And bit for bit the documented order (runtime_internal.h, relightCpcaRange): each basis row projected by the
+    // float kernel, then per channel an even sum, the mean's projection + w_0 p_0 + w_2 p_2 + ..., and an odd one,
+    // 0 + w_1 p_1 + w_3 p_3 + ... (+ 0 * 0 after an odd M's last even term), in float, then even + odd: scalar sums
+    // here (the runtime sums in vector lanes), for the whole buffer and a range ending at its end. M = 6 and 5 take
+    // the kernel for any M; a second basis of 16 directions, cut to 16, 8, 4 and 15, the kernels for M = 16, 8, 4
+    // and an odd M again.
+    const Bundle wide = cpcaBundle(V, order, K, 16, 22);
+    for (auto [source, full, used] : {std::tuple<const Bundle*, size_t, size_t>{&bundle, M, M}, {&bundle, M, M - 1},
+                                      {&wide, 16, 16}, {&wide, 16, 8}, {&wide, 16, 4}, {&wide, 16, 15}}) {
+        SCOPED_TRACE(std::to_string(used) + " of " + std::to_string(full) + " components");
+        const std::vector<float>& basis = source->layers[0].data;
+        const std::vector<float>& weights = source->layers[1].data;
+        const std::vector<uint32_t>& clusters = source->layers[2].integers;
+        RelightModel cut = relightModel(*source, "cpca.glb");
+        cut.cpcaComponents = int(used); // the same basis with its last full - used directions dropped
+        cut.cpcaBasis.clear();
+        for (size_t cluster = 0; cluster < K; ++cluster)
+            cut.cpcaBasis.insert(cut.cpcaBasis.end(), basis.begin() + std::ptrdiff_t(cluster * (full + 1) * dim),
+                                 basis.begin() + std::ptrdiff_t((cluster * (full + 1) + used + 1) * dim));
+        cut.cpcaWeights.clear();
+        for (size_t v = 0; v < V; ++v)
+            cut.cpcaWeights.insert(cut.cpcaWeights.end(), weights.begin() + std::ptrdiff_t(v * full),
+                                   weights.begin() + std::ptrdiff_t(v * full + used));
+        std::vector<float> projections(K * (used + 1) * 3);
+        relight(cut.cpcaBasis.data(), K * (used + 1), int(n), lighting.data(), projections.data());
+        std::vector<float> expected(V * 3);
+        for (size_t v = 0; v < V; ++v)
+            for (int c = 0; c < 3; ++c) {
+                const float* p = projections.data() + clusters[v] * (used + 1) * 3;
+                const float* x = cut.cpcaWeights.data() + v * used;
+                float even = p[c], odd = 0.0f;
+                size_t i = 0;
+                for (; i + 1 < used; i += 2) {
+                    even += x[i] * p[(i + 1) * 3 + c];
+                    odd += x[i + 1] * p[(i + 2) * 3 + c];
+                }
+                if (i < used) even += x[i] * p[(i + 1) * 3 + c], odd += 0.0f * 0.0f;
+                expected[v * 3 + c] = even + odd;
+            }
+        EXPECT_TRUE(sameBits(relightAll(cut, lighting.data()), expected));
+        std::vector<float> tail(7 * 3);
+        relight(cut, lighting.data(), V - 7, V, tail.data());
+        EXPECT_EQ(std::memcmp(tail.data(), expected.data() + (V - 7) * 3, tail.size() * sizeof(float)), 0);
+    }
 }
 
 namespace {
