@@ -524,9 +524,10 @@ TEST(EncodedRelight, FusedCodesOfLongRunsWithinRoundingOfTheExactSum) {
                             }
                             const double error = std::fabs(double(radiance[v * 3 + c]) - E);
                             const double rounding = std::ldexp(1.0, -45) * magnitude;
+                            const double quantisation = 0.51 * step * sumX;
                             const double bound =
-                                quantised ? 0.51 * step * sumX +
-                                                roundingGamma(double(n + 3)) * (magnitude + 0.51 * step * sumX) + rounding
+                                quantised ? quantisation + roundingGamma(double(n + 3)) * (magnitude + quantisation) +
+                                                rounding
                                           : roundingGamma(double(n * n + 2)) * magnitude + rounding;
                             if (error > bound) ++failures;
                             if (error == 0) ++exact;
