@@ -106,6 +106,7 @@ struct RelightTasks {
     const RelightModel* model;
     const float* lighting;
     const float* projections; // Cpca: [clusters][components + 1][4]
+    const U8Lighting* quantised; // blocked u8 codes: the lighting quantised once (quantiseU8Lighting), else null
     size_t begin, end;
     float* radiance;
 };
@@ -118,7 +119,7 @@ void relightTask(void* data, size_t index) {
     if (model.storage == TransferStorage::Cpca)
         relightCpcaRange(model, tasks.projections, first, last, out);
     else if (!model.offsets.empty())
-        relightRaggedRange(model, tasks.lighting, first, last, out);
+        relightRaggedRange(model, tasks.lighting, first, last, out, tasks.quantised);
     else
         relight(model.transfer.data() + first * size_t(model.order) * model.order * 3, last - first,
                 model.order * model.order, tasks.lighting, out);
@@ -134,10 +135,14 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
         throw Error("", "relight", "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
                                        ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
                     kExitFailure);
-    // Cpca: each cluster's mean and directions projected on the lighting once, before any task runs.
+    // Cpca: each cluster's mean and directions projected on the lighting once, before any task runs; blocked u8
+    // codes: the lighting quantised once.
     std::vector<float> projections;
     if (model.storage == TransferStorage::Cpca) projections = cpcaProjections(model, lighting);
-    RelightTasks tasks{&model, lighting, projections.data(), begin, end, radiance};
+    U8Lighting quantised;
+    const bool u8Blocked = model.codesBlocked && model.storage == TransferStorage::Uint8;
+    if (u8Blocked) quantised = quantiseU8Lighting(lighting, model.order);
+    RelightTasks tasks{&model, lighting, projections.data(), u8Blocked ? &quantised : nullptr, begin, end, radiance};
     // Blocks of kRelightBlock vertices keep the scheduling overhead far below the memory traffic; the caller's job
     // system (or the calling thread) runs them, so the runtime itself never starts a thread.
     runTasks(jobs, (end - begin + kRelightBlock - 1) / kRelightBlock, relightTask, &tasks);

@@ -49,57 +49,8 @@ struct CodeLayout {
     }();
 };
 
-// The lighting of the u8 blocked kernel (relightBlockedU8Kernel): per channel c one scale s_c = max_j |L_jc| /
-// 32767 and each value as an int16 Lq_j = round(L_j / s_c), |s_c Lq_j - L_j| <= 0.51 s_c. Per band l and channel c
-// (index 3 l + c): the band's coefficients m = l^2 .. l^2 + 2l taken in pairs (l^2 + 2p, l^2 + 2p + 1), p < l, each
-// pair as one int32 (Lq of the first in its low 16 bits, of the second in its high 16), then the last coefficient
-// alone (Lq in the low 16 bits, 0 in the high), and the offset -C sum_m Lq_m (C = 127) that centres the codes. A
-// channel with a value that is not finite gets scale NaN and zero codes, so its radiance is NaN, as the float
-// kernels' would be (or infinite).
-struct U8Lighting {
-    float scale[3] = {};
-    int32_t pairs[3 * 28] = {};  // (l, c) -> from pairStart(l) + c l: at most 3 * (0 + 1 + ... + 7)
-    int32_t single[3 * 8] = {};  // [3 l + c]
-    int32_t offset[3 * 8] = {};  // [3 l + c]
-};
-
-// The first of band l's pair constants: 3 (0 + 1 + ... + (l - 1)).
+// The first of band l's pair constants in U8Lighting::pairs: 3 (0 + 1 + ... + (l - 1)).
 constexpr int pairStart(int l) { return 3 * l * (l - 1) / 2; }
-
-U8Lighting quantiseU8Lighting(const float* lighting, int order) {
-    U8Lighting q;
-    const int n = order * order;
-    for (int c = 0; c < 3; ++c) {
-        float largest = 0.0f;
-        bool finite = true;
-        for (int m = 0; m < n; ++m) {
-            finite = finite && std::isfinite(lighting[m * 3 + c]);
-            largest = std::max(largest, std::fabs(lighting[m * 3 + c]));
-        }
-        q.scale[c] = finite ? largest / 32767.0f : std::numeric_limits<float>::quiet_NaN();
-    }
-    auto code = [&](int m, int c) -> int32_t {
-        if (!(q.scale[c] > 0.0f)) return 0; // zero lighting, or not finite
-        return int32_t(std::clamp(std::lrint(lighting[m * 3 + c] / q.scale[c]), -32767L, 32767L));
-    };
-    auto pack = [](int32_t low, int32_t high) {
-        return int32_t(uint32_t(uint16_t(low)) | (uint32_t(uint16_t(high)) << 16));
-    };
-    for (int l = 0; l < order; ++l)
-        for (int c = 0; c < 3; ++c) {
-            int32_t sum = 0;
-            for (int p = 0; p < l; ++p) {
-                const int m = l * l + 2 * p;
-                q.pairs[pairStart(l) + c * l + p] = pack(code(m, c), code(m + 1, c));
-                sum += code(m, c) + code(m + 1, c);
-            }
-            const int last = l * l + 2 * l;
-            q.single[3 * l + c] = pack(code(last, c), 0);
-            sum += code(last, c);
-            q.offset[3 * l + c] = -127 * sum;
-        }
-    return q;
-}
 
 namespace codes_base {
 #define PRT_CODES_AVX2 0
@@ -160,10 +111,9 @@ bool relightCodesOf(const RelightModel& model, const std::vector<Code>& codes, i
 
 // u8: the integer kernel. u16 codes (up to 65535) times int16 lighting would overflow its int32 pair sums, so they
 // keep the float kernel below.
-bool relightBlockedU8(const RelightModel& model, size_t first, size_t last, const float* lighting, float* radiance) {
+bool relightBlockedU8(const RelightModel& model, size_t first, size_t last, const U8Lighting& q, float* radiance) {
     const uint8_t* codes = model.codes8.data();
     const float* scales = model.bandScales.data();
-    const U8Lighting q = quantiseU8Lighting(lighting, model.order);
     switch (model.order) {
     case 1: PRT_BLOCKED_U8(1)(codes, scales, first, last, q, radiance); return true;
     case 2: PRT_BLOCKED_U8(2)(codes, scales, first, last, q, radiance); return true;
@@ -196,10 +146,48 @@ bool relightBlockedOf(const RelightModel& model, const std::vector<Code>& codes,
 
 } // namespace
 
+U8Lighting quantiseU8Lighting(const float* lighting, int order) {
+    U8Lighting q;
+    if (order < 1 || order > 8) return q; // no blocked kernel takes it (relightBlockedU8)
+    const int n = order * order;
+    int32_t codes[3 * 64] = {}; // Lq of value 3 m + c, each rounded once
+    for (int c = 0; c < 3; ++c) {
+        float largest = 0.0f;
+        bool finite = true;
+        for (int m = 0; m < n; ++m) {
+            finite = finite && std::isfinite(lighting[m * 3 + c]);
+            largest = std::max(largest, std::fabs(lighting[m * 3 + c]));
+        }
+        q.scale[c] = finite ? largest / 32767.0f : std::numeric_limits<float>::quiet_NaN();
+        if (!(q.scale[c] > 0.0f)) continue; // zero lighting, or not finite: codes 0
+        for (int m = 0; m < n; ++m)
+            codes[m * 3 + c] = int32_t(std::clamp(std::lrint(lighting[m * 3 + c] / q.scale[c]), -32767L, 32767L));
+    }
+    auto pack = [](int32_t low, int32_t high) {
+        return int32_t(uint32_t(uint16_t(low)) | (uint32_t(uint16_t(high)) << 16));
+    };
+    for (int l = 0; l < order; ++l)
+        for (int c = 0; c < 3; ++c) {
+            int32_t sum = 0;
+            for (int p = 0; p < l; ++p) {
+                const int m = l * l + 2 * p;
+                q.pairs[pairStart(l) + c * l + p] = pack(codes[m * 3 + c], codes[(m + 1) * 3 + c]);
+                sum += codes[m * 3 + c] + codes[(m + 1) * 3 + c];
+            }
+            const int last = l * l + 2 * l;
+            q.single[3 * l + c] = pack(codes[last * 3 + c], 0);
+            sum += codes[last * 3 + c];
+            q.offset[3 * l + c] = -127 * sum;
+        }
+    return q;
+}
+
 bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting,
-                         float* radiance) {
+                         const U8Lighting* quantised, float* radiance) {
     if (!model.codesBlocked) return false;
-    if (model.storage == TransferStorage::Uint8) return relightBlockedU8(model, first, last, lighting, radiance);
+    if (model.storage == TransferStorage::Uint8)
+        return relightBlockedU8(model, first, last, quantised ? *quantised : quantiseU8Lighting(lighting, model.order),
+                                radiance);
     if (model.storage == TransferStorage::Uint16)
         return relightBlockedOf(model, model.codes16, first, last, lighting, radiance);
     return false;

@@ -109,8 +109,9 @@ void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t fir
 
 } // namespace
 
-void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out) {
-    if (relightBlockedCodes(model, first, last, lighting, out)) return;
+void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out,
+                        const U8Lighting* quantised) {
+    if (relightBlockedCodes(model, first, last, lighting, quantised, out)) return;
     const uint32_t* offsets = model.offsets.data();
     const bool coded = model.storage == TransferStorage::Uint8 || model.storage == TransferStorage::Uint16;
     size_t band = coded && model.scaleCluster.empty() ? bandStart(model, first) : 0;

@@ -58,13 +58,31 @@ TexelRelightModel adaptiveTexelModel(Bundle& bundle, const std::string& source);
 // irradiance transfer) and the bundle's "diffuse_albedo" layer, checked: [vertexCount, 3], values in [0, 1].
 void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::string& source, RelightModel& model);
 
+// The lighting of the u8 blocked kernel (relight_codes_kernel.inc, relightBlockedU8Kernel): per channel c one
+// scale s_c = max_j |L_jc| / 32767 and each value as an int16 Lq_j = round(L_j / s_c), |s_c Lq_j - L_j| <= 0.51
+// s_c. Per band l and channel c (index 3 l + c): the band's coefficients m = l^2 .. l^2 + 2l taken in pairs (l^2 +
+// 2p, l^2 + 2p + 1), p < l, each pair as one int32 (Lq of the first in its low 16 bits, of the second in its high
+// 16), then the last coefficient alone (Lq in the low 16 bits, 0 in the high), and the offset -C sum_m Lq_m (C =
+// 127) that centres the codes. A channel with a value that is not finite gets scale NaN and zero codes, so its
+// radiance is NaN, as the float kernels' would be (or infinite).
+struct U8Lighting {
+    float scale[3] = {};
+    int32_t pairs[3 * 28] = {}; // band l, channel c from 3 l (l - 1) / 2 + c l: at most 3 (0 + 1 + ... + 7)
+    int32_t single[3 * 8] = {}; // [3 l + c]
+    int32_t offset[3 * 8] = {}; // [3 l + c]
+};
+// lighting [order^2][3]; all zero for an order outside 1..8. relight() quantises once per call, before its tasks run.
+U8Lighting quantiseU8Lighting(const float* lighting, int order);
+
 // Relight kernels of the encoded storages (relight_encoded.cpp), vertices [first, last) into out ([last - first][3]),
 // without the albedo. relightRaggedRange: a model with offsets, any storage but Cpca, each row bit-identical to
-// the float kernel on decodedTransfer. cpcaProjections: [clusters][components + 1][4] (RGB, then 0), each
+// the float kernel on decodedTransfer (blocked u8 codes: within relight()'s bound, against `quantised`, the
+// lighting as quantiseU8Lighting gives it, or quantised here when null). cpcaProjections: [clusters][components + 1][4] (RGB, then 0), each
 // cluster's mean and directions dotted with the lighting by the float kernel; relightCpcaRange sums them with the
 // vertex's weights, per channel in two sums, each in order: the mean + w_0 p_0 + w_2 p_2 + ... and 0 + w_1 p_1 +
 // w_3 p_3 + ... (+ 0 * 0 after an odd M's last even term), then the first + the second.
-void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out);
+void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out,
+                        const U8Lighting* quantised = nullptr);
 std::vector<float> cpcaProjections(const RelightModel& model, const float* lighting);
 void relightCpcaRange(const RelightModel& model, const float* projections, size_t first, size_t last, float* out);
 // The fused code kernel (relight_codes.cpp): vertices [first, last) of a u8 / u16 model, all of n bands, relit from
@@ -87,8 +105,10 @@ inline size_t blockedCodeIndex(bool u8, size_t j, size_t i) {
 }
 
 // The blocked code kernel (relight_codes.cpp): vertices [first, last) of a model with codesBlocked, relit from its
-// blocks into out. False, with nothing written, for other models.
-bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting, float* out);
+// blocks into out; u8 models against `quantised`, or, when that is null, against the lighting quantised here. False,
+// with nothing written, for other models.
+bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting,
+                         const U8Lighting* quantised, float* out);
 // The fused half kernel (relight_vector.cpp): vertices [first, last) of a Float16 model, all of `count` coefficients
 // (count = n^2, n in 1..8), relit from their halves into out, bit for bit the float kernel on decodedTransfer's
 // rows. Returns how many leading vertices it relit: 0 (nothing written) where the processor lacks AVX2 or F16C or

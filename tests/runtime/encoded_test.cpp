@@ -506,14 +506,14 @@ TEST(EncodedRelight, FusedCodesOfLongRunsWithinRoundingOfTheExactSum) {
                     // 32767 (relightBlockedU8Kernel): that adds 0.51 s_c sum |x_j|, and its rounding is
                     // gamma_{n + 3} sum |x_j| (|L_j| + 0.51 s_c).
                     const bool quantised = blocked && bits == 8;
+                    double step[3] = {};
+                    for (int k = 0; k < n * n; ++k)
+                        for (int c = 0; c < 3; ++c)
+                            step[c] = std::max(step[c], std::fabs(double(lighting[k * 3 + c])) / 32767);
                     size_t failures = 0, exact = 0;
                     for (size_t v = 0; v < V; ++v) {
                         const float* sigma = sigmas.data() + (perCluster ? model.scaleCluster[v] * n : v * n);
                         for (int c = 0; c < 3; ++c) {
-                            double step = 0;
-                            for (int k = 0; k < n * n; ++k)
-                                step = std::max(step, std::fabs(double(lighting[k * 3 + c])));
-                            step /= 32767;
                             double E = 0, magnitude = 0, sumX = 0;
                             for (int k = 0; k < n * n; ++k) {
                                 const double x = (double(codes[v * values + k * 3 + c]) - C) *
@@ -524,7 +524,7 @@ TEST(EncodedRelight, FusedCodesOfLongRunsWithinRoundingOfTheExactSum) {
                             }
                             const double error = std::fabs(double(radiance[v * 3 + c]) - E);
                             const double rounding = std::ldexp(1.0, -45) * magnitude;
-                            const double quantisation = 0.51 * step * sumX;
+                            const double quantisation = 0.51 * step[c] * sumX;
                             const double bound =
                                 quantised ? quantisation + roundingGamma(double(n + 3)) * (magnitude + quantisation) +
                                                 rounding
