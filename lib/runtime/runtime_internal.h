@@ -77,10 +77,11 @@ U8Lighting quantiseU8Lighting(const float* lighting, int order);
 // Relight kernels of the encoded storages (relight_encoded.cpp), vertices [first, last) into out ([last - first][3]),
 // without the albedo. relightRaggedRange: a model with offsets, any storage but Cpca, each row bit-identical to
 // the float kernel on decodedTransfer (blocked u8 codes: within relight()'s bound, against `quantised`, the
-// lighting as quantiseU8Lighting gives it, or quantised here when null). cpcaProjections: [clusters][components + 1][4] (RGB, then 0), each
-// cluster's mean and directions dotted with the lighting by the float kernel; relightCpcaRange sums them with the
-// vertex's weights, per channel in two sums, each in order: the mean + w_0 p_0 + w_2 p_2 + ... and 0 + w_1 p_1 +
-// w_3 p_3 + ... (+ 0 * 0 after an odd M's last even term), then the first + the second.
+// lighting as quantiseU8Lighting gives it, or quantised here when null). cpcaProjections: [clusters][components +
+// 1][4] (RGB, then 0), each cluster's mean and directions dotted with the lighting by the float kernel;
+// relightCpcaRange sums them with the vertex's weights, per channel in two sums, each in order: the mean + w_0 p_0
+// + w_2 p_2 + ... and 0 + w_1 p_1 + w_3 p_3 + ... (+ 0 * 0 after an odd M's last even term), then the first + the
+// second.
 void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out,
                         const U8Lighting* quantised = nullptr);
 std::vector<float> cpcaProjections(const RelightModel& model, const float* lighting);
