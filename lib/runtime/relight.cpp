@@ -114,7 +114,9 @@ struct RelightTasks {
 void relightTask(void* data, size_t index) {
     const RelightTasks& tasks = *static_cast<const RelightTasks*>(data);
     const RelightModel& model = *tasks.model;
-    const size_t first = tasks.begin + index * kRelightBlock, last = std::min(tasks.end, first + kRelightBlock);
+    const size_t block = tasks.begin / kRelightBlock + index; // task `index`: the part of [begin, end) in this block
+    const size_t first = std::max(tasks.begin, block * kRelightBlock);
+    const size_t last = std::min(tasks.end, (block + 1) * kRelightBlock);
     float* out = tasks.radiance + (first - tasks.begin) * 3;
     if (model.storage == TransferStorage::Cpca)
         relightCpcaRange(model, tasks.projections, first, last, out);
@@ -144,8 +146,10 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
     if (u8Blocked) quantised = quantiseU8Lighting(lighting, model.order);
     RelightTasks tasks{&model, lighting, projections.data(), u8Blocked ? &quantised : nullptr, begin, end, radiance};
     // Blocks of kRelightBlock vertices keep the scheduling overhead far below the memory traffic; the caller's job
-    // system (or the calling thread) runs them, so the runtime itself never starts a thread.
-    runTasks(jobs, (end - begin + kRelightBlock - 1) / kRelightBlock, relightTask, &tasks);
+    // system (or the calling thread) runs them, so the runtime itself never starts a thread. A task is the part of
+    // [begin, end) in one block counted from vertex 0, the unit of the ragged blocked codes' layout.
+    const size_t tasksCount = begin == end ? 0 : (end - 1) / kRelightBlock - begin / kRelightBlock + 1;
+    runTasks(jobs, tasksCount, relightTask, &tasks);
 }
 
 } // namespace prt

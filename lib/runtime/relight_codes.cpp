@@ -109,39 +109,66 @@ bool relightCodesOf(const RelightModel& model, const std::vector<Code>& codes, i
     }
 }
 
+// Calls run(n, code, scale, blocks, base, lanes) for each run of blocks of vertex-blocked codes that vertices
+// [first, last) lie in: `blocks` blocks of n bands from code index `code` and band-scale index `scale`, lane i of
+// block k being vertex base + k kCodeBlock + i, or, with lanes, base + lanes[k kCodeBlock + i]
+// (RelightModel::blockedRuns): one run for a model of one order, at most 8 per task block for a ragged one.
+template <class Run>
+void forEachBlockRun(const RelightModel& model, size_t first, size_t last, Run&& run) {
+    if (first >= last) return;
+    if (model.blockedRuns.empty()) {
+        const size_t n = size_t(model.order), b0 = first / kCodeBlock, b1 = (last + kCodeBlock - 1) / kCodeBlock;
+        run(int(n), b0 * 3 * n * n * kCodeBlock, b0 * n * kCodeBlock, b1 - b0, b0 * kCodeBlock, nullptr);
+        return;
+    }
+    for (size_t t = first / kRelightBlock; t * kRelightBlock < last; ++t)
+        for (int n = 1; n <= 8; ++n) {
+            const BlockedRun& begin = model.blockedRuns[8 * t + size_t(n) - 1];
+            const BlockedRun& end = model.blockedRuns[8 * t + size_t(n)];
+            if (end.group > begin.group)
+                run(n, begin.code, begin.scale, end.group - begin.group, t * kRelightBlock,
+                    model.blockedLanes.data() + begin.group * kCodeBlock);
+        }
+}
+
 // u8: the integer kernel. u16 codes (up to 65535) times int16 lighting would overflow its int32 pair sums, so they
 // keep the float kernel below.
-bool relightBlockedU8(const RelightModel& model, size_t first, size_t last, const U8Lighting& q, float* radiance) {
-    const uint8_t* codes = model.codes8.data();
-    const float* scales = model.bandScales.data();
-    switch (model.order) {
-    case 1: PRT_BLOCKED_U8(1)(codes, scales, first, last, q, radiance); return true;
-    case 2: PRT_BLOCKED_U8(2)(codes, scales, first, last, q, radiance); return true;
-    case 3: PRT_BLOCKED_U8(3)(codes, scales, first, last, q, radiance); return true;
-    case 4: PRT_BLOCKED_U8(4)(codes, scales, first, last, q, radiance); return true;
-    case 5: PRT_BLOCKED_U8(5)(codes, scales, first, last, q, radiance); return true;
-    case 6: PRT_BLOCKED_U8(6)(codes, scales, first, last, q, radiance); return true;
-    case 7: PRT_BLOCKED_U8(7)(codes, scales, first, last, q, radiance); return true;
-    case 8: PRT_BLOCKED_U8(8)(codes, scales, first, last, q, radiance); return true;
-    default: return false;
-    }
+void relightBlockedU8(const RelightModel& model, size_t first, size_t last, const U8Lighting& q, float* radiance) {
+    forEachBlockRun(model, first, last, [&](int n, size_t code, size_t scale, size_t blocks, size_t base,
+                                            const uint16_t* lanes) {
+        const uint8_t* codes = model.codes8.data() + code;
+        const float* scales = model.bandScales.data() + scale;
+        switch (n) {
+        case 1: return PRT_BLOCKED_U8(1)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        case 2: return PRT_BLOCKED_U8(2)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        case 3: return PRT_BLOCKED_U8(3)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        case 4: return PRT_BLOCKED_U8(4)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        case 5: return PRT_BLOCKED_U8(5)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        case 6: return PRT_BLOCKED_U8(6)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        case 7: return PRT_BLOCKED_U8(7)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        case 8: return PRT_BLOCKED_U8(8)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        }
+    });
 }
 
 template <class Code>
-bool relightBlockedOf(const RelightModel& model, const std::vector<Code>& codes, size_t first, size_t last,
+void relightBlockedOf(const RelightModel& model, const std::vector<Code>& codeArray, size_t first, size_t last,
                       const float* lighting, float* radiance) {
-    const float* scales = model.bandScales.data();
-    switch (model.order) {
-    case 1: PRT_BLOCKED(1)(codes.data(), scales, first, last, lighting, radiance); return true;
-    case 2: PRT_BLOCKED(2)(codes.data(), scales, first, last, lighting, radiance); return true;
-    case 3: PRT_BLOCKED(3)(codes.data(), scales, first, last, lighting, radiance); return true;
-    case 4: PRT_BLOCKED(4)(codes.data(), scales, first, last, lighting, radiance); return true;
-    case 5: PRT_BLOCKED(5)(codes.data(), scales, first, last, lighting, radiance); return true;
-    case 6: PRT_BLOCKED(6)(codes.data(), scales, first, last, lighting, radiance); return true;
-    case 7: PRT_BLOCKED(7)(codes.data(), scales, first, last, lighting, radiance); return true;
-    case 8: PRT_BLOCKED(8)(codes.data(), scales, first, last, lighting, radiance); return true;
-    default: return false;
-    }
+    forEachBlockRun(model, first, last, [&](int n, size_t code, size_t scale, size_t blocks, size_t base,
+                                            const uint16_t* lanes) {
+        const Code* codes = codeArray.data() + code;
+        const float* scales = model.bandScales.data() + scale;
+        switch (n) {
+        case 1: return PRT_BLOCKED(1)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        case 2: return PRT_BLOCKED(2)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        case 3: return PRT_BLOCKED(3)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        case 4: return PRT_BLOCKED(4)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        case 5: return PRT_BLOCKED(5)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        case 6: return PRT_BLOCKED(6)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        case 7: return PRT_BLOCKED(7)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        case 8: return PRT_BLOCKED(8)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        }
+    });
 }
 
 } // namespace
@@ -184,13 +211,15 @@ U8Lighting quantiseU8Lighting(const float* lighting, int order) {
 
 bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting,
                          const U8Lighting* quantised, float* radiance) {
-    if (!model.codesBlocked) return false;
+    if (!model.codesBlocked) return false; // blockCodes blocks orders 1..8 only
     if (model.storage == TransferStorage::Uint8)
-        return relightBlockedU8(model, first, last, quantised ? *quantised : quantiseU8Lighting(lighting, model.order),
-                                radiance);
-    if (model.storage == TransferStorage::Uint16)
-        return relightBlockedOf(model, model.codes16, first, last, lighting, radiance);
-    return false;
+        relightBlockedU8(model, first, last, quantised ? *quantised : quantiseU8Lighting(lighting, model.order),
+                         radiance);
+    else if (model.storage == TransferStorage::Uint16)
+        relightBlockedOf(model, model.codes16, first, last, lighting, radiance);
+    else
+        return false;
+    return true;
 }
 
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,

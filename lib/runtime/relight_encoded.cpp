@@ -266,37 +266,112 @@ void relightCpcaRange(const RelightModel& model, const float* projections, size_
 
 namespace {
 
-// Vertex v's row of blocked codes (RelightModel::codesBlocked) as decodeBody writes it: value j of band l is
-// float(int(q_j) - C) * sigma_l. Fills rows [vertexCount][order^2][3].
+// The band count n of vertex v of a model with offsets.
+int bandsOf(const RelightModel& model, size_t v) {
+    return int(std::lround(std::sqrt(double(model.offsets[v + 1] - model.offsets[v]))));
+}
+
+// Calls f(v, n, code, scale, i) for every vertex v of a model with codesBlocked: its n bands lie in lane i of the
+// block whose codes start at code index `code` and band scales at `scale` (RelightModel::codesBlocked, blockedRuns).
+template <class F>
+void forEachBlockedVertex(const RelightModel& model, F&& f) {
+    const size_t V = model.vertexCount;
+    if (model.blockedRuns.empty()) {
+        const size_t n = size_t(model.order);
+        for (size_t v = 0; v < V; ++v) {
+            const size_t b = v / kCodeBlock;
+            f(v, n, b * 3 * n * n * kCodeBlock, b * n * kCodeBlock, v % kCodeBlock);
+        }
+        return;
+    }
+    for (size_t t = 0; t * kRelightBlock < V; ++t)
+        for (size_t n = 1; n <= 8; ++n) {
+            const BlockedRun& run = model.blockedRuns[8 * t + n - 1];
+            for (size_t g = run.group; g < model.blockedRuns[8 * t + n].group; ++g)
+                for (size_t i = 0; i < kCodeBlock; ++i) {
+                    const uint16_t lane = model.blockedLanes[g * kCodeBlock + i];
+                    if (lane == kPaddingLane) continue;
+                    const size_t k = g - run.group;
+                    f(t * kRelightBlock + lane, n, run.code + k * 3 * n * n * kCodeBlock,
+                      run.scale + k * n * kCodeBlock, i);
+                }
+        }
+}
+
+// The rows of a model with codesBlocked as decodeBody writes them: value j of band l of vertex v is float(int(q_j)
+// - C) * sigma_l, at row offsets[v] + j / 3. Fills rows [offsets[V]][3].
 template <class Code>
 void decodeBlockedCodes(const RelightModel& model, const Code* codes, float* rows) {
     constexpr int C = sizeof(Code) == 1 ? 127 : 32767;
-    const size_t n = size_t(model.order), values = n * n * 3;
-    for (size_t v = 0; v < model.vertexCount; ++v) {
-        const size_t b = v / kCodeBlock, i = v % kCodeBlock;
+    forEachBlockedVertex(model, [&](size_t v, size_t n, size_t code, size_t scale, size_t i) {
+        float* row = rows + size_t(model.offsets[v]) * 3;
         for (size_t l = 0; l < n; ++l) {
-            const float sigma = model.bandScales[(b * n + l) * kCodeBlock + i];
+            const float sigma = model.bandScales[scale + l * kCodeBlock + i];
             for (size_t j = l * l * 3; j < (l + 1) * (l + 1) * 3; ++j)
-                rows[v * values + j] =
-                    float(int(codes[b * values * kCodeBlock + blockedCodeIndex(sizeof(Code) == 1, j, i)]) - C) * sigma;
+                row[j] = float(int(codes[code + blockedCodeIndex(sizeof(Code) == 1, j, i)]) - C) * sigma;
         }
-    }
+    });
 }
 
+// Lays out the rows of codes (per-vertex scales, offsets) in blocks, as RelightModel::codesBlocked describes:
+// with `runs` empty, blocks of kCodeBlock consecutive vertices of one order; otherwise per task block, groups of
+// kCodeBlock vertices of one band count in vertex order, where runs (8 per task block, then one past the last)
+// says where each band count's groups start and `lanes` receives each group's vertices.
 template <class Code>
-void blockCodesOf(std::vector<Code>& codes, std::vector<float>& scales, size_t vertices, size_t n) {
+void blockCodesOf(RelightModel& model, std::vector<Code>& codes, const std::vector<BlockedRun>& runs,
+                  std::vector<uint16_t>& lanes) {
     constexpr Code C = sizeof(Code) == 1 ? 127 : 32767;
-    const size_t values = n * n * 3, blocks = (vertices + kCodeBlock - 1) / kCodeBlock;
-    std::vector<Code> blocked(blocks * values * kCodeBlock, C);
-    std::vector<float> blockedScales(blocks * n * kCodeBlock, 0.0f);
-    for (size_t v = 0; v < vertices; ++v) {
-        const size_t b = v / kCodeBlock, i = v % kCodeBlock;
+    const size_t V = model.vertexCount, n0 = size_t(model.order);
+    const size_t blocks = (V + kCodeBlock - 1) / kCodeBlock;
+    const size_t codeCount = runs.empty() ? blocks * 3 * n0 * n0 * kCodeBlock : runs.back().code;
+    const size_t scaleCount = runs.empty() ? blocks * n0 * kCodeBlock : runs.back().scale;
+    std::vector<Code> blocked(codeCount, C);
+    std::vector<float> blockedScales(scaleCount, 0.0f);
+    if (!runs.empty()) lanes.assign(runs.back().group * kCodeBlock, kPaddingLane);
+    size_t band = 0, placed[9] = {}; // placed[n]: vertices of n bands put in the current task block's groups so far
+    for (size_t v = 0; v < V; ++v) {
+        const size_t n = size_t(bandsOf(model, v)), values = 3 * n * n;
+        size_t code, scale, i;
+        if (runs.empty()) {
+            const size_t b = v / kCodeBlock;
+            code = b * values * kCodeBlock, scale = b * n * kCodeBlock, i = v % kCodeBlock;
+        } else {
+            const size_t t = v / kRelightBlock;
+            if (v % kRelightBlock == 0) std::fill(std::begin(placed), std::end(placed), size_t(0));
+            const BlockedRun& run = runs[8 * t + n - 1];
+            const size_t k = placed[n] / kCodeBlock;
+            i = placed[n]++ % kCodeBlock;
+            code = run.code + k * values * kCodeBlock, scale = run.scale + k * n * kCodeBlock;
+            lanes[(run.group + k) * kCodeBlock + i] = uint16_t(v - t * kRelightBlock);
+        }
         for (size_t j = 0; j < values; ++j)
-            blocked[b * values * kCodeBlock + blockedCodeIndex(sizeof(Code) == 1, j, i)] = codes[v * values + j];
-        for (size_t l = 0; l < n; ++l) blockedScales[(b * n + l) * kCodeBlock + i] = scales[v * n + l];
+            blocked[code + blockedCodeIndex(sizeof(Code) == 1, j, i)] = codes[size_t(model.offsets[v]) * 3 + j];
+        for (size_t l = 0; l < n; ++l) blockedScales[scale + l * kCodeBlock + i] = model.bandScales[band + l];
+        band += n;
     }
     codes = std::move(blocked);
-    scales = std::move(blockedScales);
+    model.bandScales = std::move(blockedScales);
+}
+
+// Where each task block's groups of each band count start (RelightModel::blockedRuns), for a model whose vertices
+// have 1..8 bands.
+std::vector<BlockedRun> blockedRunsOf(const RelightModel& model) {
+    const size_t V = model.vertexCount, tasks = (V + kRelightBlock - 1) / kRelightBlock;
+    std::vector<BlockedRun> runs(tasks * 8 + 1);
+    BlockedRun at;
+    for (size_t t = 0; t < tasks; ++t) {
+        size_t count[9] = {};
+        for (size_t v = t * kRelightBlock; v < std::min(V, (t + 1) * kRelightBlock); ++v) ++count[bandsOf(model, v)];
+        for (size_t n = 1; n <= 8; ++n) {
+            runs[8 * t + n - 1] = at;
+            const size_t groups = (count[n] + kCodeBlock - 1) / kCodeBlock;
+            at.group += groups;
+            at.code += groups * 3 * n * n * kCodeBlock;
+            at.scale += groups * n * kCodeBlock;
+        }
+    }
+    runs.back() = at;
+    return runs;
 }
 
 } // namespace
@@ -320,7 +395,7 @@ std::vector<float> decodedTransfer(const RelightModel& model) {
         }
         size_t band = 0;
         for (size_t v = 0; v < model.vertexCount; ++v) {
-            const int n = int(std::lround(std::sqrt(double(model.offsets[v + 1] - model.offsets[v]))));
+            const int n = bandsOf(model, v);
             float* out = rows.data() + size_t(model.offsets[v]) * 3; // decodeCodes writes vertex v at out + 0
             if (model.storage == TransferStorage::Uint8)
                 decodeCodes(model, model.codes8.data(), n, v, v + 1, band, out);
@@ -349,17 +424,26 @@ std::vector<float> decodedTransfer(const RelightModel& model) {
 
 bool blockCodes(RelightModel& model) {
     const bool coded = model.storage == TransferStorage::Uint8 || model.storage == TransferStorage::Uint16;
+    const size_t V = model.vertexCount;
     if (!coded || model.codesBlocked || !model.scaleCluster.empty() || model.order < 1 || model.order > 8 ||
-        model.offsets.size() != size_t(model.vertexCount) + 1)
+        model.offsets.size() != V + 1 || model.offsets[0] != 0)
         return false;
-    const size_t n = size_t(model.order), count = n * n;
-    for (size_t v = 0; v <= model.vertexCount; ++v)
-        if (model.offsets[v] != v * count) return false; // not every vertex at the full order
+    // Every vertex of 1..order bands, codes and scales of the sizes the offsets describe; else left as it is.
+    size_t bands = 0;
+    bool ragged = false;
+    for (size_t v = 0; v < V; ++v) {
+        if (model.offsets[v + 1] < model.offsets[v]) return false;
+        const int n = bandsOf(model, v);
+        if (n < 1 || n > model.order || model.offsets[v + 1] - model.offsets[v] != uint32_t(n * n)) return false;
+        ragged = ragged || n != model.order;
+        bands += size_t(n);
+    }
     const size_t codes = model.storage == TransferStorage::Uint8 ? model.codes8.size() : model.codes16.size();
-    if (model.bandScales.size() != size_t(model.vertexCount) * n || codes != size_t(model.vertexCount) * count * 3)
-        return false; // codes or scales not of the size the offsets describe: left as they are
-    if (model.storage == TransferStorage::Uint8) blockCodesOf(model.codes8, model.bandScales, model.vertexCount, n);
-    else blockCodesOf(model.codes16, model.bandScales, model.vertexCount, n);
+    if (model.bandScales.size() != bands || codes != size_t(model.offsets[V]) * 3) return false;
+    const std::vector<BlockedRun> runs = ragged ? blockedRunsOf(model) : std::vector<BlockedRun>{};
+    if (model.storage == TransferStorage::Uint8) blockCodesOf(model, model.codes8, runs, model.blockedLanes);
+    else blockCodesOf(model, model.codes16, runs, model.blockedLanes);
+    model.blockedRuns = runs;
     model.codesBlocked = true;
     return true;
 }
@@ -367,7 +451,8 @@ bool blockCodes(RelightModel& model) {
 size_t relightBytes(const RelightModel& model) {
     auto bytes = [](const auto& array) { return array.size() * sizeof(array[0]); };
     if (model.codesBlocked) // the blocked kernel reads neither offsets nor the block table
-        return bytes(model.codes8) + bytes(model.codes16) + bytes(model.bandScales) + bytes(model.albedo);
+        return bytes(model.codes8) + bytes(model.codes16) + bytes(model.bandScales) + bytes(model.albedo) +
+               bytes(model.blockedRuns) + bytes(model.blockedLanes);
     size_t total = bytes(model.offsets) + bytes(model.albedo) + bytes(model.bandBlockStarts);
     switch (model.storage) {
     case TransferStorage::Float32: return total + bytes(model.transfer);

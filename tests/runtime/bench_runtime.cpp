@@ -24,8 +24,11 @@ namespace {
 
 size_t gVertices = 1000000;
 
-// u16 / u8: vertex-blocked codes, as the loader holds them (blockCodes); "-rows": the same codes row by row.
-constexpr const char* kStorages[] = {"float32", "half", "u16", "u16-rows", "u8", "u8-rows", "cpca"};
+// u16 / u8: vertex-blocked codes, as the loader holds them (blockCodes); "-rows": the same codes row by row;
+// "-ragged": graded orders as `prt adapt` stores them (patches of 16..271 vertices at the order, one or two bands
+// fewer), blocked by band count as the loader holds them, or with "-rows" row by row.
+constexpr const char* kStorages[] = {"float32",   "half", "u16", "u16-rows", "u16-ragged", "u16-ragged-rows",
+                                     "u8",        "u8-rows", "u8-ragged", "u8-ragged-rows", "cpca"};
 
 // A fast deterministic fill (the values do not matter to the speed, only that they are not all alike).
 struct Lcg {
@@ -61,12 +64,21 @@ prt::RelightModel makeModel(const std::string& storage, int order) {
         for (uint32_t& k : model.cpcaCluster) k = random.next() % K;
         return model;
     }
-    // The adaptive layout at one uniform order: offsets, and for codes one scale per (vertex, band).
+    // The adaptive layout: offsets (one uniform order, or graded), and for codes one scale per (vertex, band).
+    const bool ragged = storage.find("-ragged") != std::string::npos;
+    std::vector<int> bands(gVertices, order);
+    for (size_t v = 0; ragged && v < gVertices;) {
+        const int patchBands = std::max(1, order - int(random.next() % 3));
+        const size_t patch = 16 + random.next() % 256;
+        for (size_t i = v; i < std::min(gVertices, v + patch); ++i) bands[i] = patchBands;
+        v += patch;
+    }
     model.offsets.resize(gVertices + 1);
-    for (size_t v = 0; v <= gVertices; ++v) model.offsets[v] = uint32_t(v * n);
+    for (size_t v = 0; v < gVertices; ++v) model.offsets[v + 1] = model.offsets[v] + uint32_t(bands[v] * bands[v]);
+    const size_t rows = model.offsets[gVertices];
     if (storage == "half") {
         model.storage = prt::TransferStorage::Float16;
-        model.halves.resize(values);
+        model.halves.resize(rows * 3);
         for (uint16_t& half : model.halves) half = uint16_t(random.next() & 0xbbff); // finite, mixed signs
         return model;
     }
@@ -74,16 +86,17 @@ prt::RelightModel makeModel(const std::string& storage, int order) {
     const uint32_t C = u8 ? 127 : 32767;
     model.storage = u8 ? prt::TransferStorage::Uint8 : prt::TransferStorage::Uint16;
     if (u8) {
-        model.codes8.resize(values);
+        model.codes8.resize(rows * 3);
         for (uint8_t& code : model.codes8) code = uint8_t(random.next() % (2 * C + 1));
     } else {
-        model.codes16.resize(values);
+        model.codes16.resize(rows * 3);
         for (uint16_t& code : model.codes16) code = uint16_t(random.next() % (2 * C + 1));
     }
-    model.bandScales.resize(gVertices * order);
-    for (float& sigma : model.bandScales) sigma = (1.0f + random.unit()) / float(C);
-    for (size_t v = 0; v < gVertices; v += prt::kRelightBlock) model.bandBlockStarts.push_back(uint32_t(v * order));
-    model.bandBlockStarts.push_back(uint32_t(gVertices * order));
+    for (size_t v = 0; v < gVertices; ++v) {
+        if (v % prt::kRelightBlock == 0) model.bandBlockStarts.push_back(uint32_t(model.bandScales.size()));
+        for (int l = 0; l < bands[v]; ++l) model.bandScales.push_back((1.0f + random.unit()) / float(C));
+    }
+    model.bandBlockStarts.push_back(uint32_t(model.bandScales.size()));
     if (storage.find("-rows") == std::string::npos) prt::blockCodes(model);
     return model;
 }
@@ -114,6 +127,7 @@ Workload& workload(const std::string& storage, int order) {
             if (!array.empty()) w.buffers.push_back({array.data(), array.size() * sizeof(array[0])});
         };
         add(m.transfer), add(m.halves), add(m.codes8), add(m.codes16), add(m.bandScales), add(m.scaleCluster);
+        add(m.blockedRuns), add(m.blockedLanes);
         if (!m.codesBlocked) add(m.offsets), add(m.bandBlockStarts); // the blocked kernel reads neither
         add(m.cpcaBasis), add(m.cpcaWeights), add(m.cpcaCluster);
     }

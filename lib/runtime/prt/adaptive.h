@@ -26,10 +26,11 @@ RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source);
 // True when the bundle holds adaptive transfer layers (and so relightModel reads them).
 bool hasAdaptiveTransfer(const Bundle& bundle);
 
-// Relights vertices [begin, end) of an adaptive model (model.offsets not empty): each vertex with its own bands,
-// the lighting's first n_v^2 coefficients. Runs of equal order go through the same kernel as full-order rows, so
-// a model whose every vertex has the full order relights bit for bit like the full-order model. Single-threaded;
-// every storage but Cpca (whose rows have no offsets). relight(model, ...) calls it for adaptive models.
+// Relights vertices [begin, end) of an adaptive model (model.offsets not empty) on the calling thread, with the bits
+// relight(model, ...) gives them: each vertex with its own bands, the lighting's first n_v^2 coefficients. Float
+// and half rows go in runs of equal order through the same kernel as full-order rows, so a model whose every vertex
+// has the full order relights bit for bit like the full-order model; blocked codes (blockCodes) through the blocked
+// kernel. Every storage but Cpca (whose rows have no offsets).
 void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance);
 
 

@@ -28,6 +28,11 @@ enum class TransferStorage : uint8_t {
     Cpca,    // cpcaBasis, cpcaWeights, cpcaCluster: every vertex at the full order
 };
 
+// Where a run of groups of ragged vertex-blocked codes starts (RelightModel::blockedRuns).
+struct BlockedRun {
+    uint64_t group = 0, code = 0, scale = 0;
+};
+
 // Per-vertex transfer ready to relight: the "transfer" layer of a bundle (semantic "sh_transfer_rgb"), or the
 // adaptive layers of `prt adapt`.
 struct RelightModel {
@@ -58,6 +63,15 @@ struct RelightModel {
     // padded with code C and sigma 0. offsets and bandBlockStarts are kept; the rows are the same values in another
     // order.
     bool codesBlocked = false;
+    // Ragged vertex-blocked codes (blockCodes of a model whose vertices have orders of their own; empty for one
+    // order): each task block of kRelightBlock vertices (from vertex t kRelightBlock) holds its vertices grouped by
+    // their band count n, kCodeBlock of one n per group in vertex order (each n's last group padded as above), and
+    // the groups of n bands laid out as the blocks above at order n. blockedRuns[8 t + n - 1] is where task block
+    // t's groups of n bands start (group index, code index, band-scale index), blockedRuns[8 T] ends the last of T
+    // task blocks; blockedLanes[g kCodeBlock + i] is the vertex in lane i of group g, counted from its task block's
+    // first vertex, or kPaddingLane.
+    std::vector<BlockedRun> blockedRuns;
+    std::vector<uint16_t> blockedLanes;
     // Cpca: T[v] = mean[k] + sum_i cpcaWeights[v][i] basis[k][i], k = cpcaCluster[v]; cpcaBasis is [K][M + 1]
     // [order^2][3] (row 0 the mean), cpcaWeights [vertexCount][M].
     int cpcaComponents = 0;
@@ -77,13 +91,19 @@ inline constexpr size_t kRelightBlock = 4096;
 
 // Vertices per block of vertex-blocked codes (RelightModel::codesBlocked): one per lane of an 8-float vector.
 inline constexpr size_t kCodeBlock = 8;
+// The lane of a group of ragged blocked codes that holds no vertex (RelightModel::blockedLanes).
+inline constexpr uint16_t kPaddingLane = 0xffff;
+static_assert(kRelightBlock < kPaddingLane, "a lane names a vertex of its task block in 16 bits");
 
-// Puts a u8 / u16 model whose vertices all have model.order bands (1..8) and per-vertex scales into the
-// vertex-blocked layout (RelightModel::codesBlocked), which relight() reads 8 vertices per vector instruction, with
-// no per-value scale: per band and channel sum_j (q_j - C) L_j over the band's values, times sigma_l, summed over
-// the bands, each vertex in its own lane; for u8 the band sums are exact integer sums against the lighting
-// quantised per channel to int16 (see relight). docs/results.md, issue 21, gives the rates. Returns whether it
-// did; other models are left as they are. decodedTransfer gives the same rows bit for bit.
+// Puts a u8 / u16 model with per-vertex scales whose vertices have 1..8 bands (at most model.order) into the
+// vertex-blocked layout (RelightModel::codesBlocked; with blockedRuns and blockedLanes where the vertices' band
+// counts differ, as `prt adapt` stores them), which relight() reads 8 vertices per vector instruction, with no
+// per-value scale: per band and channel sum_j (q_j - C) L_j over the band's values, times sigma_l, summed over the
+// bands, each vertex in its own lane; for u8 the band sums are exact integer sums against the lighting quantised
+// per channel to int16 (see relight). docs/results.md, issue 21, gives the rates. Returns whether it did; other
+// models (per-cluster scales, other storages) are left as they are. decodedTransfer gives the same rows bit for bit.
+// Memory: the codes and scales are rearranged, not copied, plus at most 7 padded vertices per band count and task
+// block, and for ragged models 2 bytes per vertex of lanes.
 bool blockCodes(RelightModel& model);
 
 // Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying), or, in a bundle without
@@ -113,7 +133,8 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
              float* radiance);
 
 // Relights vertices [begin, end) of `model`, whatever its storage, times model.albedo per vertex when that is not
-// empty, in tasks of kRelightBlock vertices run through `jobs` (default: in order on the calling thread).
+// empty, in tasks run through `jobs` (default: in order on the calling thread), one per block of kRelightBlock
+// vertices counted from vertex 0 that the range overlaps.
 // Float32 and Float16 rows are bit-identical to the kernel on decodedTransfer(model); u8 / u16 codes of 1..8
 // bands are relit by a fused kernel straight from the codes (q - C times sigma_l L_j), within (gamma_{n+2} +
 // gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows (tests/runtime), blocked u16
@@ -133,7 +154,7 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
 std::vector<float> decodedTransfer(const RelightModel& model);
 
 // Bytes relight() reads from the model to relight all its vertices once (rows, codes, scales, offsets, weights,
-// cluster indices, albedo; not the lighting).
+// cluster indices, albedo, the lanes and runs of ragged blocked codes; not the lighting).
 size_t relightBytes(const RelightModel& model);
 
 } // namespace prt
