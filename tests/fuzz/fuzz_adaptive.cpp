@@ -4,8 +4,11 @@
 // (relightModel, which calls adaptiveRelightModel), then runs what `prt relight` runs: relight() of every row under
 // a fixed lighting, relightBytes, and decodedTransfer. Oracle besides the sanitizers: for float and half rows,
 // relight() must give the bits of the plain kernel on each row's decoded coefficients; for u8 / u16 codes (the
-// fused kernel) it must agree with it within (gamma_{n+2} + gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j|,
-// times the albedo and its rounding (prt/relight.h).
+// fused kernel) it must agree with it within (gamma_{n+2} + gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j|, and
+// for blocked u8 codes (relit against the lighting quantised to steps s_c = max |L_c| / 32767) within 0.51 s_c
+// sum_j |x_j| (1 + gamma_{b+3}) + (gamma_{b+4} + gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| (b bands; |x_j| <=
+// |decoded_j| (1 + gamma_1), and gamma_{b+4} - gamma_{b+3} > u covers the decoded rows' own rounding), times the
+// albedo and its rounding (prt/relight.h).
 // Seeds: tests/fuzz/corpus/adaptive/ (a small sphere adapted as float, half, u16, u8 per-vertex and per-cluster,
 // and CPCA).
 #include "bundle.h"
@@ -13,6 +16,7 @@
 #include "fuzz_util.h"
 #include "runtime.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -40,14 +44,24 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             prt::relight(rows.data() + size_t(model.offsets[v]) * 3, 1, int(count), lighting.data(), expected);
             float got[3] = {radiance[v * 3], radiance[v * 3 + 1], radiance[v * 3 + 2]};
             const bool coded = model.storage == prt::TransferStorage::Uint8 || model.storage == prt::TransferStorage::Uint16;
-            const double u = std::ldexp(1.0, -24);
+            const bool quantisedLighting = model.codesBlocked && model.storage == prt::TransferStorage::Uint8;
+            const double u = std::ldexp(1.0, -24), bands = std::round(std::sqrt(double(count)));
             auto gamma = [&](double n) { return n * u / (1 - n * u); };
             for (int c = 0; c < 3; ++c) {
                 const double a = model.albedo.empty() ? 1.0 : std::fabs(double(model.albedo[size_t(v) * 3 + c]));
-                double magnitude = 0;
-                for (uint32_t j = 0; j < count; ++j)
-                    magnitude += std::fabs(double(rows[(size_t(model.offsets[v]) + j) * 3 + c])) * std::fabs(lighting[j * 3 + c]);
-                const double bound = (gamma(count + 2.0) + gamma(count + 1.0)) * (1 + gamma(1)) * magnitude;
+                double magnitude = 0, sumDecoded = 0, step = 0;
+                for (uint32_t j = 0; j < count; ++j) {
+                    const double x = std::fabs(double(rows[(size_t(model.offsets[v]) + j) * 3 + c]));
+                    magnitude += x * std::fabs(lighting[j * 3 + c]);
+                    sumDecoded += x;
+                }
+                for (size_t j = 0; j < coefficients; ++j)
+                    step = std::max(step, std::fabs(double(lighting[j * 3 + c])) / 32767);
+                const double bound =
+                    quantisedLighting
+                        ? 0.51 * step * sumDecoded * (1 + gamma(1)) * (1 + gamma(bands + 3)) +
+                              (gamma(bands + 4) + gamma(count + 1.0)) * (1 + gamma(1)) * magnitude
+                        : (gamma(count + 2.0) + gamma(count + 1.0)) * (1 + gamma(1)) * magnitude;
                 const double raw = expected[c];
                 if (!model.albedo.empty()) expected[c] *= model.albedo[size_t(v) * 3 + c];
                 if (!coded) {
