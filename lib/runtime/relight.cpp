@@ -142,7 +142,7 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
     std::vector<float> projections;
     if (model.storage == TransferStorage::Cpca) projections = cpcaProjections(model, lighting);
     U8Lighting quantised;
-    const bool u8Blocked = model.codesBlocked && model.storage == TransferStorage::Uint8;
+    const bool u8Blocked = model.rowsBlocked && model.storage == TransferStorage::Uint8;
     if (u8Blocked) quantised = quantiseU8Lighting(lighting, model.order);
     RelightTasks tasks{&model, lighting, projections.data(), u8Blocked ? &quantised : nullptr, begin, end, radiance};
     // Blocks of kRelightBlock vertices keep the scheduling overhead far below the memory traffic; the caller's job

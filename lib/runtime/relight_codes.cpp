@@ -109,28 +109,6 @@ bool relightCodesOf(const RelightModel& model, const std::vector<Code>& codes, i
     }
 }
 
-// Calls run(n, code, scale, blocks, base, lanes) for each run of blocks of vertex-blocked codes that vertices
-// [first, last) lie in: `blocks` blocks of n bands from code index `code` and band-scale index `scale`, lane i of
-// block k being vertex base + k kCodeBlock + i, or, with lanes, base + lanes[k kCodeBlock + i]
-// (RelightModel::blockedRuns): one run for a model of one order, at most 8 per task block for a ragged one.
-template <class Run>
-void forEachBlockRun(const RelightModel& model, size_t first, size_t last, Run&& run) {
-    if (first >= last) return;
-    if (model.blockedRuns.empty()) {
-        const size_t n = size_t(model.order), b0 = first / kCodeBlock, b1 = (last + kCodeBlock - 1) / kCodeBlock;
-        run(int(n), b0 * 3 * n * n * kCodeBlock, b0 * n * kCodeBlock, b1 - b0, b0 * kCodeBlock, nullptr);
-        return;
-    }
-    for (size_t t = first / kRelightBlock; t * kRelightBlock < last; ++t)
-        for (int n = 1; n <= 8; ++n) {
-            const BlockedRun& begin = model.blockedRuns[8 * t + size_t(n) - 1];
-            const BlockedRun& end = model.blockedRuns[8 * t + size_t(n)];
-            if (end.group > begin.group)
-                run(n, begin.code, begin.scale, end.group - begin.group, t * kRelightBlock,
-                    model.blockedLanes.data() + begin.group * kCodeBlock);
-        }
-}
-
 // u8: the integer kernel. u16 codes (up to 65535) times int16 lighting would overflow its int32 pair sums, so they
 // keep the float kernel below.
 void relightBlockedU8(const RelightModel& model, size_t first, size_t last, const U8Lighting& q, float* radiance) {
@@ -211,7 +189,7 @@ U8Lighting quantiseU8Lighting(const float* lighting, int order) {
 
 bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting,
                          const U8Lighting* quantised, float* radiance) {
-    if (!model.codesBlocked) return false; // blockCodes blocks orders 1..8 only
+    if (!model.rowsBlocked) return false; // blockRows blocks orders 1..8 only
     if (model.storage == TransferStorage::Uint8)
         relightBlockedU8(model, first, last, quantised ? *quantised : quantiseU8Lighting(lighting, model.order),
                          radiance);

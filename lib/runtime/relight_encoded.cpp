@@ -111,7 +111,9 @@ void decodeCodes(const RelightModel& model, const Code* codes, int n, size_t fir
 
 void relightRaggedRange(const RelightModel& model, const float* lighting, size_t first, size_t last, float* out,
                         const U8Lighting* quantised) {
-    if (relightBlockedCodes(model, first, last, lighting, quantised, out)) return;
+    if (relightBlockedCodes(model, first, last, lighting, quantised, out) ||
+        relightBlockedHalves(model, first, last, lighting, out))
+        return;
     const uint32_t* offsets = model.offsets.data();
     const bool coded = model.storage == TransferStorage::Uint8 || model.storage == TransferStorage::Uint16;
     size_t band = coded && model.scaleCluster.empty() ? bandStart(model, first) : 0;
@@ -167,10 +169,7 @@ namespace {
 typedef float V4f __attribute__((vector_size(16)));
 typedef float V8f __attribute__((vector_size(32)));
 
-template <size_t... k, class F>
-PRT_ALWAYS_INLINE inline void unrolledPairs(std::index_sequence<k...>, F&& f) {
-    (f(std::integral_constant<size_t, k>{}), ...);
-}
+#include "relight_blocks.inc"
 
 // Per vertex and channel two sums in the two halves of an 8-float vector (lanes 0..2 and 4..6; lanes 3 and 7 hold
 // 0): the even one from the mean's projection over directions i = 0, 2, 4, ..., the odd one from 0 over i = 1,
@@ -201,7 +200,7 @@ PRT_ALWAYS_INLINE inline void cpcaBody(const float* __restrict projections, cons
             for (size_t chunk = 0; chunk < M; chunk += 8) {
                 V8f w8;
                 std::memcpy(&w8, w + chunk, sizeof w8);
-                unrolledPairs(std::make_index_sequence<4>{}, [&](auto qc) PRT_ALWAYS_INLINE {
+                unrolled(std::make_index_sequence<4>{}, [&](auto qc) PRT_ALWAYS_INLINE {
                     constexpr int a = 2 * int(decltype(qc)::value), b = a + 1;
                     V8f direction;
                     std::memcpy(&direction, p + (chunk + size_t(a) + 1) * 4, sizeof direction);
@@ -271,16 +270,17 @@ int bandsOf(const RelightModel& model, size_t v) {
     return int(std::lround(std::sqrt(double(model.offsets[v + 1] - model.offsets[v]))));
 }
 
-// Calls f(v, n, code, scale, i) for every vertex v of a model with codesBlocked: its n bands lie in lane i of the
-// block whose codes start at code index `code` and band scales at `scale` (RelightModel::codesBlocked, blockedRuns).
+// Calls f(v, n, value, scale, i) for every vertex v of a model with rowsBlocked: its n bands lie in lane i of the
+// block whose values (codes or halves) start at index `value` and band scales (codes) at `scale`
+// (RelightModel::rowsBlocked, blockedRuns).
 template <class F>
 void forEachBlockedVertex(const RelightModel& model, F&& f) {
     const size_t V = model.vertexCount;
     if (model.blockedRuns.empty()) {
-        const size_t n = size_t(model.order);
+        const size_t n = size_t(model.order), scales = model.storage == TransferStorage::Float16 ? 0 : n;
         for (size_t v = 0; v < V; ++v) {
             const size_t b = v / kCodeBlock;
-            f(v, n, b * 3 * n * n * kCodeBlock, b * n * kCodeBlock, v % kCodeBlock);
+            f(v, n, b * 3 * n * n * kCodeBlock, b * scales * kCodeBlock, v % kCodeBlock);
         }
         return;
     }
@@ -292,14 +292,21 @@ void forEachBlockedVertex(const RelightModel& model, F&& f) {
                     const uint16_t lane = model.blockedLanes[g * kCodeBlock + i];
                     if (lane == kPaddingLane) continue;
                     const size_t k = g - run.group;
-                    f(t * kRelightBlock + lane, n, run.code + k * 3 * n * n * kCodeBlock,
-                      run.scale + k * n * kCodeBlock, i);
+                    const size_t scales = model.storage == TransferStorage::Float16 ? 0 : n;
+                    f(t * kRelightBlock + lane, n, run.value + k * 3 * n * n * kCodeBlock,
+                      run.scale + k * scales * kCodeBlock, i);
                 }
         }
 }
 
-// The rows of a model with codesBlocked as decodeBody writes them: value j of band l of vertex v is float(int(q_j)
-// - C) * sigma_l, at row offsets[v] + j / 3. Fills rows [offsets[V]][3].
+// The rows of a model with rowsBlocked as decodeBody writes them: value j of band l of vertex v is float(int(q_j)
+// - C) * sigma_l, or the half widened, at row offsets[v] + j / 3. Fills rows [offsets[V]][3].
+void decodeBlockedHalves(const RelightModel& model, float* rows) {
+    forEachBlockedVertex(model, [&](size_t v, size_t n, size_t value, size_t, size_t i) {
+        float* row = rows + size_t(model.offsets[v]) * 3;
+        for (size_t j = 0; j < 3 * n * n; ++j) row[j] = halfValue(model.halves[value + blockedCodeIndex(false, j, i)]);
+    });
+}
 template <class Code>
 void decodeBlockedCodes(const RelightModel& model, const Code* codes, float* rows) {
     constexpr int C = sizeof(Code) == 1 ? 127 : 32767;
@@ -313,49 +320,50 @@ void decodeBlockedCodes(const RelightModel& model, const Code* codes, float* row
     });
 }
 
-// Lays out the rows of codes (per-vertex scales, offsets) in blocks, as RelightModel::codesBlocked describes:
-// with `runs` empty, blocks of kCodeBlock consecutive vertices of one order; otherwise per task block, groups of
-// kCodeBlock vertices of one band count in vertex order, where runs (8 per task block, then one past the last)
-// says where each band count's groups start and `lanes` receives each group's vertices.
-template <class Code>
-void blockCodesOf(RelightModel& model, std::vector<Code>& codes, const std::vector<BlockedRun>& runs,
-                  std::vector<uint16_t>& lanes) {
-    constexpr Code C = sizeof(Code) == 1 ? 127 : 32767;
+// Lays out the rows (codes with per-vertex scales, or halves: `padding` is C or +0) in blocks, as
+// RelightModel::rowsBlocked describes: with `runs` empty, blocks of kCodeBlock consecutive vertices of one order;
+// otherwise per task block, groups of kCodeBlock vertices of one band count in vertex order, where runs (8 per task
+// block, then one past the last) says where each band count's groups start and `lanes` receives each group's
+// vertices.
+template <class Element>
+void blockRowsOf(RelightModel& model, std::vector<Element>& rows, Element padding, const std::vector<BlockedRun>& runs,
+                 std::vector<uint16_t>& lanes) {
+    const bool u8 = model.storage == TransferStorage::Uint8, scaled = model.storage != TransferStorage::Float16;
     const size_t V = model.vertexCount, n0 = size_t(model.order);
     const size_t blocks = (V + kCodeBlock - 1) / kCodeBlock;
-    const size_t codeCount = runs.empty() ? blocks * 3 * n0 * n0 * kCodeBlock : runs.back().code;
-    const size_t scaleCount = runs.empty() ? blocks * n0 * kCodeBlock : runs.back().scale;
-    std::vector<Code> blocked(codeCount, C);
+    const size_t valueCount = runs.empty() ? blocks * 3 * n0 * n0 * kCodeBlock : runs.back().value;
+    const size_t scaleCount = !scaled ? 0 : runs.empty() ? blocks * n0 * kCodeBlock : runs.back().scale;
+    std::vector<Element> blocked(valueCount, padding);
     std::vector<float> blockedScales(scaleCount, 0.0f);
     if (!runs.empty()) lanes.assign(runs.back().group * kCodeBlock, kPaddingLane);
     size_t band = 0, placed[9] = {}; // placed[n]: vertices of n bands put in the current task block's groups so far
     for (size_t v = 0; v < V; ++v) {
-        const size_t n = size_t(bandsOf(model, v)), values = 3 * n * n;
-        size_t code, scale, i;
+        const size_t n = size_t(bandsOf(model, v)), values = 3 * n * n, scales = scaled ? n : 0;
+        size_t value, scale, i;
         if (runs.empty()) {
             const size_t b = v / kCodeBlock;
-            code = b * values * kCodeBlock, scale = b * n * kCodeBlock, i = v % kCodeBlock;
+            value = b * values * kCodeBlock, scale = b * scales * kCodeBlock, i = v % kCodeBlock;
         } else {
             const size_t t = v / kRelightBlock;
             if (v % kRelightBlock == 0) std::fill(std::begin(placed), std::end(placed), size_t(0));
             const BlockedRun& run = runs[8 * t + n - 1];
             const size_t k = placed[n] / kCodeBlock;
             i = placed[n]++ % kCodeBlock;
-            code = run.code + k * values * kCodeBlock, scale = run.scale + k * n * kCodeBlock;
+            value = run.value + k * values * kCodeBlock, scale = run.scale + k * scales * kCodeBlock;
             lanes[(run.group + k) * kCodeBlock + i] = uint16_t(v - t * kRelightBlock);
         }
         for (size_t j = 0; j < values; ++j)
-            blocked[code + blockedCodeIndex(sizeof(Code) == 1, j, i)] = codes[size_t(model.offsets[v]) * 3 + j];
-        for (size_t l = 0; l < n; ++l) blockedScales[scale + l * kCodeBlock + i] = model.bandScales[band + l];
-        band += n;
+            blocked[value + blockedCodeIndex(u8, j, i)] = rows[size_t(model.offsets[v]) * 3 + j];
+        for (size_t l = 0; l < scales; ++l) blockedScales[scale + l * kCodeBlock + i] = model.bandScales[band + l];
+        band += scales;
     }
-    codes = std::move(blocked);
-    model.bandScales = std::move(blockedScales);
+    rows = std::move(blocked);
+    if (scaled) model.bandScales = std::move(blockedScales);
 }
 
 // Where each task block's groups of each band count start (RelightModel::blockedRuns), for a model whose vertices
-// have 1..8 bands.
-std::vector<BlockedRun> blockedRunsOf(const RelightModel& model) {
+// have 1..8 bands; `scaled`: codes, with a band scale per lane and band.
+std::vector<BlockedRun> blockedRunsOf(const RelightModel& model, bool scaled) {
     const size_t V = model.vertexCount, tasks = (V + kRelightBlock - 1) / kRelightBlock;
     std::vector<BlockedRun> runs(tasks * 8 + 1);
     BlockedRun at;
@@ -366,8 +374,8 @@ std::vector<BlockedRun> blockedRunsOf(const RelightModel& model) {
             runs[8 * t + n - 1] = at;
             const size_t groups = (count[n] + kCodeBlock - 1) / kCodeBlock;
             at.group += groups;
-            at.code += groups * 3 * n * n * kCodeBlock;
-            at.scale += groups * n * kCodeBlock;
+            at.value += groups * 3 * n * n * kCodeBlock;
+            at.scale += scaled ? groups * n * kCodeBlock : 0;
         }
     }
     runs.back() = at;
@@ -381,6 +389,11 @@ std::vector<float> decodedTransfer(const RelightModel& model) {
     switch (model.storage) {
     case TransferStorage::Float32: return model.transfer;
     case TransferStorage::Float16: {
+        if (model.rowsBlocked) {
+            std::vector<float> rows(size_t(model.offsets[model.vertexCount]) * 3);
+            decodeBlockedHalves(model, rows.data());
+            return rows;
+        }
         std::vector<float> rows(model.halves.size());
         for (size_t i = 0; i < rows.size(); ++i) rows[i] = halfValue(model.halves[i]);
         return rows;
@@ -388,7 +401,7 @@ std::vector<float> decodedTransfer(const RelightModel& model) {
     case TransferStorage::Uint8:
     case TransferStorage::Uint16: {
         std::vector<float> rows(size_t(model.offsets[model.vertexCount]) * 3);
-        if (model.codesBlocked) {
+        if (model.rowsBlocked) {
             if (model.storage == TransferStorage::Uint8) decodeBlockedCodes(model, model.codes8.data(), rows.data());
             else decodeBlockedCodes(model, model.codes16.data(), rows.data());
             return rows;
@@ -422,13 +435,14 @@ std::vector<float> decodedTransfer(const RelightModel& model) {
     return {};
 }
 
-bool blockCodes(RelightModel& model) {
+bool blockRows(RelightModel& model) {
     const bool coded = model.storage == TransferStorage::Uint8 || model.storage == TransferStorage::Uint16;
+    const bool halves = model.storage == TransferStorage::Float16 && processorHasF16c();
     const size_t V = model.vertexCount;
-    if (!coded || model.codesBlocked || !model.scaleCluster.empty() || model.order < 1 || model.order > 8 ||
-        model.offsets.size() != V + 1 || model.offsets[0] != 0)
+    if (!(coded || halves) || model.rowsBlocked || !model.scaleCluster.empty() || model.order < 1 ||
+        model.order > 8 || model.offsets.size() != V + 1 || model.offsets[0] != 0)
         return false;
-    // Every vertex of 1..order bands, codes and scales of the sizes the offsets describe; else left as it is.
+    // Every vertex of 1..order bands, values and scales of the sizes the offsets describe; else left as it is.
     size_t bands = 0;
     bool ragged = false;
     for (size_t v = 0; v < V; ++v) {
@@ -438,21 +452,27 @@ bool blockCodes(RelightModel& model) {
         ragged = ragged || n != model.order;
         bands += size_t(n);
     }
-    const size_t codes = model.storage == TransferStorage::Uint8 ? model.codes8.size() : model.codes16.size();
-    if (model.bandScales.size() != bands || codes != size_t(model.offsets[V]) * 3) return false;
-    const std::vector<BlockedRun> runs = ragged ? blockedRunsOf(model) : std::vector<BlockedRun>{};
-    if (model.storage == TransferStorage::Uint8) blockCodesOf(model, model.codes8, runs, model.blockedLanes);
-    else blockCodesOf(model, model.codes16, runs, model.blockedLanes);
+    const size_t values = model.storage == TransferStorage::Uint8    ? model.codes8.size()
+                          : model.storage == TransferStorage::Uint16 ? model.codes16.size()
+                                                                     : model.halves.size();
+    if (values != size_t(model.offsets[V]) * 3 || (coded && model.bandScales.size() != bands)) return false;
+    const std::vector<BlockedRun> runs = ragged ? blockedRunsOf(model, coded) : std::vector<BlockedRun>{};
+    if (model.storage == TransferStorage::Uint8)
+        blockRowsOf(model, model.codes8, uint8_t(127), runs, model.blockedLanes);
+    else if (model.storage == TransferStorage::Uint16)
+        blockRowsOf(model, model.codes16, uint16_t(32767), runs, model.blockedLanes);
+    else
+        blockRowsOf(model, model.halves, uint16_t(0), runs, model.blockedLanes);
     model.blockedRuns = runs;
-    model.codesBlocked = true;
+    model.rowsBlocked = true;
     return true;
 }
 
 size_t relightBytes(const RelightModel& model) {
     auto bytes = [](const auto& array) { return array.size() * sizeof(array[0]); };
-    if (model.codesBlocked) // the blocked kernel reads neither offsets nor the block table
-        return bytes(model.codes8) + bytes(model.codes16) + bytes(model.bandScales) + bytes(model.albedo) +
-               bytes(model.blockedRuns) + bytes(model.blockedLanes);
+    if (model.rowsBlocked) // the blocked kernel reads neither offsets nor the block table
+        return bytes(model.codes8) + bytes(model.codes16) + bytes(model.halves) + bytes(model.bandScales) +
+               bytes(model.albedo) + bytes(model.blockedRuns) + bytes(model.blockedLanes);
     size_t total = bytes(model.offsets) + bytes(model.albedo) + bytes(model.bandBlockStarts);
     switch (model.storage) {
     case TransferStorage::Float32: return total + bytes(model.transfer);

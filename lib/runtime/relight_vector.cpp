@@ -53,6 +53,8 @@ PRT_ALWAYS_INLINE inline V4f load4(const float* f) {
     return x;
 }
 
+#include "relight_blocks.inc"
+
 // The float kernel's 12 accumulator lanes (relight.cpp: lane i sums values i, i + 12, i + 24, ... of the row, from
 // +0, each product rounded, then added) held as lanes 0..7 in `a` and 8..11 in `b`: the same products and the same
 // additions, lane for lane in the same order, and half->float is exact, so every lane has the float kernel's bits.
@@ -155,6 +157,31 @@ void relightBand0(const T* __restrict values, size_t vertexCount, const float* _
     for (; i < total; ++i) radiance[i] = load1(values + i) * lighting[i % 3] + 0.0f;
 }
 
+// Vertex-blocked half rows (RelightModel::rowsBlocked; value j of the block's 8 vertices side by side), a run as
+// relightBlockRun takes it. Lane i is one vertex, and holds the float kernel's 12 accumulators (relight.cpp)
+// in 12 vectors: acc[j % 12] += x_j * L_j for j in row order, from +0, each product rounded, then added; then
+// lanes 0..5 += 6..11 and channel c = acc[c] + acc[c + 3]. Those are the float kernel's operations in its order, and
+// half->float is exact, so every vertex has the float kernel's bits on its decoded row. Prefetch 2 KB ahead, as the
+// u16 codes' blocked kernel.
+template <int kN>
+void relightBlockedHalvesKernel(const uint16_t* __restrict halves, size_t blocks, size_t base,
+                                const uint16_t* __restrict lanes, size_t first, size_t last,
+                                const float* __restrict lighting, float* __restrict radiance) {
+    constexpr int kValues = 3 * kN * kN;
+    V8f light[kValues];
+    for (int j = 0; j < kValues; ++j) light[j] = V8f{} + lighting[j];
+    auto sums = [&](const uint16_t* q, const float*, V8f* sum) PRT_ALWAYS_INLINE {
+        V8f acc[12] = {};
+        unrolled(std::make_index_sequence<kValues>{}, [&](auto jc) PRT_ALWAYS_INLINE {
+            constexpr size_t j = decltype(jc)::value;
+            acc[j % 12] += load8(q + j * kCodeBlock) * light[j];
+        });
+        for (int i = 0; i < 6; ++i) acc[i] += acc[i + 6];
+        for (int c = 0; c < 3; ++c) sum[c] = acc[c] + acc[c + 3];
+    };
+    relightBlockRun<uint16_t, kN, 0, 2048>(halves, nullptr, blocks, base, lanes, first, last, sums, radiance);
+}
+
 // Vertices [0, vertexCount) of rows of `count` coefficients (n^2, n in 1..8); false, with nothing written, for
 // other counts.
 template <typename T>
@@ -190,6 +217,28 @@ bool haveF16c() {
 
 } // namespace
 
+bool processorHasF16c() { return haveF16c(); }
+
+bool relightBlockedHalves(const RelightModel& model, size_t first, size_t last, const float* lighting,
+                          float* radiance) {
+    if (!model.rowsBlocked || model.storage != TransferStorage::Float16 || !haveF16c()) return false;
+    forEachBlockRun(model, first, last, [&](int n, size_t value, size_t, size_t blocks, size_t base,
+                                                     const uint16_t* lanes) {
+        const uint16_t* halves = model.halves.data() + value;
+        switch (n) {
+        case 1: return relightBlockedHalvesKernel<1>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        case 2: return relightBlockedHalvesKernel<2>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        case 3: return relightBlockedHalvesKernel<3>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        case 4: return relightBlockedHalvesKernel<4>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        case 5: return relightBlockedHalvesKernel<5>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        case 6: return relightBlockedHalvesKernel<6>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        case 7: return relightBlockedHalvesKernel<7>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        case 8: return relightBlockedHalvesKernel<8>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        }
+    });
+    return true;
+}
+
 size_t relightHalves(const RelightModel& model, size_t first, size_t last, int count, const float* lighting,
                      float* out) {
     if (!haveF16c() || first >= last) return 0;
@@ -212,6 +261,8 @@ size_t relightFloatRows(const float* transfer, size_t vertexCount, int count, co
 
 #else
 
+bool processorHasF16c() { return false; }
+bool relightBlockedHalves(const RelightModel&, size_t, size_t, const float*, float*) { return false; }
 size_t relightHalves(const RelightModel&, size_t, size_t, int, const float*, float*) { return 0; }
 size_t relightFloatRows(const float*, size_t, int, const float*, float*) { return 0; }
 

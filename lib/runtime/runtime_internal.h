@@ -92,7 +92,7 @@ void relightCpcaRange(const RelightModel& model, const float* projections, size_
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                   float* out);
 // Where value j (= 3 coefficient + channel) of vertex i of a block of vertex-blocked codes (RelightModel::
-// codesBlocked) lies, counted from the block's start. u16: j kCodeBlock + i. u8, laid out for the integer kernel:
+// rowsBlocked) lies, counted from the block's start. u16: j kCodeBlock + i. u8, laid out for the integer kernel:
 // band l and channel c own (2l + 1) kCodeBlock codes from kCodeBlock (3 l^2 + (2l + 1) c), the band's coefficients
 // l^2 + 2p and l^2 + 2p + 1 (p < l) as 2 kCodeBlock codes from 2 kCodeBlock p with vertex i's two side by side at
 // 2i, 2i + 1, then its last coefficient's at 2 kCodeBlock l + i.
@@ -105,11 +105,41 @@ inline size_t blockedCodeIndex(bool u8, size_t j, size_t i) {
     return k < 2 * l ? base + 2 * kCodeBlock * (k / 2) + 2 * i + k % 2 : base + 2 * kCodeBlock * l + i;
 }
 
-// The blocked code kernel (relight_codes.cpp): vertices [first, last) of a model with codesBlocked, relit from its
+// Calls run(n, value, scale, blocks, base, lanes) for each run of blocks of a model with rowsBlocked that vertices
+// [first, last) lie in: `blocks` blocks of n bands from value index `value` of the codes or halves and band-scale
+// index `scale` (codes), lane i of block k being vertex base + k kCodeBlock + i, or, with lanes, base + lanes[k
+// kCodeBlock + i] (RelightModel::blockedRuns): one run for a model of one order, at most 8 per task block for a
+// ragged one.
+template <class Run>
+void forEachBlockRun(const RelightModel& model, size_t first, size_t last, Run&& run) {
+    if (first >= last) return;
+    if (model.blockedRuns.empty()) {
+        const size_t n = size_t(model.order), b0 = first / kCodeBlock, b1 = (last + kCodeBlock - 1) / kCodeBlock;
+        const size_t scales = model.storage == TransferStorage::Float16 ? 0 : n;
+        run(int(n), b0 * 3 * n * n * kCodeBlock, b0 * scales * kCodeBlock, b1 - b0, b0 * kCodeBlock, nullptr);
+        return;
+    }
+    for (size_t t = first / kRelightBlock; t * kRelightBlock < last; ++t)
+        for (int n = 1; n <= 8; ++n) {
+            const BlockedRun& begin = model.blockedRuns[8 * t + size_t(n) - 1];
+            const BlockedRun& end = model.blockedRuns[8 * t + size_t(n)];
+            if (end.group > begin.group)
+                run(n, begin.value, begin.scale, end.group - begin.group, t * kRelightBlock,
+                    model.blockedLanes.data() + begin.group * kCodeBlock);
+        }
+}
+
+// The blocked code kernel (relight_codes.cpp): vertices [first, last) of a model with rowsBlocked, relit from its
 // blocks into out; u8 models against `quantised`, or, when that is null, against the lighting quantised here. False,
 // with nothing written, for other models.
 bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting,
                          const U8Lighting* quantised, float* out);
+// The blocked half kernel (relight_vector.cpp): vertices [first, last) of a Float16 model with rowsBlocked, relit
+// from its blocks into out, bit for bit the float kernel on decodedTransfer's rows. False, with nothing written,
+// for other models or where the processor lacks F16C (blockRows blocks halves only where processorHasF16c()).
+bool relightBlockedHalves(const RelightModel& model, size_t first, size_t last, const float* lighting, float* out);
+// Whether this processor runs the F16C half conversions (and AVX2) that the half kernels use, asked once.
+bool processorHasF16c();
 // The fused half kernel (relight_vector.cpp): vertices [first, last) of a Float16 model, all of `count` coefficients
 // (count = n^2, n in 1..8), relit from their halves into out, bit for bit the float kernel on decodedTransfer's
 // rows. Returns how many leading vertices it relit: 0 (nothing written) where the processor lacks AVX2 or F16C or

@@ -44,7 +44,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             prt::relight(rows.data() + size_t(model.offsets[v]) * 3, 1, int(count), lighting.data(), expected);
             float got[3] = {radiance[v * 3], radiance[v * 3 + 1], radiance[v * 3 + 2]};
             const bool coded = model.storage == prt::TransferStorage::Uint8 || model.storage == prt::TransferStorage::Uint16;
-            const bool quantisedLighting = model.codesBlocked && model.storage == prt::TransferStorage::Uint8;
+            const bool quantisedLighting = model.rowsBlocked && model.storage == prt::TransferStorage::Uint8;
             const double u = std::ldexp(1.0, -24), bands = std::round(std::sqrt(double(count)));
             auto gamma = [&](double n) { return n * u / (1 - n * u); };
             for (int c = 0; c < 3; ++c) {

@@ -24,11 +24,12 @@ namespace {
 
 size_t gVertices = 1000000;
 
-// u16 / u8: vertex-blocked codes, as the loader holds them (blockCodes); "-rows": the same codes row by row;
+// half / u16 / u8: vertex-blocked rows, as the loader holds them (blockRows); "-rows": the same rows row by row;
 // "-ragged": graded orders as `prt adapt` stores them (patches of 16..271 vertices at the order, one or two bands
 // fewer), blocked by band count as the loader holds them, or with "-rows" row by row.
-constexpr const char* kStorages[] = {"float32",   "half", "u16", "u16-rows", "u16-ragged", "u16-ragged-rows",
-                                     "u8",        "u8-rows", "u8-ragged", "u8-ragged-rows", "cpca"};
+constexpr const char* kStorages[] = {"float32", "half",      "half-rows", "half-ragged", "half-ragged-rows",
+                                     "u16",     "u16-rows",  "u16-ragged", "u16-ragged-rows",
+                                     "u8",      "u8-rows",   "u8-ragged", "u8-ragged-rows", "cpca"};
 
 // A fast deterministic fill (the values do not matter to the speed, only that they are not all alike).
 struct Lcg {
@@ -76,10 +77,11 @@ prt::RelightModel makeModel(const std::string& storage, int order) {
     model.offsets.resize(gVertices + 1);
     for (size_t v = 0; v < gVertices; ++v) model.offsets[v + 1] = model.offsets[v] + uint32_t(bands[v] * bands[v]);
     const size_t rows = model.offsets[gVertices];
-    if (storage == "half") {
+    if (storage.rfind("half", 0) == 0) {
         model.storage = prt::TransferStorage::Float16;
         model.halves.resize(rows * 3);
         for (uint16_t& half : model.halves) half = uint16_t(random.next() & 0xbbff); // finite, mixed signs
+        if (storage.find("-rows") == std::string::npos) prt::blockRows(model);
         return model;
     }
     const bool u8 = storage.rfind("u8", 0) == 0;
@@ -97,7 +99,7 @@ prt::RelightModel makeModel(const std::string& storage, int order) {
         for (int l = 0; l < bands[v]; ++l) model.bandScales.push_back((1.0f + random.unit()) / float(C));
     }
     model.bandBlockStarts.push_back(uint32_t(model.bandScales.size()));
-    if (storage.find("-rows") == std::string::npos) prt::blockCodes(model);
+    if (storage.find("-rows") == std::string::npos) prt::blockRows(model);
     return model;
 }
 
@@ -128,7 +130,7 @@ Workload& workload(const std::string& storage, int order) {
         };
         add(m.transfer), add(m.halves), add(m.codes8), add(m.codes16), add(m.bandScales), add(m.scaleCluster);
         add(m.blockedRuns), add(m.blockedLanes);
-        if (!m.codesBlocked) add(m.offsets), add(m.bandBlockStarts); // the blocked kernel reads neither
+        if (!m.rowsBlocked) add(m.offsets), add(m.bandBlockStarts); // the blocked kernel reads neither
         add(m.cpcaBasis), add(m.cpcaWeights), add(m.cpcaCluster);
     }
     return *current;

@@ -52,7 +52,8 @@ inline Layer layer(const std::string& name, const std::string& domain, const std
     return out;
 }
 
-// Ragged orders 1..order (vertex v has 1 + (v * 7) % order bands) as `prt adapt` stores them, quantised to `bits`
+// Ragged orders 1..order (vertex v has 1 + (v / patch * 7) % order bands: with patch > 1 in runs of `patch`
+// vertices, as graded orders come over a mesh) as `prt adapt` stores them, quantised to `bits`
 // with per-vertex or per-cluster half scales. `original` receives the float rows the codes stand for.
 struct Quantised {
     Bundle bundle;
@@ -62,7 +63,7 @@ struct Quantised {
     std::vector<uint32_t> offsets;
 };
 
-inline Quantised quantisedBundle(size_t V, int order, int bits, bool perCluster, uint32_t seed) {
+inline Quantised quantisedBundle(size_t V, int order, int bits, bool perCluster, uint32_t seed, size_t patch = 1) {
     std::mt19937 random(seed);
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
     const uint32_t C = (1u << (bits - 1)) - 1, K = 3;
@@ -71,7 +72,7 @@ inline Quantised quantisedBundle(size_t V, int order, int bits, bool perCluster,
     q.offsets.push_back(0);
     std::vector<int> bands(V);
     for (size_t v = 0; v < V; ++v) {
-        bands[v] = 1 + int((v * 7) % order);
+        bands[v] = 1 + int((v / patch * 7) % order);
         q.offsets.push_back(q.offsets.back() + uint32_t(bands[v] * bands[v]));
     }
     // Scales: exact halves in [0.25, 4), per (vertex, band) or per (cluster, band).

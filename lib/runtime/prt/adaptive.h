@@ -16,7 +16,7 @@ inline constexpr int kMaxRuntimeOrder = sh::kMaxOrder;
 // The adaptive transfer of a bundle as a RelightModel, kept as stored so relight() reads the compressed bytes: the
 // ragged layer "transfer_ragged" (float32 into transfer, float16 into halves, uint8/uint16 codes into codes8 /
 // codes16 with their band scales as sigma = scale / C; codes of one order with per-vertex scales put in the
-// vertex-blocked layout by blockCodes) with its offsets, or the clustered-PCA layers
+// vertex-blocked layout by blockRows) with its offsets, or the clustered-PCA layers
 // "transfer_cpca_*" (storage Cpca; decodedTransfer reconstructs the rows to full order). Needs the layers and params docs/bundle.md lists, offsets
 // ascending from 0 whose every difference is n^2 with 1 <= n <= params.order <= kMaxRuntimeOrder, codes and
 // cluster indices in range, finite values. Throws prt::Error naming `source`, the layer and the problem
@@ -29,7 +29,7 @@ bool hasAdaptiveTransfer(const Bundle& bundle);
 // Relights vertices [begin, end) of an adaptive model (model.offsets not empty) on the calling thread, with the bits
 // relight(model, ...) gives them: each vertex with its own bands, the lighting's first n_v^2 coefficients. Float
 // and half rows go in runs of equal order through the same kernel as full-order rows, so a model whose every vertex
-// has the full order relights bit for bit like the full-order model; blocked codes (blockCodes) through the blocked
+// has the full order relights bit for bit like the full-order model; blocked codes (blockRows) through the blocked
 // kernel. Every storage but Cpca (whose rows have no offsets).
 void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance);
 

@@ -28,9 +28,10 @@ enum class TransferStorage : uint8_t {
     Cpca,    // cpcaBasis, cpcaWeights, cpcaCluster: every vertex at the full order
 };
 
-// Where a run of groups of ragged vertex-blocked codes starts (RelightModel::blockedRuns).
+// Where a run of groups of ragged vertex-blocked rows starts (RelightModel::blockedRuns): the group, the index of
+// its first value in the codes or halves, and of its first band scale (codes).
 struct BlockedRun {
-    uint64_t group = 0, code = 0, scale = 0;
+    uint64_t group = 0, value = 0, scale = 0;
 };
 
 // Per-vertex transfer ready to relight: the "transfer" layer of a bundle (semantic "sh_transfer_rgb"), or the
@@ -54,22 +55,21 @@ struct RelightModel {
     std::vector<float> bandScales;
     std::vector<uint32_t> bandBlockStarts;
     std::vector<uint32_t> scaleCluster;
-    // Vertex-blocked codes (blockCodes): blocks of kCodeBlock vertices, block b holding the 3 order^2 values of its
-    // vertices, value j (= 3 coefficient + channel) of vertex b kCodeBlock + i at codes[b 3 order^2 kCodeBlock +
-    // position]. u16: position j kCodeBlock + i (value j's codes side by side). u8, which the integer kernel reads
-    // 16 codes at a time: band l and channel c own (2l + 1) kCodeBlock positions from kCodeBlock (3 l^2 + (2l + 1)
-    // c), coefficients l^2 + 2p and l^2 + 2p + 1 (p < l) at 2 kCodeBlock p + 2i and + 1 within them, the band's
-    // last coefficient at 2 kCodeBlock l + i. sigma_l at bandScales[(b order + l) kCodeBlock + i]; the last block
-    // padded with code C and sigma 0. offsets and bandBlockStarts are kept; the rows are the same values in another
-    // order.
-    bool codesBlocked = false;
-    // Ragged vertex-blocked codes (blockCodes of a model whose vertices have orders of their own; empty for one
+    // Vertex-blocked rows (blockRows; codes and halves): blocks of kCodeBlock vertices, block b holding the 3
+    // order^2 values of its vertices, value j (= 3 coefficient + channel) of vertex b kCodeBlock + i at codes[b 3
+    // order^2 kCodeBlock + position] (or halves[...]). u16 and halves: position j kCodeBlock + i (value j of the 8
+    // side by side). u8, which the integer kernel reads 16 codes at a time: band l and channel c own (2l + 1)
+    // kCodeBlock positions from kCodeBlock (3 l^2 + (2l + 1) c), coefficients l^2 + 2p and l^2 + 2p + 1 (p < l) at 2
+    // kCodeBlock p + 2i and + 1 within them, the band's last coefficient at 2 kCodeBlock l + i. Codes' sigma_l at
+    // bandScales[(b order + l) kCodeBlock + i]; the last block padded with code C and sigma 0 (halves: +0).
+    // offsets and bandBlockStarts are kept; the rows are the same values in another order.
+    bool rowsBlocked = false;
+    // Ragged vertex-blocked rows (blockRows of a model whose vertices have orders of their own; empty for one
     // order): each task block of kRelightBlock vertices (from vertex t kRelightBlock) holds its vertices grouped by
     // their band count n, kCodeBlock of one n per group in vertex order (each n's last group padded as above), and
     // the groups of n bands laid out as the blocks above at order n. blockedRuns[8 t + n - 1] is where task block
-    // t's groups of n bands start (group index, code index, band-scale index), blockedRuns[8 T] ends the last of T
-    // task blocks; blockedLanes[g kCodeBlock + i] is the vertex in lane i of group g, counted from its task block's
-    // first vertex, or kPaddingLane.
+    // t's groups of n bands start, blockedRuns[8 T] ends the last of T task blocks; blockedLanes[g kCodeBlock + i]
+    // is the vertex in lane i of group g, counted from its task block's first vertex, or kPaddingLane.
     std::vector<BlockedRun> blockedRuns;
     std::vector<uint16_t> blockedLanes;
     // Cpca: T[v] = mean[k] + sum_i cpcaWeights[v][i] basis[k][i], k = cpcaCluster[v]; cpcaBasis is [K][M + 1]
@@ -89,22 +89,24 @@ struct RelightModel {
 // Vertices per task of relight(model, ...): the split is fixed, so results never depend on the job system.
 inline constexpr size_t kRelightBlock = 4096;
 
-// Vertices per block of vertex-blocked codes (RelightModel::codesBlocked): one per lane of an 8-float vector.
+// Vertices per block of vertex-blocked rows (RelightModel::rowsBlocked): one per lane of an 8-float vector.
 inline constexpr size_t kCodeBlock = 8;
-// The lane of a group of ragged blocked codes that holds no vertex (RelightModel::blockedLanes).
+// The lane of a group of ragged blocked rows that holds no vertex (RelightModel::blockedLanes).
 inline constexpr uint16_t kPaddingLane = 0xffff;
 static_assert(kRelightBlock < kPaddingLane, "a lane names a vertex of its task block in 16 bits");
 
-// Puts a u8 / u16 model with per-vertex scales whose vertices have 1..8 bands (at most model.order) into the
-// vertex-blocked layout (RelightModel::codesBlocked; with blockedRuns and blockedLanes where the vertices' band
-// counts differ, as `prt adapt` stores them), which relight() reads 8 vertices per vector instruction, with no
-// per-value scale: per band and channel sum_j (q_j - C) L_j over the band's values, times sigma_l, summed over the
-// bands, each vertex in its own lane; for u8 the band sums are exact integer sums against the lighting quantised
-// per channel to int16 (see relight). docs/results.md, issue 21, gives the rates. Returns whether it did; other
-// models (per-cluster scales, other storages) are left as they are. decodedTransfer gives the same rows bit for bit.
-// Memory: the codes and scales are rearranged, not copied, plus at most 7 padded vertices per band count and task
-// block, and for ragged models 2 bytes per vertex of lanes.
-bool blockCodes(RelightModel& model);
+// Puts a model whose vertices have 1..8 bands (at most model.order) into the vertex-blocked layout
+// (RelightModel::rowsBlocked; with blockedRuns and blockedLanes where the vertices' band counts differ, as `prt
+// adapt` stores them), which relight() reads 8 vertices per vector instruction, each vertex in its own lane: u8 /
+// u16 codes with per-vertex scales (per band and channel sum_j (q_j - C) L_j over the band's values, times sigma_l,
+// summed over the bands, with no per-value scale; for u8 exact integer sums against the lighting quantised per
+// channel to int16, see relight), and half rows where the processor has AVX2 and F16C (each lane's products added
+// in the float kernel's 12 lanes and fold, so the bits stay the float kernel's). docs/results.md, issue 21, gives
+// the rates. Returns whether it did; other models (per-cluster scales, float rows, halves without F16C) are left as
+// they are. decodedTransfer gives the same rows bit for bit. Memory: the rows and scales are rearranged (a second
+// copy while it runs), plus at most 7 padded vertices per band count and task block, and for ragged models 2 bytes
+// per vertex of lanes.
+bool blockRows(RelightModel& model);
 
 // Takes the "transfer" layer out of `bundle` (pass it with std::move to avoid copying), or, in a bundle without
 // one, the adaptive layers `prt adapt` writes (adaptiveRelightModel, prt/adaptive.h), kept encoded. `source` names
@@ -138,7 +140,7 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 // Float32 and Float16 rows are bit-identical to the kernel on decodedTransfer(model); u8 / u16 codes of 1..8
 // bands are relit by a fused kernel straight from the codes (q - C times sigma_l L_j), within (gamma_{n+2} +
 // gamma_{n+1})(1 + gamma_1) sum_j |decoded_j L_j| of the kernel on the decoded rows (tests/runtime), blocked u16
-// codes (blockCodes) by the blocked kernel within the same bound, blocked u8 codes against the lighting quantised
+// codes (blockRows) by the blocked kernel within the same bound, blocked u8 codes against the lighting quantised
 // per channel c to steps of s_c = max_j |L_jc| / 32767, within 0.51 s_c sum_j |x_j| + gamma_{n+3} sum_j |x_j|
 // (|L_j| + 0.51 s_c) of the exact sum over the decoded values x_j (n bands; the same bits on every x86-64 build,
 // the sums being exact integers; a channel whose lighting is not finite gives NaN); Cpca projects each
