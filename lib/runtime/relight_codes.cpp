@@ -96,56 +96,34 @@ namespace codes_avx2 {
 template <class Code>
 bool relightCodesOf(const RelightModel& model, const std::vector<Code>& codes, int n, size_t first, size_t last,
                     size_t band, const float* lighting, float* radiance) {
-    switch (n) {
-    case 1: PRT_CODES(1)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
-    case 2: PRT_CODES(2)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
-    case 3: PRT_CODES(3)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
-    case 4: PRT_CODES(4)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
-    case 5: PRT_CODES(5)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
-    case 6: PRT_CODES(6)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
-    case 7: PRT_CODES(7)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
-    case 8: PRT_CODES(8)(model, codes.data(), codes.size(), first, last, band, lighting, radiance); return true;
-    default: return false;
-    }
+    return withBands(n, [&](auto bands) {
+        PRT_CODES(decltype(bands)::value)(model, codes.data(), codes.size(), first, last, band, lighting, radiance);
+    });
 }
 
 // u8: the integer kernel. u16 codes (up to 65535) times int16 lighting would overflow its int32 pair sums, so they
 // keep the float kernel below.
 void relightBlockedU8(const RelightModel& model, size_t first, size_t last, const U8Lighting& q, float* radiance) {
-    forEachBlockRun(model, first, last, [&](int n, size_t code, size_t scale, size_t blocks, size_t base,
+    forEachBlockRun(model, first, last, [&](int n, size_t value, size_t scale, size_t blocks, size_t base,
                                             const uint16_t* lanes) {
-        const uint8_t* codes = model.codes8.data() + code;
+        const uint8_t* codes = model.codes8.data() + value;
         const float* scales = model.bandScales.data() + scale;
-        switch (n) {
-        case 1: return PRT_BLOCKED_U8(1)(codes, scales, blocks, base, lanes, first, last, q, radiance);
-        case 2: return PRT_BLOCKED_U8(2)(codes, scales, blocks, base, lanes, first, last, q, radiance);
-        case 3: return PRT_BLOCKED_U8(3)(codes, scales, blocks, base, lanes, first, last, q, radiance);
-        case 4: return PRT_BLOCKED_U8(4)(codes, scales, blocks, base, lanes, first, last, q, radiance);
-        case 5: return PRT_BLOCKED_U8(5)(codes, scales, blocks, base, lanes, first, last, q, radiance);
-        case 6: return PRT_BLOCKED_U8(6)(codes, scales, blocks, base, lanes, first, last, q, radiance);
-        case 7: return PRT_BLOCKED_U8(7)(codes, scales, blocks, base, lanes, first, last, q, radiance);
-        case 8: return PRT_BLOCKED_U8(8)(codes, scales, blocks, base, lanes, first, last, q, radiance);
-        }
+        withBands(n, [&](auto bands) {
+            PRT_BLOCKED_U8(decltype(bands)::value)(codes, scales, blocks, base, lanes, first, last, q, radiance);
+        });
     });
 }
 
 template <class Code>
 void relightBlockedOf(const RelightModel& model, const std::vector<Code>& codeArray, size_t first, size_t last,
                       const float* lighting, float* radiance) {
-    forEachBlockRun(model, first, last, [&](int n, size_t code, size_t scale, size_t blocks, size_t base,
+    forEachBlockRun(model, first, last, [&](int n, size_t value, size_t scale, size_t blocks, size_t base,
                                             const uint16_t* lanes) {
-        const Code* codes = codeArray.data() + code;
+        const Code* codes = codeArray.data() + value;
         const float* scales = model.bandScales.data() + scale;
-        switch (n) {
-        case 1: return PRT_BLOCKED(1)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
-        case 2: return PRT_BLOCKED(2)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
-        case 3: return PRT_BLOCKED(3)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
-        case 4: return PRT_BLOCKED(4)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
-        case 5: return PRT_BLOCKED(5)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
-        case 6: return PRT_BLOCKED(6)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
-        case 7: return PRT_BLOCKED(7)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
-        case 8: return PRT_BLOCKED(8)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
-        }
+        withBands(n, [&](auto bands) {
+            PRT_BLOCKED(decltype(bands)::value)(codes, scales, blocks, base, lanes, first, last, lighting, radiance);
+        });
     });
 }
 

@@ -225,16 +225,10 @@ bool relightBlockedHalves(const RelightModel& model, size_t first, size_t last, 
     forEachBlockRun(model, first, last, [&](int n, size_t value, size_t, size_t blocks, size_t base,
                                                      const uint16_t* lanes) {
         const uint16_t* halves = model.halves.data() + value;
-        switch (n) {
-        case 1: return relightBlockedHalvesKernel<1>(halves, blocks, base, lanes, first, last, lighting, radiance);
-        case 2: return relightBlockedHalvesKernel<2>(halves, blocks, base, lanes, first, last, lighting, radiance);
-        case 3: return relightBlockedHalvesKernel<3>(halves, blocks, base, lanes, first, last, lighting, radiance);
-        case 4: return relightBlockedHalvesKernel<4>(halves, blocks, base, lanes, first, last, lighting, radiance);
-        case 5: return relightBlockedHalvesKernel<5>(halves, blocks, base, lanes, first, last, lighting, radiance);
-        case 6: return relightBlockedHalvesKernel<6>(halves, blocks, base, lanes, first, last, lighting, radiance);
-        case 7: return relightBlockedHalvesKernel<7>(halves, blocks, base, lanes, first, last, lighting, radiance);
-        case 8: return relightBlockedHalvesKernel<8>(halves, blocks, base, lanes, first, last, lighting, radiance);
-        }
+        withBands(n, [&](auto bands) {
+            constexpr int kN = decltype(bands)::value;
+            relightBlockedHalvesKernel<kN>(halves, blocks, base, lanes, first, last, lighting, radiance);
+        });
     });
     return true;
 }

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 // The relighting kernels (relight.cpp, relight_encoded.cpp) are also compiled for AVX2 and chosen at run time on
@@ -103,6 +104,23 @@ inline size_t blockedCodeIndex(bool u8, size_t j, size_t i) {
     while ((l + 1) * (l + 1) <= m) ++l;
     const size_t k = m - l * l, base = kCodeBlock * (3 * l * l + (2 * l + 1) * c);
     return k < 2 * l ? base + 2 * kCodeBlock * (k / 2) + 2 * i + k % 2 : base + 2 * kCodeBlock * l + i;
+}
+
+// Calls f(std::integral_constant<int, n>{}) for a band count n in 1..8, so that f can pick the kernel compiled for
+// n bands; returns false, calling nothing, for other n.
+template <class F>
+bool withBands(int n, F&& f) {
+    switch (n) {
+    case 1: f(std::integral_constant<int, 1>{}); return true;
+    case 2: f(std::integral_constant<int, 2>{}); return true;
+    case 3: f(std::integral_constant<int, 3>{}); return true;
+    case 4: f(std::integral_constant<int, 4>{}); return true;
+    case 5: f(std::integral_constant<int, 5>{}); return true;
+    case 6: f(std::integral_constant<int, 6>{}); return true;
+    case 7: f(std::integral_constant<int, 7>{}); return true;
+    case 8: f(std::integral_constant<int, 8>{}); return true;
+    default: return false;
+    }
 }
 
 // Calls run(n, value, scale, blocks, base, lanes) for each run of blocks of a model with rowsBlocked that vertices
