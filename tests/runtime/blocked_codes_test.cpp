@@ -53,99 +53,99 @@ RelightModel vertexAlone(const Quantised& q, const RelightModel& ragged, size_t 
     return alone;
 }
 
+// Calls f(q, model, bits) for graded u8 and u16 codes, vertex by vertex and in patches, loaded (so blocked) as
+// `prt relight` loads them.
+template <class F>
+void forEachRaggedModel(uint32_t seed, F&& f) {
+    for (int bits : {8, 16})
+        for (size_t patch : kPatches) {
+            SCOPED_TRACE(std::to_string(bits) + " bits, patches of " + std::to_string(patch));
+            const Quantised q = quantisedBundle(kVertices, kOrder, bits, false, seed + uint32_t(bits), patch);
+            f(q, relightModel(q.bundle, "q.glb"), bits);
+        }
+}
+
 } // namespace
 
 TEST(BlockedCodes, RaggedCodesAreGroupedByBandCountAndDecodeToTheirRows) {
-    for (int bits : {8, 16})
-        for (size_t patch : kPatches) {
-            SCOPED_TRACE(std::to_string(bits) + " bits, patches of " + std::to_string(patch));
-            Quantised q = quantisedBundle(kVertices, kOrder, bits, false, 41 + bits, patch);
-            const RelightModel model = relightModel(q.bundle, "q.glb");
-            ASSERT_TRUE(model.rowsBlocked) << "blocked at load";
-            const size_t tasks = (kVertices + kRelightBlock - 1) / kRelightBlock;
-            ASSERT_EQ(model.blockedRuns.size(), tasks * 8 + 1);
-            ASSERT_EQ(model.blockedLanes.size(), model.blockedRuns.back().group * kCodeBlock);
-            // Every vertex in exactly one lane, of a group of its own band count, in its own task block, in vertex
-            // order.
-            std::vector<int> seen(kVertices, 0);
-            size_t padding = 0;
-            for (size_t t = 0; t < tasks; ++t)
-                for (size_t n = 1; n <= 8; ++n) {
-                    long previous = -1;
-                    const uint64_t groupEnd = model.blockedRuns[8 * t + n].group;
-                    for (uint64_t g = model.blockedRuns[8 * t + n - 1].group; g < groupEnd; ++g)
-                        for (size_t i = 0; i < kCodeBlock; ++i) {
-                            const uint16_t lane = model.blockedLanes[g * kCodeBlock + i];
-                            if (lane == kPaddingLane) {
-                                ++padding;
-                                continue;
-                            }
-                            const size_t v = t * kRelightBlock + lane;
-                            ASSERT_LT(v, kVertices);
-                            ++seen[v];
-                            EXPECT_EQ(q.offsets[v + 1] - q.offsets[v], n * n) << "vertex " << v;
-                            EXPECT_GT(long(v), previous) << "vertex order within a run";
-                            previous = long(v);
+    forEachRaggedModel(41, [](const Quantised& q, const RelightModel& model, int bits) {
+        ASSERT_TRUE(model.rowsBlocked) << "blocked at load";
+        const size_t tasks = (kVertices + kRelightBlock - 1) / kRelightBlock;
+        ASSERT_EQ(model.blockedRuns.size(), tasks * 8 + 1);
+        ASSERT_EQ(model.blockedLanes.size(), model.blockedRuns.back().group * kCodeBlock);
+        // Every vertex in exactly one lane, of a group of its own band count, in its own task block, in vertex
+        // order.
+        std::vector<int> seen(kVertices, 0);
+        size_t padding = 0;
+        for (size_t t = 0; t < tasks; ++t)
+            for (size_t n = 1; n <= 8; ++n) {
+                long previous = -1;
+                const uint64_t groupEnd = model.blockedRuns[8 * t + n].group;
+                for (uint64_t g = model.blockedRuns[8 * t + n - 1].group; g < groupEnd; ++g)
+                    for (size_t i = 0; i < kCodeBlock; ++i) {
+                        const uint16_t lane = model.blockedLanes[g * kCodeBlock + i];
+                        if (lane == kPaddingLane) {
+                            ++padding;
+                            continue;
                         }
-                }
-            EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(kVertices));
-            EXPECT_LE(padding, tasks * 8 * (kCodeBlock - 1)) << "at most 7 padded lanes per band count and task block";
-            // The rows decode to what the codes stand for, bit for bit.
-            const std::vector<float> decoded = decodedTransfer(model);
-            ASSERT_EQ(decoded.size(), q.exact.size());
-            size_t wrong = 0;
-            for (size_t i = 0; i < decoded.size(); ++i) wrong += decoded[i] != float(q.exact[i]);
-            EXPECT_EQ(wrong, 0u);
-            // What relight reads: the codes and scales with their padding, the lanes and runs; no offsets.
-            const size_t codeBytes = q.exact.size() * (bits / 8), lanes = model.blockedLanes.size() * sizeof(uint16_t);
-            EXPECT_GT(relightBytes(model), codeBytes + lanes);
-            EXPECT_LT(relightBytes(model), size_t(double(codeBytes) * 1.2) + lanes + kVertices * 8 * sizeof(float));
-        }
+                        const size_t v = t * kRelightBlock + lane;
+                        ASSERT_LT(v, kVertices);
+                        ++seen[v];
+                        EXPECT_EQ(q.offsets[v + 1] - q.offsets[v], n * n) << "vertex " << v;
+                        EXPECT_GT(long(v), previous) << "vertex order within a run";
+                        previous = long(v);
+                    }
+            }
+        EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(kVertices));
+        EXPECT_LE(padding, tasks * 8 * (kCodeBlock - 1)) << "at most 7 padded lanes per band count and task block";
+        // The rows decode to what the codes stand for, bit for bit.
+        const std::vector<float> decoded = decodedTransfer(model);
+        ASSERT_EQ(decoded.size(), q.exact.size());
+        size_t wrong = 0;
+        for (size_t i = 0; i < decoded.size(); ++i) wrong += decoded[i] != float(q.exact[i]);
+        EXPECT_EQ(wrong, 0u);
+        // What relight reads: the codes and scales with their padding, the lanes and runs; no offsets.
+        const size_t codeBytes = q.exact.size() * (bits / 8), lanes = model.blockedLanes.size() * sizeof(uint16_t);
+        EXPECT_GT(relightBytes(model), codeBytes + lanes);
+        EXPECT_LT(relightBytes(model), size_t(double(codeBytes) * 1.2) + lanes + kVertices * 8 * sizeof(float));
+    });
 }
 
 TEST(BlockedCodes, EachVertexRelightsAsItWouldAloneAtItsOwnOrder) {
-    for (int bits : {8, 16})
-        for (size_t patch : kPatches) {
-            SCOPED_TRACE(std::to_string(bits) + " bits, patches of " + std::to_string(patch));
-            Quantised q = quantisedBundle(kVertices, kOrder, bits, false, 7 + bits, patch);
-            const RelightModel model = relightModel(q.bundle, "q.glb");
-            ASSERT_FALSE(model.blockedRuns.empty());
-            const std::vector<float> lighting = bandZeroLargest(5);
-            const std::vector<float> radiance = relightAll(model, lighting.data());
-            size_t different = 0;
-            for (size_t v = 0; v < kVertices; ++v) {
-                const RelightModel alone = vertexAlone(q, model, v, bits);
-                float one[3];
-                relight(alone, lighting.data(), 0, 1, one); // lighting's first n^2 coefficients: the same steps
-                different += std::memcmp(one, &radiance[v * 3], sizeof one) != 0;
-            }
-            EXPECT_EQ(different, 0u);
-            EXPECT_EQ(outsideExactCodeBound(q.exact, q.offsets, lighting, bits == 8, radiance.data(), 0, kVertices),
-                      0u);
+    forEachRaggedModel(7, [](const Quantised& q, const RelightModel& model, int bits) {
+        ASSERT_FALSE(model.blockedRuns.empty());
+        const std::vector<float> lighting = bandZeroLargest(5);
+        const std::vector<float> radiance = relightAll(model, lighting.data());
+        size_t different = 0;
+        for (size_t v = 0; v < kVertices; ++v) {
+            const RelightModel alone = vertexAlone(q, model, v, bits);
+            float one[3];
+            relight(alone, lighting.data(), 0, 1, one); // lighting's first n^2 coefficients: the same steps
+            different += std::memcmp(one, &radiance[v * 3], sizeof one) != 0;
         }
+        EXPECT_EQ(different, 0u);
+        EXPECT_EQ(outsideExactCodeBound(q.exact, q.offsets, lighting, bits == 8, radiance.data(), 0, kVertices),
+                  0u);
+    });
 }
 
 TEST(BlockedCodes, RangesAndJobSystemsGiveTheWholeCallsBits) {
-    for (int bits : {8, 16})
-        for (size_t patch : kPatches) {
-            SCOPED_TRACE(std::to_string(bits) + " bits, patches of " + std::to_string(patch));
-            Quantised q = quantisedBundle(kVertices, kOrder, bits, false, 3 + bits, patch);
-            const RelightModel model = relightModel(q.bundle, "q.glb");
-            const std::vector<float> lighting = randomLighting(kOrder, 11);
-            const std::vector<float> whole = relightAll(model, lighting.data());
-            for (auto [begin, end] : {std::pair<size_t, size_t>{1, 2}, {4095, 4097}, {1237, 9000}, {8192, kVertices},
-                                      {5000, 5001}, {3, 4090}, {0, kVertices}}) {
-                std::vector<float> part((end - begin) * 3), adaptive((end - begin) * 3);
-                relight(model, lighting.data(), begin, end, part.data());
-                EXPECT_EQ(std::memcmp(part.data(), &whole[begin * 3], part.size() * sizeof(float)), 0)
-                    << begin << ".." << end;
-                relightAdaptive(model, lighting.data(), begin, end, adaptive.data());
-                EXPECT_TRUE(sameBits(adaptive, part)) << "relightAdaptive " << begin << ".." << end;
-            }
-            size_t calls = 0;
-            EXPECT_TRUE(sameBits(relightAll(model, lighting.data(), JobSystem{scrambledParallelFor, &calls}), whole));
-            EXPECT_EQ(calls, 1u);
+    forEachRaggedModel(3, [](const Quantised& q, const RelightModel& model, int bits) {
+        const std::vector<float> lighting = randomLighting(kOrder, 11);
+        const std::vector<float> whole = relightAll(model, lighting.data());
+        for (auto [begin, end] : {std::pair<size_t, size_t>{1, 2}, {4095, 4097}, {1237, 9000}, {8192, kVertices},
+                                  {5000, 5001}, {3, 4090}, {0, kVertices}}) {
+            std::vector<float> part((end - begin) * 3), adaptive((end - begin) * 3);
+            relight(model, lighting.data(), begin, end, part.data());
+            EXPECT_EQ(std::memcmp(part.data(), &whole[begin * 3], part.size() * sizeof(float)), 0)
+                << begin << ".." << end;
+            relightAdaptive(model, lighting.data(), begin, end, adaptive.data());
+            EXPECT_TRUE(sameBits(adaptive, part)) << "relightAdaptive " << begin << ".." << end;
         }
+        size_t calls = 0;
+        EXPECT_TRUE(sameBits(relightAll(model, lighting.data(), JobSystem{scrambledParallelFor, &calls}), whole));
+        EXPECT_EQ(calls, 1u);
+    });
 }
 
 // blockRows leaves alone what it cannot block: per-cluster scales, a vertex with more bands than the model's
