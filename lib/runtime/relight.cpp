@@ -147,7 +147,7 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
     RelightTasks tasks{&model, lighting, projections.data(), u8Blocked ? &quantised : nullptr, begin, end, radiance};
     // Blocks of kRelightBlock vertices keep the scheduling overhead far below the memory traffic; the caller's job
     // system (or the calling thread) runs them, so the runtime itself never starts a thread. A task is the part of
-    // [begin, end) in one block counted from vertex 0, the unit of the ragged blocked codes' layout.
+    // [begin, end) in one block counted from vertex 0, the unit of the graded blocked rows' layout.
     const size_t tasksCount = begin == end ? 0 : (end - 1) / kRelightBlock - begin / kRelightBlock + 1;
     runTasks(jobs, tasksCount, relightTask, &tasks);
 }

@@ -1,8 +1,9 @@
-// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"): u8 / u16 codes of 1..8 bands are
-// relit by a fused kernel that reads each code once (relight_codes.cpp, no decoded row), half rows of 1..8 bands on
-// a processor with F16C by a fused kernel with the float kernel's bits (relight_vector.cpp); other rows (more bands,
-// halves without F16C, the last half row of an odd order) are decoded a few vertices at a time into a tile that
-// stays in the L1 cache and relit there by the float kernel, so memory carries only the compressed bytes;
+// Relighting straight from encoded transfer (docs/bundle.md, "Adaptive transfer"), and the vertex-blocked layout
+// (blockRows) the loader puts codes and halves in: blocked u8 / u16 codes and halves of 1..8 bands are relit 8
+// vertices at a time (relight_codes.cpp, relight_vector.cpp); codes left row by row (per-cluster scales) by a fused
+// kernel that reads each code once, half rows by a fused kernel with the float kernel's bits; other rows (more
+// bands, halves without F16C, the last half row of an odd order) are decoded a few vertices at a time into a tile
+// that stays in the L1 cache and relit there by the float kernel, so memory carries only the compressed bytes;
 // clustered PCA is relit in its own basis (Sloan et al. 2003).
 #include "runtime.h"
 
@@ -287,26 +288,29 @@ void forEachBlockedVertex(const RelightModel& model, F&& f) {
     for (size_t t = 0; t * kRelightBlock < V; ++t)
         for (size_t n = 1; n <= 8; ++n) {
             const BlockedRun& run = model.blockedRuns[8 * t + n - 1];
+            const size_t scales = model.storage == TransferStorage::Float16 ? 0 : n;
             for (size_t g = run.group; g < model.blockedRuns[8 * t + n].group; ++g)
                 for (size_t i = 0; i < kCodeBlock; ++i) {
                     const uint16_t lane = model.blockedLanes[g * kCodeBlock + i];
                     if (lane == kPaddingLane) continue;
                     const size_t k = g - run.group;
-                    const size_t scales = model.storage == TransferStorage::Float16 ? 0 : n;
                     f(t * kRelightBlock + lane, n, run.value + k * 3 * n * n * kCodeBlock,
                       run.scale + k * scales * kCodeBlock, i);
                 }
         }
 }
 
-// The rows of a model with rowsBlocked as decodeBody writes them: value j of band l of vertex v is float(int(q_j)
-// - C) * sigma_l, or the half widened, at row offsets[v] + j / 3. Fills rows [offsets[V]][3].
+// The rows of a Float16 model with rowsBlocked: value j of vertex v, widened exactly, at row offsets[v] + j / 3.
+// Fills rows [offsets[V]][3].
 void decodeBlockedHalves(const RelightModel& model, float* rows) {
     forEachBlockedVertex(model, [&](size_t v, size_t n, size_t value, size_t, size_t i) {
         float* row = rows + size_t(model.offsets[v]) * 3;
         for (size_t j = 0; j < 3 * n * n; ++j) row[j] = halfValue(model.halves[value + blockedCodeIndex(false, j, i)]);
     });
 }
+
+// The rows of a u8 / u16 model with rowsBlocked as decodeBody writes them: value j of band l of vertex v is
+// float(int(q_j) - C) * sigma_l, at row offsets[v] + j / 3. Fills rows [offsets[V]][3].
 template <class Code>
 void decodeBlockedCodes(const RelightModel& model, const Code* codes, float* rows) {
     constexpr int C = sizeof(Code) == 1 ? 127 : 32767;
@@ -326,8 +330,8 @@ void decodeBlockedCodes(const RelightModel& model, const Code* codes, float* row
 // block, then one past the last) says where each band count's groups start and `lanes` receives each group's
 // vertices.
 template <class Element>
-void blockRowsOf(RelightModel& model, std::vector<Element>& rows, Element padding, const std::vector<BlockedRun>& runs,
-                 std::vector<uint16_t>& lanes) {
+void blockRowsOf(RelightModel& model, std::vector<Element>& rows, Element padding,
+                 const std::vector<BlockedRun>& runs, std::vector<uint16_t>& lanes) {
     const bool u8 = model.storage == TransferStorage::Uint8, scaled = model.storage != TransferStorage::Float16;
     const size_t V = model.vertexCount, n0 = size_t(model.order);
     const size_t blocks = (V + kCodeBlock - 1) / kCodeBlock;

@@ -1,7 +1,8 @@
-// The vector row kernel (AVX2): float rows of 1..5 bands and half rows of 1..8, the halves converted by F16C inside
-// the dot product with no decoded row in memory; bit for bit the float kernel (relight.cpp) on the same (decoded)
-// rows, two vertices folded at a time. Processors without AVX2 (and F16C, for halves) take relight.cpp's lane loop
-// for floats and relight_encoded.cpp's decode tile for halves.
+// The vector kernels (AVX2): float rows of 1..5 bands and half rows of 1..8, the halves converted by F16C inside the
+// dot product with no decoded row in memory, two vertices folded at a time; and vertex-blocked half rows
+// (blockRows), 8 vertices at a time. Both are bit for bit the float kernel (relight.cpp) on the same (decoded) rows.
+// Processors without AVX2 (and F16C, for halves) take relight.cpp's lane loop for floats and relight_encoded.cpp's
+// decode tile for halves (which blockRows then leaves row by row).
 #include "runtime.h"
 
 #include "runtime_internal.h"
@@ -223,7 +224,7 @@ bool relightBlockedHalves(const RelightModel& model, size_t first, size_t last, 
                           float* radiance) {
     if (!model.rowsBlocked || model.storage != TransferStorage::Float16 || !haveF16c()) return false;
     forEachBlockRun(model, first, last, [&](int n, size_t value, size_t, size_t blocks, size_t base,
-                                                     const uint16_t* lanes) {
+                                            const uint16_t* lanes) {
         const uint16_t* halves = model.halves.data() + value;
         withBands(n, [&](auto bands) {
             constexpr int kN = decltype(bands)::value;

@@ -92,11 +92,11 @@ void relightCpcaRange(const RelightModel& model, const float* projections, size_
 // for other storages or n outside 1..8 (those take the decode tile).
 bool relightCodes(const RelightModel& model, int n, size_t first, size_t last, size_t band, const float* lighting,
                   float* out);
-// Where value j (= 3 coefficient + channel) of vertex i of a block of vertex-blocked codes (RelightModel::
-// rowsBlocked) lies, counted from the block's start. u16: j kCodeBlock + i. u8, laid out for the integer kernel:
-// band l and channel c own (2l + 1) kCodeBlock codes from kCodeBlock (3 l^2 + (2l + 1) c), the band's coefficients
-// l^2 + 2p and l^2 + 2p + 1 (p < l) as 2 kCodeBlock codes from 2 kCodeBlock p with vertex i's two side by side at
-// 2i, 2i + 1, then its last coefficient's at 2 kCodeBlock l + i.
+// Where value j (= 3 coefficient + channel) of vertex i of a block of vertex-blocked rows (RelightModel::
+// rowsBlocked) lies, counted from the block's start. u16 codes and halves: j kCodeBlock + i. u8, laid out for the
+// integer kernel: band l and channel c own (2l + 1) kCodeBlock codes from kCodeBlock (3 l^2 + (2l + 1) c), the band's
+// coefficients l^2 + 2p and l^2 + 2p + 1 (p < l) as 2 kCodeBlock codes from 2 kCodeBlock p with vertex i's two side
+// by side at 2i, 2i + 1, then its last coefficient's at 2 kCodeBlock l + i.
 inline size_t blockedCodeIndex(bool u8, size_t j, size_t i) {
     if (!u8) return j * kCodeBlock + i;
     const size_t m = j / 3, c = j % 3;
