@@ -234,7 +234,7 @@ RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source) {
     if (data->params.contains("transfer") && data->params["transfer"].is_object()) input.params = data->params["transfer"];
     RelightModel model = data->name == "transfer_ragged" ? raggedModel(bundle, source) : cpcaModel(bundle, source);
     readExcludedAlbedo(bundle, input, source, model);
-    blockRows(model); // codes of one order with per-vertex scales: the blocked kernel's layout, in place
+    blockRows(model); // codes with per-vertex scales, and halves: the blocked kernels' layout, in place
     return model;
 }
 

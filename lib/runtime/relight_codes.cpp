@@ -167,7 +167,7 @@ U8Lighting quantiseU8Lighting(const float* lighting, int order) {
 
 bool relightBlockedCodes(const RelightModel& model, size_t first, size_t last, const float* lighting,
                          const U8Lighting* quantised, float* radiance) {
-    if (!model.rowsBlocked) return false; // blockRows blocks orders 1..8 only
+    if (!model.rowsBlocked) return false; // blocked models have orders 1..8 (blockRows)
     if (model.storage == TransferStorage::Uint8)
         relightBlockedU8(model, first, last, quantised ? *quantised : quantiseU8Lighting(lighting, model.order),
                          radiance);

@@ -276,28 +276,20 @@ int bandsOf(const RelightModel& model, size_t v) {
 // (RelightModel::rowsBlocked, blockedRuns).
 template <class F>
 void forEachBlockedVertex(const RelightModel& model, F&& f) {
-    const size_t V = model.vertexCount;
-    if (model.blockedRuns.empty()) {
-        const size_t n = size_t(model.order), scales = model.storage == TransferStorage::Float16 ? 0 : n;
-        for (size_t v = 0; v < V; ++v) {
-            const size_t b = v / kCodeBlock;
-            f(v, n, b * 3 * n * n * kCodeBlock, b * scales * kCodeBlock, v % kCodeBlock);
-        }
-        return;
-    }
-    for (size_t t = 0; t * kRelightBlock < V; ++t)
-        for (size_t n = 1; n <= 8; ++n) {
-            const BlockedRun& run = model.blockedRuns[8 * t + n - 1];
-            const size_t scales = model.storage == TransferStorage::Float16 ? 0 : n;
-            for (size_t g = run.group; g < model.blockedRuns[8 * t + n].group; ++g)
-                for (size_t i = 0; i < kCodeBlock; ++i) {
-                    const uint16_t lane = model.blockedLanes[g * kCodeBlock + i];
-                    if (lane == kPaddingLane) continue;
-                    const size_t k = g - run.group;
-                    f(t * kRelightBlock + lane, n, run.value + k * 3 * n * n * kCodeBlock,
-                      run.scale + k * scales * kCodeBlock, i);
+    forEachBlockRun(model, 0, model.vertexCount, [&](int bands, size_t value, size_t scale, size_t blocks,
+                                                     size_t base, const uint16_t* lanes) {
+        const size_t n = size_t(bands), scales = model.storage == TransferStorage::Float16 ? 0 : n;
+        for (size_t k = 0; k < blocks; ++k)
+            for (size_t i = 0; i < kCodeBlock; ++i) {
+                size_t v = base + k * kCodeBlock + i;
+                if (lanes) {
+                    if (lanes[k * kCodeBlock + i] == kPaddingLane) continue;
+                    v = base + lanes[k * kCodeBlock + i];
                 }
-        }
+                if (v < model.vertexCount) // the last block of one order is padded
+                    f(v, n, value + k * 3 * n * n * kCodeBlock, scale + k * scales * kCodeBlock, i);
+            }
+    });
 }
 
 // The rows of a Float16 model with rowsBlocked: value j of vertex v, widened exactly, at row offsets[v] + j / 3.

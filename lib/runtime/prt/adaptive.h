@@ -15,8 +15,8 @@ inline constexpr int kMaxRuntimeOrder = sh::kMaxOrder;
 
 // The adaptive transfer of a bundle as a RelightModel, kept as stored so relight() reads the compressed bytes: the
 // ragged layer "transfer_ragged" (float32 into transfer, float16 into halves, uint8/uint16 codes into codes8 /
-// codes16 with their band scales as sigma = scale / C; codes of one order with per-vertex scales put in the
-// vertex-blocked layout by blockRows) with its offsets, or the clustered-PCA layers
+// codes16 with their band scales as sigma = scale / C; codes with per-vertex scales, and halves where the processor
+// has F16C, put in the vertex-blocked layout by blockRows) with its offsets, or the clustered-PCA layers
 // "transfer_cpca_*" (storage Cpca; decodedTransfer reconstructs the rows to full order). Needs the layers and params docs/bundle.md lists, offsets
 // ascending from 0 whose every difference is n^2 with 1 <= n <= params.order <= kMaxRuntimeOrder, codes and
 // cluster indices in range, finite values. Throws prt::Error naming `source`, the layer and the problem

@@ -156,7 +156,7 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
 std::vector<float> decodedTransfer(const RelightModel& model);
 
 // Bytes relight() reads from the model to relight all its vertices once (rows, codes, scales, offsets, weights,
-// cluster indices, albedo, the lanes and runs of ragged blocked codes; not the lighting).
+// cluster indices, albedo, the lanes and runs of ragged blocked rows; not the lighting).
 size_t relightBytes(const RelightModel& model);
 
 } // namespace prt
