@@ -2,13 +2,12 @@
 #include "bake.h"
 
 #include "core.h"
+#include "position_groups.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <map>
-#include <unordered_map>
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
@@ -16,29 +15,6 @@
 namespace prt {
 
 namespace {
-
-// Vertices at bitwise-equal positions share an id.
-std::vector<uint32_t> positionIds(const TriMesh& mesh) {
-    struct Key {
-        uint32_t bits[3];
-        bool operator==(const Key& other) const { return std::memcmp(bits, other.bits, sizeof bits) == 0; }
-    };
-    struct KeyHash {
-        size_t operator()(const Key& key) const {
-            uint64_t h = 1469598103934665603ull;
-            for (uint32_t b : key.bits) h = (h ^ b) * 1099511628211ull;
-            return size_t(h);
-        }
-    };
-    std::unordered_map<Key, uint32_t, KeyHash> idOf;
-    std::vector<uint32_t> ids(mesh.vertexCount());
-    for (size_t v = 0; v < mesh.vertexCount(); ++v) {
-        Key key;
-        std::memcpy(key.bits, &mesh.positions[3 * v], sizeof key.bits);
-        ids[v] = idOf.try_emplace(key, uint32_t(idOf.size())).first->second;
-    }
-    return ids;
-}
 
 bool sameTexcoord(const TriMesh& mesh, uint32_t v, uint32_t w) {
     return mesh.texcoords[2 * size_t(v)] == mesh.texcoords[2 * size_t(w)] &&
@@ -57,12 +33,13 @@ bool sameNormal(const TriMesh& mesh, uint32_t v, uint32_t w) {
 } // namespace
 
 std::vector<SeamEdge> findSeams(const TriMesh& mesh) {
-    std::vector<uint32_t> ids = positionIds(mesh);
+    // One id per position (-0 and +0 alike), as spawn normals group them.
+    const std::vector<int32_t> ids = groupPositions(mesh, 0, mesh.vertexCount()).group;
     // Undirected position edge -> the (triangle, corner) of each triangle using it, in triangle order.
     std::map<std::pair<uint32_t, uint32_t>, std::vector<std::pair<uint32_t, int>>> uses;
     for (size_t t = 0; t < mesh.triangleCount(); ++t)
         for (int k = 0; k < 3; ++k) {
-            uint32_t p = ids[mesh.indices[3 * t + k]], q = ids[mesh.indices[3 * t + (k + 1) % 3]];
+            const uint32_t p = uint32_t(ids[mesh.indices[3 * t + k]]), q = uint32_t(ids[mesh.indices[3 * t + (k + 1) % 3]]);
             if (p != q) uses[{std::min(p, q), std::max(p, q)}].push_back({uint32_t(t), k});
         }
     std::vector<SeamEdge> seams;

@@ -3,11 +3,11 @@
 
 #include "core.h"
 #include "material.h"
+#include "position_groups.h"
 
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <cstring>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -283,52 +283,6 @@ void pinholeRayDirection(const PinholeRays& rays, size_t pixel, float d[3]) {
     normalize(d);
 }
 
-namespace {
-
-// Vertices at the same position, one group per position: an open-addressing table (linear probing, at most 70%
-// full) of group numbers, each group keyed by the position of its first vertex (bits compared, -0 and +0 one
-// position). 4 bytes per slot and per group.
-struct PositionGroups {
-    const float* positions;
-    std::vector<int32_t> slots;          // a group, or -1: empty
-    std::vector<uint32_t> firstVertex;   // per group
-    size_t mask = 0;
-
-    PositionGroups(const float* positions_, size_t maxGroups) : positions(positions_) {
-        size_t capacity = 16;
-        while (capacity * 7 < maxGroups * 10) capacity *= 2;
-        slots.assign(capacity, -1);
-        mask = capacity - 1;
-    }
-    std::array<uint32_t, 3> key(size_t v) const {
-        std::array<uint32_t, 3> bits;
-        std::memcpy(bits.data(), positions + 3 * v, sizeof bits);
-        for (uint32_t& b : bits) b = b == 0x80000000u ? 0u : b;
-        return bits;
-    }
-    // The slot of vertex v's position: the one holding its group, or the empty one where it belongs.
-    size_t slot(size_t v) const {
-        const std::array<uint32_t, 3> bits = key(v);
-        uint64_t h = (uint64_t(bits[0]) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(bits[1]) * 0xC2B2AE3D27D4EB4Full) ^
-                     (uint64_t(bits[2]) * 0x165667B19E3779F9ull);
-        size_t at = size_t(h ^ (h >> 29)) & mask;
-        while (slots[at] >= 0 && key(firstVertex[size_t(slots[at])]) != bits) at = (at + 1) & mask;
-        return at;
-    }
-    int32_t insert(size_t v) {
-        const size_t at = slot(v);
-        if (slots[at] < 0) {
-            slots[at] = int32_t(firstVertex.size());
-            firstVertex.push_back(uint32_t(v));
-        }
-        return slots[at];
-    }
-    int32_t find(size_t v) const { return slots[slot(v)]; }
-    size_t count() const { return firstVertex.size(); }
-};
-
-} // namespace
-
 std::vector<float> spawnNormals(const TriMesh& mesh) { return spawnNormals(mesh, 0, mesh.vertexCount()); }
 
 std::vector<float> spawnNormals(const TriMesh& mesh, size_t begin, size_t end) {
@@ -336,14 +290,10 @@ std::vector<float> spawnNormals(const TriMesh& mesh, size_t begin, size_t end) {
     end = std::min(end, count);
     begin = std::min(begin, end);
     // The groups of the range's positions; every vertex at one of them belongs to its group.
-    PositionGroups table(mesh.positions.data(), end - begin);
-    std::vector<int32_t> group(count, -1);
-    for (size_t v = begin; v < end; ++v) group[v] = table.insert(v);
-    if (end - begin < count)
-        for (size_t v = 0; v < count; ++v)
-            if (v < begin || v >= end) group[v] = table.find(v);
+    const PositionGroups groups = groupPositions(mesh, begin, end);
+    const std::vector<int32_t>& group = groups.group;
     // Each group's sum over its triangles in triangle order, corner by corner, whatever the range.
-    std::vector<double> sum(3 * table.count(), 0.0);
+    std::vector<double> sum(3 * groups.groupCount, 0.0);
     for (size_t t = 0; t < mesh.triangleCount(); ++t) {
         const uint32_t* corner = &mesh.indices[3 * t];
         if (group[corner[0]] < 0 && group[corner[1]] < 0 && group[corner[2]] < 0) continue;

@@ -29,6 +29,25 @@ TEST(FindSeams, PlaneHasNoneAndAnAtlasOfASphereHasThemWherePositionsMeet) {
     }
 }
 
+// A quad split along x = 0 into two charts, the seam's two vertices duplicated with their own texcoords, one copy
+// at x = -0 (what mirroring a half mesh leaves): the two triangles still meet there, so it is one seam edge.
+TEST(FindSeams, SignedZeroCopiesOfAVertexAreOnePosition) {
+    TriMesh mesh;
+    mesh.positions = {-1, 0, 0, 0, 0, 0, 0, 1, 0,        // left chart: its seam side at x = +0
+                      -0.0f, 0, 0, 1, 0, 0, -0.0f, 1, 0}; // right chart: the same corners at x = -0
+    mesh.texcoords = {0.0f, 0.0f, 0.4f, 0.0f, 0.4f, 0.4f, 0.6f, 0.0f, 1.0f, 0.0f, 0.6f, 0.4f};
+    mesh.indices = {0, 1, 2, 3, 4, 5};
+    const std::vector<SeamEdge> seams = findSeams(mesh);
+    ASSERT_EQ(seams.size(), 1u);
+    EXPECT_EQ(seams[0].first, 0u);
+    EXPECT_EQ(seams[0].second, 1u);
+    // The edge from vertex 1 to 2 of the first triangle meets the edge 3..5 of the second, corner to corner.
+    EXPECT_EQ(seams[0].a, 1u);
+    EXPECT_EQ(seams[0].b, 2u);
+    EXPECT_EQ(seams[0].c, 3u);
+    EXPECT_EQ(seams[0].d, 5u);
+}
+
 // A smooth function of position plus per-texel noise (what Monte Carlo leaves), over an atlas of a sphere,
 // with gutters filled: the raw material of the seam measurements.
 struct NoisyAtlas {
