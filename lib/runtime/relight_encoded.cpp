@@ -187,6 +187,9 @@ PRT_ALWAYS_INLINE inline void cpcaBody(const float* __restrict projections, cons
                                        float* __restrict out) {
     if constexpr (kM != 0) components = kM;
     const size_t M = components;
+    // Software prefetch of the weights 2 KB ahead and of the cluster indices as many vertices ahead (1 M vertices,
+    // M = 8, order 5: 1.1-1.25x the rate without, alternated over seven rounds; 1 and 4 KB measured no better).
+    constexpr size_t kWeightsAhead = 2048 / sizeof(float), kClustersAhead = kM != 0 ? kWeightsAhead / kM : 64;
     auto load4 = [](const float* p) {
         V4f x;
         std::memcpy(&x, p, sizeof x);
@@ -195,6 +198,8 @@ PRT_ALWAYS_INLINE inline void cpcaBody(const float* __restrict projections, cons
     for (size_t v = 0; v < count; ++v) {
         const float* p = projections + size_t(cluster[v]) * (M + 1) * 4;
         const float* w = weights + v * M;
+        __builtin_prefetch(w + kWeightsAhead);
+        __builtin_prefetch(cluster + v + kClustersAhead);
         // The mean's projection in the even half, 0 in the odd.
         V8f sum = __builtin_shufflevector(load4(p), V4f{}, 0, 1, 2, 3, 4, 5, 6, 7);
         if constexpr (kM != 0 && kM % 8 == 0) { // weights 8 at a time, each pair's spread by a fixed shuffle
