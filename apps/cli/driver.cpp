@@ -2,9 +2,12 @@
 #include "cli.h"
 
 #include "core.h"
+#include "utf8.h"
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <functional>
 #include <vector>
@@ -17,6 +20,25 @@ namespace prt::cli {
 
 int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* answer) {
     std::vector<char*> args(argv, argv + argc);
+    // File names and values go into JSON (reports, logs, bundles, cache keys), which holds UTF-8 only.
+    for (int i = 1; i < argc; ++i)
+        if (!isUtf8(argv[i])) {
+            std::string shown;
+            for (const char* c = argv[i]; *c && shown.size() < 200; ++c) {
+                char escaped[8];
+                std::snprintf(escaped, sizeof escaped, "\\x%02x", unsigned((unsigned char)*c));
+                shown += (unsigned char)*c < 0x80 ? std::string(1, *c) : std::string(escaped);
+            }
+            if (!answer) {
+                LogOptions json;
+                json.json = std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--log-json") == 0; });
+                setLogOptions(json);
+            }
+            logError("argument " + std::to_string(i) + " ('" + shown + "') is not UTF-8: prt writes file names and "
+                     "values into JSON (reports, logs, bundles), which holds UTF-8 only; rename the file or pass the "
+                     "name in UTF-8");
+            return kExitUsage;
+        }
     std::string command = onlyCommand ? onlyCommand : "";
     if (onlyCommand) args.insert(args.begin() + 1, command.data());
 

@@ -1,6 +1,7 @@
 #include "bundle_internal.h"
 
 #include "core.h"
+#include "utf8.h"
 
 #include <algorithm>
 #include <cctype>
@@ -14,16 +15,6 @@
 namespace prt::detail {
 
 using nlohmann::json;
-
-// nlohmann refuses to write strings that are not UTF-8; finding out here names the place.
-static bool isUtf8(const std::string& text) {
-    try {
-        (void)json(text).dump();
-        return true;
-    } catch (const json::type_error&) {
-        return false;
-    }
-}
 
 static bool isEmptyValue(const json& value) {
     return value.is_null() || ((value.is_object() || value.is_array()) && value.empty());

@@ -21,11 +21,17 @@ double nowSeconds() {
     return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
+// A log line as JSON; bytes of a message that are not UTF-8 (a file name, a name from an input file) are written as
+// U+FFFD rather than failing the line.
+static std::string dumpLine(const nlohmann::json& line) {
+    return line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 static void emit(const char* level, const std::string& message) {
     std::lock_guard<std::mutex> lock(gLogMutex);
     if (gOptions.json) {
         nlohmann::json record = {{"level", level}, {"msg", message}};
-        std::fprintf(stderr, "%s\n", record.dump().c_str());
+        std::fprintf(stderr, "%s\n", dumpLine(record).c_str());
     } else if (std::string(level) == "info") {
         std::fprintf(stderr, "%s\n", message.c_str());
     } else {
@@ -47,10 +53,10 @@ void logEvent(const std::string& event, const std::string& jsonObject) {
     if (gOptions.json) {
         nlohmann::json line = {{"event", event}};
         line.update(record);
-        std::fprintf(stderr, "%s\n", line.dump().c_str());
+        std::fprintf(stderr, "%s\n", dumpLine(line).c_str());
     } else {
         std::string text = event + ":";
-        for (auto& [key, value] : record.items()) text += " " + key + "=" + (value.is_string() ? value.get<std::string>() : value.dump());
+        for (auto& [key, value] : record.items()) text += " " + key + "=" + (value.is_string() ? value.get<std::string>() : dumpLine(value));
         std::fprintf(stderr, "%s\n", text.c_str());
     }
 }
@@ -84,7 +90,7 @@ static void printProgress(Progress::State& s, double now, bool final) {
     if (gOptions.json) {
         nlohmann::json line = {{"event", "progress"}, {"label", s.label}, {"done", s.done}, {"total", s.total},
                                {"elapsed_s", elapsed}, {"eta_s", final ? 0.0 : (std::isfinite(eta) ? eta : -1.0)}};
-        std::fprintf(stderr, "%s\n", line.dump().c_str());
+        std::fprintf(stderr, "%s\n", dumpLine(line).c_str());
     } else {
         std::fprintf(stderr, "\r%s: %5.1f%% (%llu/%llu) elapsed %s eta %s%s", s.label.c_str(), 100.0 * fraction,
                      (unsigned long long)s.done, (unsigned long long)s.total, formatDuration(elapsed).c_str(),
@@ -138,7 +144,7 @@ void reportCost(const StageCost& cost) {
     nlohmann::json record = {{"stage", cost.stage}, {"seconds", cost.seconds}, {"rays", cost.rays},
                              {"peak_memory_bytes", cost.peakMemoryBytes}};
     if (gOptions.json) {
-        logEvent("cost", record.dump());
+        logEvent("cost", dumpLine(record));
         return;
     }
     if (gOptions.quiet) return;

@@ -499,6 +499,8 @@ std::vector<Case> commandLineCases() {
         Case{"cli", "unknown flag", {}, "meshprep {in}/m.obj -o {out}/m.glb --frobnicate", 2, "frobnicate"},
         Case{"cli", "order 0", {}, "envsh {in}/e.exr --order 0 -o {out}/sh.json", 2, "--order"},
         Case{"cli", "shard past its count", {}, "transfer {in}/b.glb -o {out}/t.glb --shard 3/2", 2, "--shard"},
+        Case{"cli", "file name not UTF-8 (Latin-1)", {{"m\xe6.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
+             "meshprep {in}/m\xe6.off -o {out}/m.glb --report {out}/r.json", 2, "m\\xe6.off') is not UTF-8"},
         Case{"cli", "element cap not a number", {{"m.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
              "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}}
     };
