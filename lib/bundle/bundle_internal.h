@@ -62,7 +62,10 @@ TriMesh readGltfScene(const tinygltf::Model& model, const std::string& file, Sce
 // The asset's materials, textures, samplers and images into `scene` (materials then the default one), checked;
 // refuses required extensions prt cannot honour (checkRequiredExtensions).
 void readMaterials(const tinygltf::Model& model, const std::string& file, SceneAsset& scene);
-void checkRequiredExtensions(const tinygltf::Model& model, const std::string& file);
+// Refuses, by name and with advice, the first of `required` (a file's extensionsRequired) that prt cannot honour.
+void checkRequiredExtensions(const std::vector<std::string>& required, const std::string& file);
+// Refuses an asset.version of glTF 1.0 (which parses far enough to find no glTF 2.0 meshes) by saying what it is.
+void requireGltf2(const std::string& version, const std::string& file);
 
 // `model` made self-contained for writing as one .glb: every buffer merged into buffer 0 (each at an 8-byte
 // aligned offset, views rebased), every image moved into a buffer view of its encoded bytes (uri cleared), the

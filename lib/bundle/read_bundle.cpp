@@ -84,11 +84,33 @@ static tinygltf::Model loadModel(const std::string& path, std::string& jsonText)
 
 namespace prt::detail {
 
+// Why tinygltf could not read a file whose JSON (already bounded by checkJsonShape) says it is glTF 1.0 or requires
+// an extension prt cannot honour, such as Draco's accessors without a buffer view: refused by name, as a file that
+// loads would be. Returns where the JSON says neither (or is not JSON).
+static void explainUnreadable(std::string_view jsonText, const std::string& path) {
+    const nlohmann::json root = nlohmann::json::parse(jsonText, nullptr, false);
+    if (!root.is_object()) return;
+    if (root.contains("asset") && root["asset"].is_object() && root["asset"].contains("version") &&
+        root["asset"]["version"].is_string())
+        requireGltf2(root["asset"]["version"].get<std::string>(), path);
+    if (!root.contains("extensionsRequired") || !root["extensionsRequired"].is_array()) return;
+    std::vector<std::string> required;
+    for (const nlohmann::json& name : root["extensionsRequired"])
+        if (name.is_string()) required.push_back(name.get<std::string>());
+    checkRequiredExtensions(required, path);
+}
+
 tinygltf::Model loadModelFromBytes(const std::string& path, const std::string& bytes, std::string& jsonText) {
     if (bytes.empty()) throw Error(path, "", "empty file");
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error(path, "", "larger than 4 GiB, the glTF limit");
     bool binary = bytes.compare(0, 4, "glTF") == 0;
     const std::string place = binary ? "glTF binary" : "glTF";
+    // A binary of glTF 1.0 (KHR_binary_glTF) lays out its header otherwise: say what it is before reading on.
+    uint32_t binaryVersion = 2;
+    if (binary && bytes.size() >= 8) std::memcpy(&binaryVersion, bytes.data() + 4, 4);
+    if (binaryVersion != 2)
+        throw Error(path, place, "version " + std::to_string(binaryVersion) + " is not supported; prt reads glTF 2.0 "
+                                 "(convert the file, for example with the Khronos glTF 1.0 to 2.0 converter)");
     // The most common damage, a cut-off download or copy, gets a plain message instead of tinygltf's generic one.
     uint32_t declaredLength = 0;
     if (binary && bytes.size() >= 12) std::memcpy(&declaredLength, bytes.data() + 8, 4);
@@ -98,8 +120,9 @@ tinygltf::Model loadModelFromBytes(const std::string& path, const std::string& b
     // Nesting bounded before tinygltf's recursive parser sees the JSON (a GLB's first chunk).
     uint32_t jsonChunk = 0;
     if (binary && bytes.size() >= 20) std::memcpy(&jsonChunk, bytes.data() + 12, 4);
-    checkJsonShape(binary ? std::string_view(bytes).substr(std::min<size_t>(20, bytes.size()), jsonChunk) : bytes,
-                   path, place, std::numeric_limits<unsigned int>::max());
+    const std::string_view json = binary ? std::string_view(bytes).substr(std::min<size_t>(20, bytes.size()), jsonChunk)
+                                         : std::string_view(bytes);
+    checkJsonShape(json, path, place, std::numeric_limits<unsigned int>::max());
 
     // External buffers and images of a .gltf lie next to the file, or, when it is a symbolic link (as `prt run`
     // links inputs into a job's folder), next to its target.
@@ -128,6 +151,7 @@ tinygltf::Model loadModelFromBytes(const std::string& path, const std::string& b
         jsonText = bytes;
     }
     if (!loaded) {
+        explainUnreadable(json, path);
         while (!error.empty() && std::isspace((unsigned char)error.back())) error.pop_back();
         if (!files.refused.empty())
             throw Error(path, place, "an external URI resolves to " + files.refused +

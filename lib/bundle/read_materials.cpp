@@ -149,15 +149,15 @@ ImageRecord readImage(const tinygltf::Model& model, size_t index) {
 
 } // namespace
 
-void checkRequiredExtensions(const tinygltf::Model& model, const std::string& file) {
-    for (const std::string& name : model.extensionsRequired)
+void checkRequiredExtensions(const std::vector<std::string>& required, const std::string& file) {
+    for (const std::string& name : required)
         if (!kHonouredExtensions.count(name) && name != kBundleExtension)
             throw Error(file, "extensionsRequired", "requires " + name.substr(0, 80) + ", which prt cannot honour" +
                                                          requiredExtensionAdvice(name));
 }
 
 void readMaterials(const tinygltf::Model& model, const std::string& file, SceneAsset& scene) {
-    checkRequiredExtensions(model, file);
+    checkRequiredExtensions(model.extensionsRequired, file);
     for (size_t s = 0; s < model.samplers.size(); ++s) {
         const tinygltf::Sampler& sampler = model.samplers[s];
         const std::string place = "samplers[" + std::to_string(s) + "]";

@@ -422,17 +422,16 @@ static TriMesh finishMesh(MeshBuilder& builder, const std::string& noTriangles) 
     return std::move(mesh);
 }
 
-// glTF 1.0 parses far enough to find no glTF 2.0 meshes; say what it is instead of "no triangles".
-static void requireGltf2(const tinygltf::Model& model, const std::string& file) {
-    if (!model.asset.version.empty() && model.asset.version[0] == '1')
-        throw Error(file, "asset.version", "glTF " + model.asset.version + " is not supported; prt reads glTF 2.0 "
+void requireGltf2(const std::string& version, const std::string& file) {
+    if (!version.empty() && version[0] == '1')
+        throw Error(file, "asset.version", "glTF " + version.substr(0, 20) + " is not supported; prt reads glTF 2.0 "
                                            "(convert the file, for example with the Khronos glTF 1.0 to 2.0 converter)");
 }
 
 // Walks the default scene (every mesh once, untransformed, when the file has no scene) into the builder.
 static void addDefaultScene(MeshBuilder& builder) {
     const tinygltf::Model& model = builder.model;
-    requireGltf2(model, builder.file);
+    requireGltf2(model.asset.version, builder.file);
     if (model.nodes.size() > kMaxNodes)
         throw Error(builder.file, "nodes", std::to_string(model.nodes.size()) + " nodes, more than the " +
                                                std::to_string(kMaxNodes) + " prt reads");
@@ -477,7 +476,7 @@ TriMesh readGltfPrimitive(const tinygltf::Model& model, int meshIndex, int primi
 }
 
 TriMesh readGltfMeshAt(const tinygltf::Model& model, int meshIndex, const std::string& file) {
-    requireGltf2(model, file);
+    requireGltf2(model.asset.version, file);
     MeshBuilder builder{model, file, TriMesh{}};
     addMesh(builder, meshIndex, kIdentity, "meshes");
     return finishMesh(builder, "no triangles in meshes[" + std::to_string(meshIndex) + "]");

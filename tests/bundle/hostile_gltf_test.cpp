@@ -177,6 +177,32 @@ TEST(HostileGltf, Gltf1IsNamedAsUnsupported) {
     EXPECT_NE(message.find("glTF 1.0 is not supported"), std::string::npos) << message;
 }
 
+// A Draco primitive's accessors have no buffer view (the data is in the extension's), and tinygltf refuses an index
+// accessor without one before prt sees extensionsRequired: the refusal still names the extension, with what to do.
+TEST(HostileGltf, DracoIsNamedEvenWhereItsAccessorsHaveNoBufferView) {
+    json gltf = squareGltf();
+    gltf["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+    gltf["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+    gltf["accessors"][0].erase("bufferView");
+    gltf["accessors"][1].erase("bufferView");
+    std::string message = refusal(writeGltf(gltf, "draco.gltf"));
+    EXPECT_NE(message.find("extensionsRequired: requires KHR_draco_mesh_compression"), std::string::npos) << message;
+    EXPECT_NE(message.find("decompress"), std::string::npos) << message;
+}
+
+// A glTF 1.0 binary (header version 1) is named as such, not as truncated or unreadable.
+TEST(HostileGltf, Gltf1BinaryIsNamedByItsHeaderVersion) {
+    std::string json = R"({"asset":{"version":"1.0"}})";
+    std::string glb = "glTF";
+    const uint32_t header[4] = {1, uint32_t(20 + json.size() + 100), uint32_t(json.size()), 0};
+    glb.append(reinterpret_cast<const char*>(header), sizeof header);
+    glb += json;
+    std::string path = scratch("v1.glb").string();
+    std::ofstream(path, std::ios::binary) << glb;
+    std::string message = refusal(path);
+    EXPECT_NE(message.find("glTF binary: version 1 is not supported"), std::string::npos) << message;
+}
+
 TEST(HostileGltf, ClaimedVertexCountAboveTheCapIsRefusedNamingTheLimit) {
     json gltf = squareGltf();
     gltf["accessors"][0]["count"] = 1000000000000ull;
