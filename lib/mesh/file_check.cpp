@@ -28,6 +28,9 @@ size_t firstNonText(std::string_view text) {
 
 // Text formats must be text: a binary or corrupt file would be half-parsed by the readers.
 void requireText(std::string_view text, const std::string& path) {
+    // UTF-16 and UTF-32 (their byte order marks) are text, but not in the 8-bit encoding the readers parse.
+    if (text.starts_with("\xFF\xFE") || text.starts_with("\xFE\xFF") || text.starts_with(std::string_view("\0\0\xFE\xFF", 4)))
+        throw Error(path, "byte 0", "UTF-16 or UTF-32 text (its byte order mark): save the file as UTF-8 or ASCII");
     size_t i = firstNonText(text);
     if (i == std::string_view::npos) return;
     char hex[8];
@@ -129,6 +132,12 @@ struct LastUse {
 };
 
 } // namespace
+
+bool dropUtf8Bom(std::string& text) {
+    if (!text.starts_with("\xEF\xBB\xBF")) return false;
+    text.erase(0, 3);
+    return true;
+}
 
 CheckedFile checkObj(std::string_view text, const std::string& path) {
     requireText(text, path);

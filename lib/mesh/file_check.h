@@ -23,6 +23,10 @@ struct CheckedFile {
     std::string readerInput;
 };
 
+// Removes a leading UTF-8 byte order mark (EF BB BF, which Windows editors write) from a text file's bytes: the
+// readers would take it for part of the first line's keyword and skip that line. Returns whether there was one.
+bool dropUtf8Bom(std::string& text);
+
 // Each throws prt::Error naming `path`, the place (line, element, byte offset) and the problem.
 CheckedFile checkObj(std::string_view text, const std::string& path);
 CheckedFile checkOff(std::string_view text, const std::string& path);

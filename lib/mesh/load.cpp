@@ -296,6 +296,7 @@ TriMesh loadMesh(const std::string& path, MeshFileInfo* info) {
     std::string bytes = readFileBytes(path);
     if (bytes.empty()) throw Error(path, "", "empty mesh (the file is empty)");
     out.hash = hashBytes(bytes.data(), bytes.size());
+    if (out.format == "obj" || out.format == "off") detail::dropUtf8Bom(bytes);
     detail::CheckedFile declared = check(bytes, path);
 
     // The reader gets the bytes that were checked, not a second read of the file.

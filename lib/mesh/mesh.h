@@ -182,7 +182,9 @@ struct PreparedScene {
     Bundle bundle;         // the scene, no layers
     nlohmann::json report; // input, scene counts, counts, bounds, boundary, vertex_order
 };
-// Whether `path` is an OBJ that names an MTL file (mtllib): meshprep then reads it as a scene (readObjScene).
+// Whether `path` is an OBJ that names an MTL file (mtllib) that exists: meshprep then reads it as a scene
+// (readObjScene). An MTL it names but that is missing is logged as a warning (false: the geometry is read without
+// materials, as other importers do); one outside the OBJ's folder is refused (Error).
 bool objHasMaterials(const std::string& path);
 // An OBJ with its MTL as a scene bundle (no layers): one mesh, one primitive per material (its distinct corners as
 // vertices, texcoords flipped to glTF's v down), Kd as base colour factor, map_Kd as base colour texture, not

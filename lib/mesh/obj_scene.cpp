@@ -4,6 +4,7 @@
 
 #include "core.h"
 #include "file_check.h"
+#include "utf8.h"
 
 #include <tiny_gltf.h>
 #include <tiny_obj_loader.h>
@@ -21,9 +22,10 @@ namespace prt {
 namespace {
 
 // A file an OBJ or MTL names, resolved inside the OBJ's folder: backslashes read as separators (Windows
-// exporters write `.\\file.jpg`), links resolved, and nothing outside the folder followed.
-std::filesystem::path insideFolder(const std::filesystem::path& folder, std::string name, const std::string& file,
-                                   const std::string& place) {
+// exporters write `.\\file.jpg`), links resolved, and nothing outside the folder followed (Error naming `file` and
+// `place`). Whether the file exists is not checked.
+std::filesystem::path resolveInFolder(const std::filesystem::path& folder, std::string name, const std::string& file,
+                                      const std::string& place) {
     for (char& c : name)
         if (c == '\\') c = '/';
     std::error_code error;
@@ -32,9 +34,24 @@ std::filesystem::path insideFolder(const std::filesystem::path& folder, std::str
     auto mismatch = std::mismatch(base.begin(), base.end(), resolved.begin(), resolved.end());
     if (error || mismatch.first != base.end() || resolved == base)
         throw Error(file, place, "'" + name.substr(0, 80) + "' lies outside the OBJ file's folder; prt follows no path out of it");
+    return resolved;
+}
+
+// resolveInFolder's file, which must exist.
+std::filesystem::path insideFolder(const std::filesystem::path& folder, const std::string& name, const std::string& file,
+                                   const std::string& place) {
+    std::filesystem::path resolved = resolveInFolder(folder, name, file, place);
+    std::error_code error;
     if (!std::filesystem::is_regular_file(resolved, error))
         throw Error(file, place, "'" + name.substr(0, 80) + "' is not a file next to the OBJ file");
     return resolved;
+}
+
+// The folder an OBJ's MTL and maps lie in: the OBJ's, or, when it is a symbolic link (as `prt run` links inputs into
+// a job's folder), its target's.
+std::filesystem::path objFolder(const std::string& path) {
+    std::error_code error;
+    return std::filesystem::weakly_canonical(std::filesystem::absolute(path), error).parent_path();
 }
 
 // The first `mtllib NAME` of the OBJ text, or "".
@@ -86,22 +103,33 @@ int addAccessor(tinygltf::Model& model, const std::vector<float>& values, int ty
 } // namespace
 
 bool objHasMaterials(const std::string& path) {
-    return fileExtension(path) == "obj" && !mtllibName(readFileBytes(path)).empty();
+    if (fileExtension(path) != "obj") return false;
+    std::string text = readFileBytes(path);
+    detail::dropUtf8Bom(text);
+    const std::string name = mtllibName(text);
+    if (name.empty()) return false;
+    // A missing MTL (exporters write names that do not match the file, or leave it behind) costs the materials,
+    // not the geometry, as in other importers; one outside the folder is refused.
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(resolveInFolder(objFolder(path), name, path, "mtllib"), error)) {
+        logWarn(path + ": mtllib: '" + name.substr(0, 80) + "' is not a file next to the OBJ file: it is read without " +
+                "its materials (every face takes the default one)");
+        return false;
+    }
+    return true;
 }
 
 Bundle readObjScene(const std::string& path) {
-    const std::string text = readFileBytes(path);
+    std::string text = readFileBytes(path);
+    detail::dropUtf8Bom(text);
     detail::checkObj(text, path); // counts, numbers and text checked before tinyobjloader sees the bytes
-    // The MTL and its maps lie next to the OBJ, or, when it is a symbolic link (as `prt run` links inputs into a
-    // job's folder), next to its target.
-    std::error_code linkError;
-    const std::filesystem::path folder =
-        std::filesystem::weakly_canonical(std::filesystem::absolute(path), linkError).parent_path();
+    const std::filesystem::path folder = objFolder(path);
     const std::string mtlName = mtllibName(text);
     const std::filesystem::path mtlPath = insideFolder(folder, mtlName, path, "mtllib");
     if (std::filesystem::file_size(mtlPath) > (uint64_t(64) << 20))
         throw Error(mtlPath.string(), "", "larger than 64 MiB, more than an MTL file prt reads");
-    const std::string mtlText = readFileBytes(mtlPath.string());
+    std::string mtlText = readFileBytes(mtlPath.string());
+    detail::dropUtf8Bom(mtlText);
 
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
@@ -122,7 +150,7 @@ Bundle readObjScene(const std::string& path) {
         const tinyobj::material_t& source = materials[m];
         const std::string place = mtlPath.filename().string() + ": newmtl " + source.name.substr(0, 80);
         tinygltf::Material material;
-        material.name = source.name;
+        material.name = utf8FromLatin1(source.name); // glTF names are UTF-8; old MTL files write Latin-1
         material.pbrMetallicRoughness.baseColorFactor = {std::clamp(double(source.diffuse[0]), 0.0, 1.0),
                                                          std::clamp(double(source.diffuse[1]), 0.0, 1.0),
                                                          std::clamp(double(source.diffuse[2]), 0.0, 1.0), 1.0};
@@ -132,7 +160,7 @@ Bundle readObjScene(const std::string& path) {
             auto found = imageOf.find(texture.string());
             if (found == imageOf.end()) {
                 tinygltf::Image image;
-                image.name = texture.filename().string();
+                image.name = utf8FromLatin1(texture.filename().string());
                 std::string bytes = readFileBytes(texture.string());
                 image.image.assign(bytes.begin(), bytes.end());
                 image.as_is = true;
@@ -165,7 +193,7 @@ Bundle readObjScene(const std::string& path) {
             }
         }
     tinygltf::Mesh mesh;
-    mesh.name = std::filesystem::path(path).stem().string();
+    mesh.name = utf8FromLatin1(std::filesystem::path(path).stem().string());
     for (const auto& [material, corners] : cornersOf) {
         std::map<Corner, uint32_t> vertexOf;
         std::vector<float> positions, normals, texcoords;

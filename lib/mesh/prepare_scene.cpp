@@ -53,8 +53,9 @@ void validateScene(const Bundle& bundle, const std::string& file) {
 
 PreparedScene prepareScene(const MeshprepOptions& options, Bundle bundle) {
     auto refuse = [&](const char* flag) {
-        throw Error("", flag, "does not apply to a glTF scene, which meshprep keeps as it is; add --flatten to merge "
-                              "the scene into one welded mesh first", kExitUsage);
+        throw Error("", flag, "does not apply to a scene (a glTF file, or an OBJ with its MTL materials), which "
+                              "meshprep keeps as it is; add --flatten to merge the scene into one welded mesh first",
+                    kExitUsage);
     };
     if (options.decimateTo > 0) refuse("--decimate-to");
     if (options.scale != 1.0) refuse("--scale");

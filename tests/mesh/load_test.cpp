@@ -100,6 +100,22 @@ TEST_F(LoadMesh, ObjFansPolygonsAndSplitsCornersWithDifferentTexcoords) {
     EXPECT_FLOAT_EQ(mesh.texcoords[2 * 5 + 1], 1.0f);
 }
 
+// Windows editors start text with a UTF-8 byte order mark: the first line is still read (before, its vertex was
+// skipped and the face named a vertex the file "did not have"). UTF-16 is refused as such.
+TEST_F(LoadMesh, ObjAndOffAfterAUtf8ByteOrderMarkAreReadAndUtf16IsNamed) {
+    TriMesh obj = loadMesh(write("bom.obj", "\xef\xbb\xbfv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+    EXPECT_EQ(obj.vertexCount(), 3u);
+    EXPECT_EQ(obj.triangleCount(), 1u);
+    TriMesh off = loadMesh(write("bom.off", "\xef\xbb\xbfOFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+    EXPECT_EQ(off.triangleCount(), 1u);
+    try {
+        loadMesh(write("utf16.obj", std::string("\xfe\xff\0v\0 \0" "1", 8)));
+        ADD_FAILURE() << "UTF-16 was read";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("UTF-16"), std::string::npos) << e.what();
+    }
+}
+
 TEST_F(LoadMesh, ObjRelativeIndicesAndNormals) {
     std::string file = write("relative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nf -3//1 -2//1 -1//1\n");
     TriMesh mesh = loadMesh(file);
