@@ -62,6 +62,11 @@ TriMesh readGltfScene(const tinygltf::Model& model, const std::string& file, Sce
 // The asset's materials, textures, samplers and images into `scene` (materials then the default one), checked;
 // refuses required extensions prt cannot honour (checkRequiredExtensions).
 void readMaterials(const tinygltf::Model& model, const std::string& file, SceneAsset& scene);
+// Throws Error(file, PLACE, "expected TYPE (glTF 2.0 schema), got ...") for the first core property of the glTF
+// JSON `root` whose JSON type the glTF 2.0 schema does not allow (a name that is not a string, an index that is not an
+// integer >= 0, an object that is an array, an extension that is not an object, ...); properties the schema does
+// not define, and extras, are not checked. gltf_types.cpp.
+void checkGltfTypes(const nlohmann::json& root, const std::string& file);
 // Refuses, by name and with advice, the first of `required` (a file's extensionsRequired) that prt cannot honour.
 void checkRequiredExtensions(const std::vector<std::string>& required, const std::string& file);
 // Refuses an asset.version of glTF 1.0 (which parses far enough to find no glTF 2.0 meshes) by saying what it is.

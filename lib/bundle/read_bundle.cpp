@@ -150,6 +150,10 @@ tinygltf::Model loadModelFromBytes(const std::string& path, const std::string& b
     } else if (loaded) {
         jsonText = bytes;
     }
+    if (loaded) {
+        const nlohmann::json root = nlohmann::json::parse(jsonText, nullptr, false); // tinygltf parsed it already
+        if (!root.is_discarded()) checkGltfTypes(root, path);
+    }
     if (!loaded) {
         explainUnreadable(json, path);
         while (!error.empty() && std::isspace((unsigned char)error.back())) error.pop_back();

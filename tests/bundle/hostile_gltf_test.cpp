@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -201,6 +202,41 @@ TEST(HostileGltf, Gltf1BinaryIsNamedByItsHeaderVersion) {
     std::ofstream(path, std::ios::binary) << glb;
     std::string message = refusal(path);
     EXPECT_NE(message.find("glTF binary: version 1 is not supported"), std::string::npos) << message;
+}
+
+// Properties of the wrong JSON type, as in assimp's glTF2/wrongTypes: tinygltf reads them as absent (a material
+// whose pbrMetallicRoughness is an array became black and fully metallic) and a scene bundle carried them on. Each
+// is refused naming the property; without the check every one of them loads.
+TEST(HostileGltf, CorePropertiesOfTheWrongJsonTypeAreRefusedByPlace) {
+    json textured = squareGltf();
+    textured["materials"] = {{{"pbrMetallicRoughness", {{"metallicFactor", 0}}}}};
+    textured["meshes"][0]["primitives"][0]["material"] = 0;
+    const std::pair<std::function<void(json&)>, std::string> cases[] = {
+        {[](json& g) { g["meshes"][0]["name"] = 42; }, "meshes[0].name: expected a string"},
+        {[](json& g) { g["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", -1}}; },
+         "materials[0].pbrMetallicRoughness.baseColorTexture.index: expected an integer in 0.."},
+        {[](json& g) { g["materials"][0]["normalTexture"] = {{"index", 0}, {"scale", "not a number"}}; },
+         "materials[0].normalTexture.scale: expected a number"},
+        {[](json& g) { g["materials"][0]["pbrMetallicRoughness"] = {"not an object"}; },
+         "materials[0].pbrMetallicRoughness: expected an object"},
+        {[](json& g) {
+             g["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}, {"extensions", {{"KHR_texture_transform", "x"}}}};
+         },
+         "baseColorTexture.extensions.KHR_texture_transform: expected an object"},
+        {[](json& g) { g["meshes"][0]["primitives"] = g["meshes"][0]["primitives"][0]; },
+         "meshes[0].primitives: expected an array of objects"},
+        {[](json& g) { g["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = "0"; },
+         "meshes[0].primitives[0].attributes.POSITION: expected an integer"},
+        {[](json& g) { g["accessors"][1]["count"] = 0; }, "accessors[1].count: expected an integer in 1.."},
+        {[](json& g) { g["extensionsUsed"] = {"KHR_texture_transform", 3}; }, "extensionsUsed[1]: expected a string"},
+    };
+    for (const auto& [edit, expected] : cases) {
+        json gltf = textured;
+        edit(gltf);
+        const std::string message = refusal(writeGltf(gltf, "types.gltf"));
+        EXPECT_NE(message.find(expected), std::string::npos) << expected << "\n" << message;
+    }
+    EXPECT_EQ(refusal(writeGltf(textured, "types.gltf")), ""); // the file they were made from is read
 }
 
 TEST(HostileGltf, ClaimedVertexCountAboveTheCapIsRefusedNamingTheLimit) {
