@@ -84,6 +84,9 @@ void addBakeCommand(CLI::App& app) {
                         "Bake into TEXCOORD_K of the input (default: TEXCOORD_0 of a mesh; a scene's TEXCOORD_1 when it "
                         "is unique, else an atlas generated over every instance)")
         ->check(CLI::Range(0, 7));
+    command->add_flag("--generate-atlas", o.generateAtlas,
+                      "Bake into a generated lightmap atlas whatever texcoords the input has (texcoords shared by "
+                      "instances, overlapping or of zero area are no lightmap)");
     command->add_option("--format", args->format,
                         "Coefficient storage: half or float (one multi-channel OpenEXR) or u8 (8-bit PNG per "
                         "coefficient with a per-layer [min, max] JSON sidecar) or bundle (float32 rows in the bundle's own "

@@ -30,6 +30,8 @@ void checkOptions(const BakeOptions& options) {
                                      std::to_string(kMaxTransferSamples));
     if (options.bounces < 0) throw usage("--bounces", "must be >= 0");
     if (options.uvSet < -1) throw usage("--uv-set", "must be >= 0 (or -1: the default choice)");
+    if (options.generateAtlas && options.uvSet >= 0)
+        throw usage("--generate-atlas", "bakes into a generated atlas, not into the --uv-set given");
     if (!(options.cage > 0.0 && options.cage < 1.0)) throw usage("--cage", "must lie in (0, 1)");
     if (!(options.maxMissFraction >= 0.0 && options.maxMissFraction <= 1.0))
         throw usage("--max-miss", "must lie in [0, 1]");
@@ -56,7 +58,8 @@ TriMesh sceneBakeMesh(Bundle input, const BakeOptions& options, BakeSurface& sur
     if (options.albedoOverride)
         throw usage("--albedo", "a scene (" + options.input + ") takes its albedo from its materials");
     TriMesh mesh = input.mesh;
-    mesh.texcoords = sceneAtlasTexcoords(input, options.uvSet, options.input, chosenSet);
+    if (options.generateAtlas) chosenSet = -1;
+    else mesh.texcoords = sceneAtlasTexcoords(input, options.uvSet, options.input, chosenSet);
     input.layers.clear();
     auto scene = std::make_shared<const Bundle>(std::move(input));
     surface.materials = std::make_shared<const Surface>(decodeSurface(*scene, options.input));
@@ -122,6 +125,7 @@ BakeSurface bakeSurface(const BakeOptions& options) {
     } else {
         mesh = std::move(input.mesh);
         if (options.uvSet > 0) mesh.texcoords = readTexcoordSet(options.input, options.uvSet);
+        if (options.generateAtlas) mesh.texcoords.clear();
     }
     bool generated = mesh.texcoords.empty();
     nlohmann::json& atlasRecord = surface.atlasRecord;
@@ -152,7 +156,11 @@ BakeSurface bakeSurface(const BakeOptions& options) {
     TexelSamples& samples = surface.samples;
     samples = rasteriseAtlas(mesh, raster, options.input);
     const size_t count = samples.texel.size();
-    if (count == 0) throw Error(options.input, "texcoords", "cover no texel of the atlas");
+    if (count == 0)
+        throw Error(options.input, "texcoords",
+                    "cover no texel of the atlas (" + std::to_string(samples.degenerateTriangles) + " of " +
+                        std::to_string(mesh.triangleCount()) + " triangles have zero UV area): these texcoords are "
+                        "no lightmap: bake into a generated atlas with --generate-atlas");
     if (samples.overlappingTexels > 0)
         logWarn("bake: " + std::to_string(samples.overlappingTexels) +
                 " texels lie under overlapping UV triangles; the lowest triangle keeps each");

@@ -250,6 +250,9 @@ struct BakeOptions {
     // lightmap set, when no mesh is placed twice), and a generated atlas where that set is absent. A scene's
     // TEXCOORD_0 addresses its textures, so a scene takes it only when asked.
     int uvSet = -1;
+    // Bake into a generated lightmap atlas whatever texcoords the input has (for texcoords that are no lightmap:
+    // shared between instances, overlapping or of zero area). Excludes uvSet >= 0.
+    bool generateAtlas = false;
     std::array<float, 3> albedo = {1.0f, 1.0f, 1.0f}; // used where the low mesh has no albedo, or always with
     bool albedoOverride = false;                      // albedoOverride (linear RGB in [0, 1])
     TexelFormat format = TexelFormat::Half;

@@ -35,6 +35,7 @@ nlohmann::json texelShardIdentity(const BakeOptions& options, const BakeSurface&
             {"height", surface.samples.height},
             {"texel_count", surface.samples.texel.size()},
             {"uv_set", options.uvSet},
+            {"generate_atlas", options.generateAtlas},
             {"wrap", options.wrap == UvWrap::Repeat ? "repeat" : "none"},
             {"allow_overlap", options.allowOverlap},
             {"padding", options.padding},

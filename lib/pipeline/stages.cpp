@@ -129,6 +129,7 @@ StageSpec bakeStage() {
                    {"format", ParamType::String, 0.0, 0.0, {"half", "float", "u8"}},
                    {"wrap", ParamType::String, 0.0, 0.0, {"none", "repeat"}},
                    {"allow-overlap", ParamType::Boolean},
+                   {"generate-atlas", ParamType::Boolean},
                    {"dilate-only", ParamType::Boolean},
                    {"no-seam-stitch", ParamType::Boolean},
                    {"low-position", ParamType::Boolean},

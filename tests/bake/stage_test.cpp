@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -80,6 +81,29 @@ TEST(BakeStage, OverlappingUvs) {
     TriMesh twice = mergeMeshes({plane, makePlane(1.0f, 2, 1.0f)}); // the second copy keeps UVs [0, 1]^2
     Error e = expectFailureWithoutOutput(smallBake(writeMesh(folder, "low.glb", twice), folder / "out.glb"), folder, 1);
     EXPECT_NE(e.problem().find("overlap"), std::string::npos) << e.what();
+}
+
+// Texcoords that all meet in one point (assimp's WusonOBJ.obj has a single `vt`) cover no texel: refused, naming
+// the zero-area triangles and --generate-atlas, which bakes into a generated atlas instead.
+TEST(BakeStage, DegenerateUvsAreRefusedAndGenerateAtlasBakesThem) {
+    Folder folder("degenerate");
+    TriMesh plane = makePlane(1.0f, 2);
+    for (float& t : plane.texcoords) t = 0.5f;
+    BakeOptions options = smallBake(writeMesh(folder, "low.glb", plane), folder / "out.glb");
+    Error e = expectFailureWithoutOutput(options, folder, 1);
+    EXPECT_NE(e.problem().find("8 of 8 triangles have zero UV area"), std::string::npos) << e.what();
+    EXPECT_NE(e.problem().find("--generate-atlas"), std::string::npos) << e.what();
+    options.generateAtlas = true;
+    runBake(options);
+    Bundle bundle = readBundle(options.output);
+    const Layer* transfer = findLayer(bundle, "texel_transfer");
+    ASSERT_TRUE(transfer);
+    EXPECT_EQ(transfer->params["atlas"]["generated"], true);
+    ASSERT_EQ(bundle.mesh.texcoords.size(), 2 * bundle.mesh.vertexCount());
+    EXPECT_TRUE(std::any_of(bundle.mesh.texcoords.begin(), bundle.mesh.texcoords.end(),
+                            [](float t) { return t != 0.5f; })); // the generated atlas, not the collapsed UVs
+    options.uvSet = 0; // both at once are a usage error
+    EXPECT_EQ(expectFailureWithoutOutput(options, folder, folder.files()).exitCode(), kExitUsage);
 }
 
 TEST(BakeStage, ResolutionOutOfRange) {
