@@ -29,10 +29,10 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
                 std::snprintf(escaped, sizeof escaped, "\\x%02x", unsigned((unsigned char)*c));
                 shown += (unsigned char)*c < 0x80 ? std::string(1, *c) : std::string(escaped);
             }
-            if (!answer) {
-                LogOptions json;
-                json.json = std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--log-json") == 0; });
-                setLogOptions(json);
+            if (!answer) { // the message obeys --log-json, though the flags are not parsed yet
+                LogOptions options;
+                options.json = std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--log-json") == 0; });
+                setLogOptions(options);
             }
             logError("argument " + std::to_string(i) + " ('" + shown + "') is not UTF-8: prt writes file names and "
                      "values into JSON (reports, logs, bundles), which holds UTF-8 only; rename the file or pass the "

@@ -39,7 +39,8 @@ std::vector<SeamEdge> findSeams(const TriMesh& mesh) {
     std::map<std::pair<uint32_t, uint32_t>, std::vector<std::pair<uint32_t, int>>> uses;
     for (size_t t = 0; t < mesh.triangleCount(); ++t)
         for (int k = 0; k < 3; ++k) {
-            const uint32_t p = uint32_t(ids[mesh.indices[3 * t + k]]), q = uint32_t(ids[mesh.indices[3 * t + (k + 1) % 3]]);
+            const uint32_t p = uint32_t(ids[mesh.indices[3 * t + k]]);
+            const uint32_t q = uint32_t(ids[mesh.indices[3 * t + (k + 1) % 3]]);
             if (p != q) uses[{std::min(p, q), std::max(p, q)}].push_back({uint32_t(t), k});
         }
     std::vector<SeamEdge> seams;

@@ -17,9 +17,11 @@ namespace {
 
 using nlohmann::json;
 
-// What a property holds. Id: a glTF index (an integer >= 0); Count: an integer >= 1; Object / Objects: one / an
-// array of objects of `kind`; IdMap: an object of ids (attributes, morph targets); IdMaps: an array of those.
-enum class Type { String, Number, Id, Count, Boolean, Numbers, Ids, Strings, Object, Objects, IdMap, IdMaps };
+// What a property holds. Id: a glTF index or enum value (an integer in 0..2^31 - 1); Offset / Count: a byte offset
+// or stride (an integer >= 0) / a length or count (>= 1), up to 2^53, so that sizes past what prt reads reach the
+// readers' own caps and messages; Object / Objects: one / an array of objects of `kind`; IdMap: an object of ids
+// (attributes, morph targets); IdMaps: an array of those.
+enum class Type { String, Number, Id, Offset, Count, Boolean, Numbers, Ids, Strings, Object, Objects, IdMap, IdMaps };
 
 struct Kind;
 struct Property {
@@ -44,11 +46,11 @@ const Kind kMaterial{{{"pbrMetallicRoughness", Type::Object, &kPbr},
                       {"occlusionTexture", Type::Object, &kOcclusionTextureInfo},
                       {"emissiveTexture", Type::Object, &kTextureInfo}, {"emissiveFactor", Type::Numbers},
                       {"alphaMode", Type::String}, {"alphaCutoff", Type::Number}, {"doubleSided", Type::Boolean}}};
-const Kind kSparseIndices{{{"bufferView", Type::Id}, {"byteOffset", Type::Id}, {"componentType", Type::Id}}};
-const Kind kSparseValues{{{"bufferView", Type::Id}, {"byteOffset", Type::Id}}};
+const Kind kSparseIndices{{{"bufferView", Type::Id}, {"byteOffset", Type::Offset}, {"componentType", Type::Id}}};
+const Kind kSparseValues{{{"bufferView", Type::Id}, {"byteOffset", Type::Offset}}};
 const Kind kSparse{{{"count", Type::Count}, {"indices", Type::Object, &kSparseIndices},
                     {"values", Type::Object, &kSparseValues}}};
-const Kind kAccessor{{{"bufferView", Type::Id}, {"byteOffset", Type::Id}, {"componentType", Type::Id},
+const Kind kAccessor{{{"bufferView", Type::Id}, {"byteOffset", Type::Offset}, {"componentType", Type::Id},
                       {"normalized", Type::Boolean}, {"count", Type::Count}, {"type", Type::String},
                       {"max", Type::Numbers}, {"min", Type::Numbers}, {"sparse", Type::Object, &kSparse}}};
 const Kind kChannelTarget{{{"node", Type::Id}, {"path", Type::String}}};
@@ -58,8 +60,8 @@ const Kind kAnimation{{{"channels", Type::Objects, &kChannel}, {"samplers", Type
 const Kind kAsset{{{"copyright", Type::String}, {"generator", Type::String}, {"version", Type::String},
                    {"minVersion", Type::String}}};
 const Kind kBuffer{{{"uri", Type::String}, {"byteLength", Type::Count}}};
-const Kind kBufferView{{{"buffer", Type::Id}, {"byteOffset", Type::Id}, {"byteLength", Type::Count},
-                        {"byteStride", Type::Id}, {"target", Type::Id}}};
+const Kind kBufferView{{{"buffer", Type::Id}, {"byteOffset", Type::Offset}, {"byteLength", Type::Count},
+                        {"byteStride", Type::Offset}, {"target", Type::Id}}};
 const Kind kOrthographic{{{"xmag", Type::Number}, {"ymag", Type::Number}, {"zfar", Type::Number}, {"znear", Type::Number}}};
 const Kind kPerspective{{{"aspectRatio", Type::Number}, {"yfov", Type::Number}, {"zfar", Type::Number},
                          {"znear", Type::Number}}};
@@ -90,8 +92,11 @@ const Kind kRoot{{{"extensionsUsed", Type::Strings}, {"extensionsRequired", Type
                                  " " + jsonExcerpt(value, 40));
 }
 
-void checkId(const json& value, const std::string& file, const std::string& place, int64_t min) {
-    jsonIntegerValue(value, file, place, min, std::numeric_limits<int32_t>::max());
+void checkId(const json& value, const std::string& file, const std::string& place) {
+    jsonIntegerValue(value, file, place, 0, std::numeric_limits<int32_t>::max());
+}
+void checkSize(const json& value, const std::string& file, const std::string& place, int64_t min) {
+    jsonIntegerValue(value, file, place, min, int64_t(1) << 53);
 }
 
 void checkArray(const json& value, const std::string& file, const std::string& place, const char* expected,
@@ -102,7 +107,7 @@ void checkArray(const json& value, const std::string& file, const std::string& p
 
 void checkIdMap(const json& value, const std::string& file, const std::string& place) {
     if (!value.is_object()) wrongType(value, file, place, "an object of indices");
-    for (const auto& [key, id] : value.items()) checkId(id, file, place + "." + key, 0);
+    for (const auto& [key, id] : value.items()) checkId(id, file, place + "." + key);
 }
 
 // `object` against `kind`, then its name, extensions and extras. The schema nests at most 5 objects deep, so the
@@ -110,7 +115,8 @@ void checkIdMap(const json& value, const std::string& file, const std::string& p
 void checkObject(const json& object, const Kind& kind, const std::string& file, const std::string& place) {
     if (!object.is_object()) wrongType(object, file, place, "an object");
     const std::string prefix = place.empty() ? "" : place + ".";
-    if (object.contains("name") && !object["name"].is_string()) wrongType(object["name"], file, prefix + "name", "a string");
+    if (object.contains("name") && !object["name"].is_string())
+        wrongType(object["name"], file, prefix + "name", "a string");
     if (object.contains("extensions")) {
         const json& extensions = object["extensions"];
         if (!extensions.is_object()) wrongType(extensions, file, prefix + "extensions", "an object");
@@ -127,16 +133,19 @@ void checkObject(const json& object, const Kind& kind, const std::string& file, 
             if (!value.is_string()) wrongType(value, file, at, "a string");
             break;
         case Type::Number: jsonNumberValue(value, file, at); break;
-        case Type::Id: checkId(value, file, at, 0); break;
-        case Type::Count: checkId(value, file, at, 1); break;
+        case Type::Id: checkId(value, file, at); break;
+        case Type::Offset: checkSize(value, file, at, 0); break;
+        case Type::Count: checkSize(value, file, at, 1); break;
         case Type::Boolean:
             if (!value.is_boolean()) wrongType(value, file, at, "true or false");
             break;
         case Type::Numbers:
-            checkArray(value, file, at, "an array of numbers", [&](const json& e, const std::string& p) { jsonNumberValue(e, file, p); });
+            checkArray(value, file, at, "an array of numbers",
+                       [&](const json& e, const std::string& p) { jsonNumberValue(e, file, p); });
             break;
         case Type::Ids:
-            checkArray(value, file, at, "an array of indices", [&](const json& e, const std::string& p) { checkId(e, file, p, 0); });
+            checkArray(value, file, at, "an array of indices",
+                       [&](const json& e, const std::string& p) { checkId(e, file, p); });
             break;
         case Type::Strings:
             checkArray(value, file, at, "an array of strings", [&](const json& e, const std::string& p) {
