@@ -47,8 +47,8 @@ struct ViewSet {
 const ViewSet& viewSet();
 
 // ---- the direction grid ------------------------------------------------------------------------------------
-// A cube grid of 6 x resolution^2 texel centres (faces +X, -X, +Y, -Y, +Z, -Z) with their exact solid angles,
-// summing to 4 pi.
+// A cube grid of 6 x resolution^2 texel centres (a cube strip's, faces +X, -X, +Y, -Y, +Z, -Z as sh::kCubeFaces
+// lays them out) with their exact solid angles, summing to 4 pi.
 struct DirectionGrid {
     int resolution = 0;
     std::vector<float> directions; // [count][3], unit

@@ -1,6 +1,8 @@
 // The 92-view set: a frequency-3 (edge-trisected) geodesic icosahedron, built once.
 #include "glossy.h"
 
+#include "sh.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -81,25 +83,18 @@ const ViewSet& viewSet() {
 DirectionGrid cubeGrid(int resolution) {
     DirectionGrid grid;
     grid.resolution = resolution;
-    // Solid angle of the face-plane rectangle [0, x] x [0, y] at distance 1 (docs/conventions.md, "Cube maps").
-    auto area = [](double x, double y) { return std::atan2(x * y, std::sqrt(x * x + y * y + 1.0)); };
-    for (int face = 0; face < 6; ++face) {
-        int axis = face / 2;
-        double sign = face % 2 ? -1.0 : 1.0;
+    // The texel centres of a cube strip of faces `resolution` texels wide, in strip order, and their exact solid
+    // angles: prt's one cube layout (sh::kCubeFaces, docs/conventions.md "Cube maps").
+    for (int face = 0; face < 6; ++face)
         for (int row = 0; row < resolution; ++row)
             for (int column = 0; column < resolution; ++column) {
-                double u0 = -1.0 + 2.0 * column / resolution, u1 = -1.0 + 2.0 * (column + 1) / resolution;
-                double v0 = -1.0 + 2.0 * row / resolution, v1 = -1.0 + 2.0 * (row + 1) / resolution;
-                double u = (u0 + u1) / 2, v = (v0 + v1) / 2;
                 double d[3];
-                d[axis] = sign;
-                d[(axis + 1) % 3] = u;
-                d[(axis + 2) % 3] = v;
-                double length = std::sqrt(1.0 + u * u + v * v);
-                for (int c = 0; c < 3; ++c) grid.directions.push_back(float(d[c] / length));
-                grid.solidAngle.push_back(float(area(u1, v1) - area(u0, v1) - area(u1, v0) + area(u0, v0)));
+                sh::cubeStripDirection(resolution, column, face * resolution + row, d);
+                for (int c = 0; c < 3; ++c) grid.directions.push_back(float(d[c]));
+                const double a0 = -1.0 + 2.0 * column / resolution, a1 = -1.0 + 2.0 * (column + 1) / resolution;
+                const double b0 = 1.0 - 2.0 * (row + 1) / resolution, b1 = 1.0 - 2.0 * row / resolution;
+                grid.solidAngle.push_back(float(sh::cubeRectangleSolidAngle(a0, a1, b0, b1)));
             }
-    }
     return grid;
 }
 
