@@ -239,6 +239,15 @@ RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source) {
 }
 
 void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance) {
+    if (begin > end || end > model.vertexCount)
+        throw Error("", "relightAdaptive", "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
+                                               ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
+                    kExitFailure);
+    checkModelArrays(model, "relightAdaptive");
+    if (model.offsets.empty() || model.storage == TransferStorage::Cpca)
+        throw Error("", "relightAdaptive", "needs a model with per-vertex orders (offsets), not clustered PCA; relight() "
+                                           "takes every model", kExitFailure);
+    if (begin == end) return;
     relightRaggedRange(model, lighting, begin, end, radiance);
     if (!model.albedo.empty())
         for (size_t i = 0; i < (end - begin) * 3; ++i) radiance[i] *= model.albedo[begin * 3 + i];

@@ -12,6 +12,11 @@
 namespace prt {
 
 std::vector<float> fitLighting(const float* lighting, int lightingCoefficientCount, int coefficientCount) {
+    const int most = sh::kMaxOrder * sh::kMaxOrder;
+    if (lightingCoefficientCount < 0 || lightingCoefficientCount > most || coefficientCount < 0 || coefficientCount > most)
+        throw Error("", "fitLighting", "coefficient counts " + std::to_string(lightingCoefficientCount) + " and " +
+                                           std::to_string(coefficientCount) + " are not both in 0.." + std::to_string(most),
+                    kExitFailure);
     std::vector<float> fitted(size_t(coefficientCount) * 3, 0.0f);
     std::copy_n(lighting, size_t(std::min(lightingCoefficientCount, coefficientCount)) * 3, fitted.begin());
     return fitted;

@@ -83,6 +83,8 @@ void relightRows(const float* transfer, size_t vertexCount, int values, const fl
 
 void relight(const float* transfer, size_t vertexCount, int coefficientCount, const float* lighting,
              float* radiance) {
+    if (coefficientCount < 1)
+        throw Error("", "relight", std::to_string(coefficientCount) + " coefficients per row (at least 1)", kExitFailure);
     // Where the processor has AVX2, orders 1..5 take the vector kernel (the same bits), all but an odd order's
     // last row.
     const size_t done = relightFloatRows(transfer, vertexCount, coefficientCount, lighting, radiance);
@@ -137,6 +139,8 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
         throw Error("", "relight", "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
                                        ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
                     kExitFailure);
+    checkModelArrays(model, "relight");
+    if (begin == end) return; // nothing to relight: the lighting is not read
     // Cpca: each cluster's mean and directions projected on the lighting once, before any task runs; blocked u8
     // codes: the lighting quantised once.
     std::vector<float> projections;

@@ -198,8 +198,9 @@ PRT_ALWAYS_INLINE inline void cpcaBody(const float* __restrict projections, cons
     for (size_t v = 0; v < count; ++v) {
         const float* p = projections + size_t(cluster[v]) * (M + 1) * 4;
         const float* w = weights + v * M;
-        __builtin_prefetch(w + kWeightsAhead);
-        __builtin_prefetch(cluster + v + kClustersAhead);
+        // Addresses as integers: past the arrays' ends (and for M = 0, where weights may be null) they point nowhere.
+        __builtin_prefetch(reinterpret_cast<const void*>(uintptr_t(w) + kWeightsAhead * sizeof(float)));
+        __builtin_prefetch(reinterpret_cast<const void*>(uintptr_t(cluster + v) + kClustersAhead * sizeof(uint32_t)));
         // The mean's projection in the even half, 0 in the odd.
         V8f sum = __builtin_shufflevector(load4(p), V4f{}, 0, 1, 2, 3, 4, 5, 6, 7);
         if constexpr (kM != 0 && kM % 8 == 0) { // weights 8 at a time, each pair's spread by a fixed shuffle

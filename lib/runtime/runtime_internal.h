@@ -59,6 +59,12 @@ TexelRelightModel adaptiveTexelModel(Bundle& bundle, const std::string& source);
 // irradiance transfer) and the bundle's "diffuse_albedo" layer, checked: [vertexCount, 3], values in [0, 1].
 void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::string& source, RelightModel& model);
 
+// Throws prt::Error("", place, ...) where the model's arrays do not have the sizes its vertex count, order, storage
+// and layout say (a model moved from, arrays changed after loading, a hand-built model): O(1), the sizes only. The
+// values (offsets' steps, codes, cluster indices, lanes) are as a loader or blockRows left them, which check them.
+// model_check.cpp.
+void checkModelArrays(const RelightModel& model, const char* place);
+
 // The lighting of the u8 blocked kernel (relight_codes_kernel.inc, relightBlockedU8Kernel): per channel c one
 // scale s_c = max_j |L_jc| / 32767 and each value as an int16 Lq_j = round(L_j / s_c), |s_c Lq_j - L_j| <= 0.51
 // s_c. Per band l and channel c (index 3 l + c): the band's coefficients m = l^2 .. l^2 + 2l taken in pairs (l^2 +

@@ -30,7 +30,8 @@ bool hasAdaptiveTransfer(const Bundle& bundle);
 // relight(model, ...) gives them: each vertex with its own bands, the lighting's first n_v^2 coefficients. Float
 // and half rows go in runs of equal order through the same kernel as full-order rows, so a model whose every vertex
 // has the full order relights bit for bit like the full-order model; blocked codes (blockRows) through the blocked
-// kernel. Every storage but Cpca (whose rows have no offsets).
+// kernel. Every storage but Cpca (whose rows have no offsets). Throws prt::Error for a range outside the model, for
+// a model without offsets or of storage Cpca, and for one relight() refuses.
 void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance);
 
 

@@ -11,6 +11,7 @@ namespace prt {
 
 // Lighting of `coefficientCount` RGB coefficients from lighting of another count: their common prefix, with
 // missing coefficients set to zero. Both counts are squares, so this is projecting both onto their common bands.
+// Throws prt::Error for a count outside 0..sh::kMaxOrder^2.
 std::vector<float> fitLighting(const float* lighting, int lightingCoefficientCount, int coefficientCount);
 
 // Reads prt-sh JSON as `prt envsh` writes it ({"format":"prt-sh","order":L,"coefficients":[[r,g,b],...]}).

@@ -130,7 +130,7 @@ Bundle readRelightBundle(const std::string& bundlePath);
 // transfer is [vertexCount][coefficientCount][3], lighting [coefficientCount][3], radiance [vertexCount][3].
 // Single-threaded and allocation-free; sums in float in a fixed order, so results do not depend on how callers
 // split the vertices. To stream a range [begin, end), pass transfer + begin * coefficientCount * 3 and
-// end - begin vertices.
+// end - begin vertices. Throws prt::Error for coefficientCount < 1.
 void relight(const float* transfer, size_t vertexCount, int coefficientCount, const float* lighting,
              float* radiance);
 
@@ -147,8 +147,15 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 // cluster's mean and directions on the lighting once per call, then sums M weights per vertex, which agrees
 // with the kernel on the decoded rows within float rounding (tests/runtime). Bit-identical for every job system.
 // Needs lighting of model.order * model.order RGB coefficients (see fitLighting), end <= model.vertexCount and
-// radiance sized (end - begin) * 3: row 0 of radiance is vertex `begin`. Throws prt::Error for a range outside
-// the model. Allocates only for Cpca (the per-call projections).
+// radiance sized (end - begin) * 3: row 0 of radiance is vertex `begin`; an empty range reads neither (they may be
+// null). Throws prt::Error for a range outside the model, and for a model whose arrays do not have the sizes its
+// vertex count, order, storage and layout say (checked on every call, O(1): a model moved from, or whose arrays
+// were changed after loading); the arrays' values (offsets, codes, cluster indices) are trusted as the loaders and
+// blockRows checked them. Allocates only for Cpca (the per-call projections).
+// Cost per call: a ragged blocked model computes every task block the range touches whole, and Cpca projects every
+// cluster on the lighting, so streaming a model in small ranges costs those again per range (graded u8 codes of
+// 29,394 vertices in calls of 16 vertices: 235x the time of one call): stream in ranges of whole kRelightBlock blocks. Lighting that is not finite gives
+// infinities or NaN (u8 codes and Cpca: NaN, from the quantisation or from products of infinity and zero).
 void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance,
              const JobSystem& jobs = {});
 

@@ -1,0 +1,90 @@
+// The sizes of a RelightModel's arrays against its counts, storage and layout (checkModelArrays): what relight()
+// checks on every call, so that a model an engine built by hand, or moved from, is refused instead of read past.
+#include "runtime.h"
+
+#include "runtime_internal.h"
+
+#include <string>
+
+namespace prt {
+
+namespace {
+
+[[noreturn]] void refuse(const char* place, const std::string& problem) {
+    throw Error("", place, "the model's " + problem, kExitFailure);
+}
+
+void requireSize(size_t size, size_t expected, const char* place, const char* array) {
+    if (size != expected)
+        refuse(place, std::string(array) + " holds " + std::to_string(size) + " values where its counts and layout "
+                      "say " + std::to_string(expected) + " (a model moved from, or arrays changed after loading?)");
+}
+
+} // namespace
+
+void checkModelArrays(const RelightModel& model, const char* place) {
+    const size_t V = model.vertexCount;
+    if (model.order < 1 || model.order > sh::kMaxOrder)
+        refuse(place, "order " + std::to_string(model.order) + " is outside 1.." + std::to_string(sh::kMaxOrder));
+    const size_t n = size_t(model.order), values = 3 * n * n;
+    if (!model.albedo.empty()) requireSize(model.albedo.size(), 3 * V, place, "albedo");
+    if (model.storage == TransferStorage::Cpca) {
+        if (model.cpcaComponents < 0 || (V > 0 && model.cpcaClusters == 0))
+            refuse(place, "clustered PCA has " + std::to_string(model.cpcaComponents) + " components and " +
+                              std::to_string(model.cpcaClusters) + " clusters");
+        const size_t M = size_t(model.cpcaComponents);
+        requireSize(model.cpcaWeights.size(), V * M, place, "cpcaWeights");
+        requireSize(model.cpcaCluster.size(), V, place, "cpcaCluster");
+        requireSize(model.cpcaBasis.size(), size_t(model.cpcaClusters) * (M + 1) * values, place, "cpcaBasis");
+        return;
+    }
+    // Rows: V * n^2, or with offsets (every storage but float32 has them) offsets[V].
+    if (model.offsets.empty() && model.storage != TransferStorage::Float32)
+        refuse(place, "encoded rows have no offsets");
+    if (!model.offsets.empty()) requireSize(model.offsets.size(), V + 1, place, "offsets");
+    const size_t rows = model.offsets.empty() ? V * n * n : size_t(model.offsets[V]);
+    if (!model.offsets.empty() && (model.offsets[0] != 0 || rows > V * n * n))
+        refuse(place, "offsets run from " + std::to_string(model.offsets[0]) + " to " + std::to_string(rows) +
+                          ", not from 0 to at most " + std::to_string(V * n * n) + " rows");
+    if (model.storage == TransferStorage::Float32) return requireSize(model.transfer.size(), 3 * rows, place, "transfer");
+    const size_t stored = model.storage == TransferStorage::Float16 ? model.halves.size()
+                          : model.storage == TransferStorage::Uint8 ? model.codes8.size()
+                                                                    : model.codes16.size();
+    const char* array = model.storage == TransferStorage::Float16 ? "halves"
+                        : model.storage == TransferStorage::Uint8 ? "codes8"
+                                                                  : "codes16";
+    const bool coded = model.storage != TransferStorage::Float16;
+    if (!model.rowsBlocked) {
+        requireSize(stored, 3 * rows, place, array);
+        if (coded && !model.scaleCluster.empty()) {
+            requireSize(model.scaleCluster.size(), V, place, "scaleCluster");
+            if (model.bandScales.size() % n != 0) refuse(place, "bandScales are not whole clusters of order bands");
+        } else if (coded) { // one start per task block, and (as the loader writes it) the end after the last
+            const size_t tasks = (V + kRelightBlock - 1) / kRelightBlock;
+            if (model.bandBlockStarts.size() < tasks || model.bandBlockStarts.size() > tasks + 1)
+                requireSize(model.bandBlockStarts.size(), tasks + 1, place, "bandBlockStarts");
+            if (model.bandBlockStarts.size() == tasks + 1)
+                requireSize(model.bandScales.size(), model.bandBlockStarts.back(), place, "bandScales");
+            else if (tasks > 0 && model.bandScales.size() < model.bandBlockStarts.back())
+                refuse(place, "bandScales end before the last task block's first scale");
+        }
+        return;
+    }
+    // Vertex-blocked (blockRows): blocks of one order, or ragged groups described by blockedRuns.
+    size_t blockedValues = 0, blockedScales = 0;
+    if (model.blockedRuns.empty()) {
+        const size_t blocks = (V + kCodeBlock - 1) / kCodeBlock;
+        blockedValues = blocks * values * kCodeBlock;
+        blockedScales = blocks * n * kCodeBlock;
+    } else {
+        requireSize(model.blockedRuns.size(), (V + kRelightBlock - 1) / kRelightBlock * 8 + 1, place, "blockedRuns");
+        const BlockedRun& end = model.blockedRuns.back();
+        requireSize(model.blockedLanes.size(), size_t(end.group) * kCodeBlock, place, "blockedLanes");
+        blockedValues = size_t(end.value);
+        blockedScales = size_t(end.scale);
+    }
+    requireSize(stored, blockedValues, place, array);
+    if (coded) requireSize(model.bandScales.size(), blockedScales, place, "bandScales");
+}
+
+} // namespace prt
