@@ -36,6 +36,10 @@ std::string canonicalExtensionText(nlohmann::json extension);
 // tinygltf's model of a glTF file's bytes (`path` names it in messages), with the checks readBundle makes before
 // tinygltf parses (truncation, JSON nesting); `jsonText` receives the glTF JSON as the bytes hold it.
 tinygltf::Model loadModelFromBytes(const std::string& path, const std::string& bytes, std::string& jsonText);
+// A .glb's header against the file: version 2, and a declared length that is the file's. Throws Error(path, "glTF
+// binary", ...) naming what differs. Every reader of a .glb checks its header here (loadModelFromBytes,
+// readBundleHeader).
+void checkGlbHeader(const std::string& path, uint32_t version, uint64_t declaredLength, uint64_t fileSize);
 
 // What readBundleHeader streamed of buffer 0, which its model holds only up to the first layer view.
 struct StreamedBuffer {

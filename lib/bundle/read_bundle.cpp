@@ -100,23 +100,31 @@ static void explainUnreadable(std::string_view jsonText, const std::string& path
     checkRequiredExtensions(required, path);
 }
 
+void checkGlbHeader(const std::string& path, uint32_t version, uint64_t declaredLength, uint64_t fileSize) {
+    // A binary of glTF 1.0 (KHR_binary_glTF) lays out its header otherwise: say what it is before reading on.
+    if (version != 2)
+        throw Error(path, "glTF binary", "version " + std::to_string(version) + " is not supported; prt reads glTF 2.0 "
+                                         "(convert the file, for example with the Khronos glTF 1.0 to 2.0 converter)");
+    // The most common damage, a cut-off download or copy, gets a plain message instead of tinygltf's generic one.
+    if (declaredLength > fileSize)
+        throw Error(path, "glTF binary", "truncated: the header declares " + std::to_string(declaredLength) +
+                                             " bytes, the file has " + std::to_string(fileSize));
+    if (declaredLength < fileSize)
+        throw Error(path, "glTF binary", std::to_string(fileSize - declaredLength) + " bytes past the " +
+                                             std::to_string(declaredLength) + " its header declares (two files joined, "
+                                             "or a copy that appended to an old one?)");
+}
+
 tinygltf::Model loadModelFromBytes(const std::string& path, const std::string& bytes, std::string& jsonText) {
     if (bytes.empty()) throw Error(path, "", "empty file");
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error(path, "", "larger than 4 GiB, the glTF limit");
     bool binary = bytes.compare(0, 4, "glTF") == 0;
     const std::string place = binary ? "glTF binary" : "glTF";
-    // A binary of glTF 1.0 (KHR_binary_glTF) lays out its header otherwise: say what it is before reading on.
-    uint32_t binaryVersion = 2;
-    if (binary && bytes.size() >= 8) std::memcpy(&binaryVersion, bytes.data() + 4, 4);
-    if (binaryVersion != 2)
-        throw Error(path, place, "version " + std::to_string(binaryVersion) + " is not supported; prt reads glTF 2.0 "
-                                 "(convert the file, for example with the Khronos glTF 1.0 to 2.0 converter)");
-    // The most common damage, a cut-off download or copy, gets a plain message instead of tinygltf's generic one.
-    uint32_t declaredLength = 0;
-    if (binary && bytes.size() >= 12) std::memcpy(&declaredLength, bytes.data() + 8, 4);
-    if (declaredLength > bytes.size())
-        throw Error(path, place, "truncated: the header declares " + std::to_string(declaredLength) + " bytes, the file has " +
-                                     std::to_string(bytes.size()));
+    if (binary && bytes.size() >= 12) {
+        uint32_t head[3];
+        std::memcpy(head, bytes.data(), sizeof head);
+        checkGlbHeader(path, head[1], head[2], bytes.size());
+    }
     // Nesting bounded before tinygltf's recursive parser sees the JSON (a GLB's first chunk).
     uint32_t jsonChunk = 0;
     if (binary && bytes.size() >= 20) std::memcpy(&jsonChunk, bytes.data() + 12, 4);

@@ -62,8 +62,7 @@ BundleHeader readBundleHeader(const std::string& path) {
     if (fileSize < sizeof head) refuse(path, "too short for a .glb");
     readAt(in, 0, head, sizeof head, path);
     if (std::memcmp(head, "glTF", 4) != 0) refuse(path, "not a .glb: a bundle is streamed from a glTF binary only");
-    if (head[2] > fileSize)
-        refuse(path, "truncated: the header declares " + std::to_string(head[2]) + " bytes, the file has " + std::to_string(fileSize));
+    detail::checkGlbHeader(path, head[1], head[2], fileSize);
     const uint64_t length = head[2], jsonLength = head[3], binaryStart = 28 + jsonLength;
     if (head[4] != 0x4E4F534Au || binaryStart > length) refuse(path, "has no JSON chunk followed by a BIN chunk");
     std::string text(jsonLength, '\0');

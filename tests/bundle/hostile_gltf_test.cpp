@@ -1,6 +1,7 @@
 // Crafted glTF files: node DAGs, cycles, deep trees, URIs that leave the file's folder, strips and fans,
 // glTF 1.0 and claimed sizes over the element cap. Each test failed (or hung) before its fix.
 #include "bundle.h"
+#include "bundle_stream.h"
 
 #include "core.h"
 #include "gltf_data_uri.h"
@@ -237,6 +238,27 @@ TEST(HostileGltf, CorePropertiesOfTheWrongJsonTypeAreRefusedByPlace) {
         EXPECT_NE(message.find(expected), std::string::npos) << expected << "\n" << message;
     }
     EXPECT_EQ(refusal(writeGltf(textured, "types.gltf")), ""); // the file they were made from is read
+}
+
+// Bytes after the length a .glb's header declares (two files joined, a copy appended to an old one) are refused by
+// both readers of a .glb, as a cut-off file is; before, they were read as if absent.
+TEST(HostileGltf, BytesPastTheDeclaredLengthAreRefusedByBothGlbReaders) {
+    prt::Bundle bundle;
+    bundle.mesh.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    bundle.mesh.indices = {0, 1, 2};
+    const std::string path = scratch("joined.glb").string();
+    prt::writeBundle(path, bundle);
+    EXPECT_NO_THROW(prt::readBundle(path));
+    EXPECT_NO_THROW(prt::readBundleHeader(path));
+    std::ofstream(path, std::ios::binary | std::ios::app) << "glTF";
+    std::string message = refusal(path);
+    EXPECT_NE(message.find("glTF binary: 4 bytes past the"), std::string::npos) << message;
+    try {
+        prt::readBundleHeader(path);
+        ADD_FAILURE() << "readBundleHeader read past the declared length";
+    } catch (const prt::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("4 bytes past the"), std::string::npos) << e.what();
+    }
 }
 
 TEST(HostileGltf, ClaimedVertexCountAboveTheCapIsRefusedNamingTheLimit) {
