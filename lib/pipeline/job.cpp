@@ -341,7 +341,7 @@ std::string storedFile(const PipelineStage& stage, const std::map<std::string, s
                        const std::string& label, bool verify = false) {
     std::string store = storeDir(options);
     std::string key = keyOf(jobIngredients(stage, hashes, shardIndex, shardCount, pass));
-    std::optional<StoreEntry> entry = findStoreEntry(store, key);
+    std::optional<StoreEntry> entry = findStoreEntry(store, key, hashMemoFile(options));
     std::string what = shardIndex == kGatherJob ? "the gather" : "shard " + std::to_string(shardIndex + 1) + "/" + std::to_string(shardCount);
     if (stagePasses(stage, shardCount) > 1) what += " of pass " + std::to_string(pass);
     if (!entry || !entry->manifest["outputs"].contains(port))
@@ -425,9 +425,9 @@ nlohmann::json runJob(const PipelineStage& stage, const StageInputs& inputs, con
     if (sharded)
         record["shard"] = merge ? nlohmann::json("merge") : gather ? nlohmann::json("gather") : nlohmann::json{shardIndex, shardCount};
     if (passes > 1 && !merge) record["pass"] = pass;
-    std::optional<StoreEntry> existing = findStoreEntry(store, key);
+    std::optional<StoreEntry> existing = findStoreEntry(store, key, hashMemoFile(options));
     // A shard (or a pass's gather) whose merged stage is already stored has nothing to add.
-    if (!existing && sharded && !merge && !force) existing = findStoreEntry(store, stageKey);
+    if (!existing && sharded && !merge && !force) existing = findStoreEntry(store, stageKey, hashMemoFile(options));
     if (existing && !force) {
         record.update({{"status", "cached"}, {"end", epochSeconds()}, {"seconds", 0.0},
                        {"outputs", existing->manifest["outputs"]}});
@@ -491,7 +491,7 @@ nlohmann::json runStageJob(const Pipeline& given, const PipelineStage& givenStag
         if (upstream.id == stage.id) break;
         std::optional<StageInputs> inputs = resolveInputs(upstream, pipelineInputs, entries);
         if (!inputs) continue;
-        if (std::optional<StoreEntry> entry = findStoreEntry(storeDir(options), keyOf(keyIngredients(upstream, inputHashes(*inputs)))))
+        if (std::optional<StoreEntry> entry = findStoreEntry(storeDir(options), keyOf(keyIngredients(upstream, inputHashes(*inputs))), hashMemoFile(options)))
             entries[upstream.id] = *entry;
     }
     std::optional<StageInputs> inputs = resolveInputs(stage, pipelineInputs, entries);

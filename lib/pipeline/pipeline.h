@@ -167,12 +167,16 @@ int stagePasses(const PipelineStage& stage, int shardCount);
 inline constexpr int kMergeJob = -1, kGatherJob = -2;
 std::string keyOf(const nlohmann::json& ingredients); // "xxh128:<32 hex>"
 
-// A complete store entry: manifest.json read back and each output's size checked against it.
+// A complete store entry: manifest.json read back and each output's size and content hash checked against it (the
+// hash through hashFileMemo in `memoFile`, so a cached run stats the files instead of reading them). An entry that
+// does not match its manifest (a file cut, overwritten or gone) is removed from the store with a warning, so the
+// stage runs again and stores it afresh; nullopt then, as for a key never stored.
 struct StoreEntry {
     std::string dir;
     nlohmann::json manifest; // {"key","ingredients","outputs":{port:{"file","hash","bytes"}},"cost":{...}}
 };
-std::optional<StoreEntry> findStoreEntry(const std::string& store, const std::string& key);
+std::optional<StoreEntry> findStoreEntry(const std::string& store, const std::string& key,
+                                         const std::string& memoFile = "");
 
 // Removes temporary entries whose writer process on this host has died, and leftovers of replaced entries.
 void sweepStore(const std::string& store);

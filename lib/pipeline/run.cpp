@@ -198,7 +198,7 @@ std::vector<StagePlan> planStages(const Pipeline& pipeline, const RunOptions& op
         std::optional<StoreEntry> entry;
         if (inputs) {
             plan.key = keyOf(keyIngredients(stage, hashes));
-            entry = findStoreEntry(storeDir(options), plan.key);
+            entry = findStoreEntry(storeDir(options), plan.key, hashMemoFile(options));
         }
         if (entry && !plan.force) {
             plan.action = Action::Cached;
@@ -296,7 +296,7 @@ void executeStages(const Pipeline& pipeline, const RunOptions& options, const st
             }
         }
         plan.key = keyOf(keyIngredients(stage, inputHashes(*inputs)));
-        std::optional<StoreEntry> entry = findStoreEntry(storeDir(options), plan.key);
+        std::optional<StoreEntry> entry = findStoreEntry(storeDir(options), plan.key, hashMemoFile(options));
         if (!entry) throw Error(storeDir(options), "stage " + stage.id, "finished but its entry " + plan.key + " is missing", kExitFailure);
         entries[stage.id] = *entry;
         if (plan.reason.rfind("after ", 0) == 0 && jobs[stage.id].back()["status"] == "cached")

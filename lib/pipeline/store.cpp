@@ -84,20 +84,35 @@ std::string privateEntryPath(const std::string& store, const std::string& prefix
     return store + "/" + prefix + keyHex(key) + "-" + hostName() + "-" + std::to_string(getpid());
 }
 
-std::optional<StoreEntry> findStoreEntry(const std::string& store, const std::string& key) {
+std::optional<StoreEntry> findStoreEntry(const std::string& store, const std::string& key, const std::string& memoFile) {
     StoreEntry entry;
     entry.dir = store + "/" + keyHex(key);
     std::error_code error;
-    if (!fs::is_regular_file(entry.dir + "/manifest.json", error)) return std::nullopt;
-    entry.manifest = nlohmann::json::parse(readFileBytes(entry.dir + "/manifest.json"), nullptr, false);
+    if (!fs::is_directory(entry.dir, error)) return std::nullopt;
+    const std::string manifest = entry.dir + "/manifest.json";
+    if (fs::is_regular_file(manifest, error))
+        entry.manifest = nlohmann::json::parse(readFileBytes(manifest), nullptr, false);
     bool intact = entry.manifest.is_object() && entry.manifest.value("key", "") == key &&
                   entry.manifest.contains("outputs") && entry.manifest["outputs"].is_object();
     for (auto& [port, output] : intact ? entry.manifest["outputs"].items() : nlohmann::json::object().items()) {
-        uintmax_t bytes = fs::file_size(entry.dir + "/" + output.value("file", ""), error);
+        if (!output.is_object() || !output.contains("file") || !output["file"].is_string()) {
+            intact = false;
+            break;
+        }
+        const std::string file = entry.dir + "/" + output["file"].get<std::string>();
+        uintmax_t bytes = fs::file_size(file, error);
         if (error || bytes != output.value("bytes", uintmax_t(0))) intact = false;
+        else if (output.contains("hash") && output["hash"].is_string() && hashFileMemo(file, memoFile) != output["hash"])
+            intact = false;
+        if (!intact) break;
     }
     if (!intact) {
-        logWarn("store entry " + entry.dir + " does not match its manifest; it will be rebuilt");
+        // Out of the way (an entry is renamed as a whole, so readers see it or nothing), so the rebuilt one can be
+        // committed under the key; a kill during the removal leaves an .old- folder that sweepStore removes.
+        logWarn("store entry " + entry.dir + " does not match its manifest (a file cut, overwritten or missing): "
+                "removed, and the stage runs again");
+        const std::string aside = privateEntryPath(store, ".old-", key);
+        if (std::rename(entry.dir.c_str(), aside.c_str()) == 0) fs::remove_all(aside, error);
         return std::nullopt;
     }
     return entry;

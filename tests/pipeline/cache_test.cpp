@@ -2,6 +2,9 @@
 // subgraph reruns. Also --plan, --only, --from and --force.
 #include "pipeline_test_util.h"
 
+#include <filesystem>
+#include <functional>
+
 namespace prt {
 namespace {
 
@@ -94,6 +97,46 @@ TEST_F(Cache, RerunsExactlyTheAffectedSubgraph) {
     EXPECT_EQ(run(turned), (Names{"relight", "compare"}));
     EXPECT_EQ(run(turned), Names{});
     EXPECT_EQ(run(pipeline()), Names{}); // the earlier results are still stored
+}
+
+// A damaged store entry (found by a session that damaged the store as a farm's disks and people do): a file cut
+// short, overwritten in place at the same size, deleted, or a manifest that is not JSON. The run removes the entry,
+// reruns its stage and what it feeds, and gives the first run's outputs; before, a cut file made every later run
+// fail ("finished but its entry ... is missing", exit 1) and an overwritten one was copied out as the result.
+TEST_F(Cache, ADamagedStoreEntryIsRebuiltAndItsOutputsAreTheFirstRunsAgain) {
+    nlohmann::json first = test::runQuietly(pipeline(), options);
+    const std::map<std::string, std::string> outputs = test::outputHashes(first);
+    const std::string store = options.cacheDir + "/store";
+    auto entryOf = [&](const std::string& stage) {
+        for (const nlohmann::json& record : first["stages"])
+            if (record["id"] == stage) return store + "/" + record["key"].get<std::string>().substr(7);
+        return std::string();
+    };
+    auto fileOf = [&](const std::string& entry) {
+        for (const auto& item : std::filesystem::directory_iterator(entry))
+            if (item.path().filename() != "manifest.json" && item.path().filename() != "stage.log") return item.path().string();
+        return std::string();
+    };
+    const std::string transfer = entryOf("transfer"), relight = entryOf("relight");
+    ASSERT_TRUE(std::filesystem::is_directory(transfer)) << transfer;
+    const std::vector<std::pair<std::string, std::function<void()>>> damages = {
+        {"cut", [&] { std::filesystem::resize_file(fileOf(relight), std::filesystem::file_size(fileOf(relight)) - 10); }},
+        {"overwritten", [&] {
+             std::string bytes = readFileBytes(fileOf(transfer));
+             bytes[bytes.size() / 2] ^= 0x5a;
+             test::writeText(fileOf(transfer), bytes);
+         }},
+        {"deleted", [&] { std::filesystem::remove(fileOf(relight)); }},
+        {"manifest", [&] { test::writeText(transfer + "/manifest.json", "{"); }},
+    };
+    for (const auto& [name, damage] : damages) {
+        SCOPED_TRACE(name);
+        damage();
+        nlohmann::json again = test::runQuietly(pipeline(), options);
+        EXPECT_FALSE(test::ranStages(again).empty());
+        EXPECT_EQ(test::outputHashes(again), outputs);
+        EXPECT_EQ(run(pipeline()), Names{}); // and stored whole again
+    }
 }
 
 // A code version bump reruns every stage of that kind. Their outputs come out identical (the code did not
