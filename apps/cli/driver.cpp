@@ -18,6 +18,15 @@
 
 namespace prt::cli {
 
+namespace {
+
+// Whether the command line asks for JSON logs: for the errors reported before its flags are parsed.
+bool wantsJsonLog(int argc, char** argv) {
+    return std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--log-json") == 0; });
+}
+
+} // namespace
+
 int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* answer) {
     std::vector<char*> args(argv, argv + argc);
     // File names and values go into JSON (reports, logs, bundles, cache keys), which holds UTF-8 only.
@@ -31,7 +40,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
             }
             if (!answer) { // the message obeys --log-json, though the flags are not parsed yet
                 LogOptions options;
-                options.json = std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--log-json") == 0; });
+                options.json = wantsJsonLog(argc, argv);
                 setLogOptions(options);
             }
             logError("argument " + std::to_string(i) + " ('" + shown + "') is not UTF-8: prt writes file names and "
@@ -119,7 +128,15 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     try {
         app.parse(int(args.size()), args.data());
     } catch (const CLI::ParseError& e) {
-        // CLI11's own codes (106, 109, ...) would collide with ours; help and version are successes.
+        // CLI11's own codes (106, 109, ...) would collide with ours; help and version are successes. With
+        // --log-json a usage error is a JSON line like every other error.
+        if (e.get_exit_code() != 0 && !answer && wantsJsonLog(argc, argv)) {
+            LogOptions options;
+            options.json = true;
+            setLogOptions(options);
+            logError(e.what());
+            return kExitUsage;
+        }
         return app.exit(e) == 0 ? kExitOk : kExitUsage;
     } catch (const Error& e) {
         logError(e.what());

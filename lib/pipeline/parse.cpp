@@ -8,9 +8,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <limits>
 
 namespace prt {
 
@@ -89,6 +91,18 @@ std::string requireString(const Context& context, const toml::node& node, const 
     return value;
 }
 
+// A file path of the pipeline (an input's or an output's): a string naming a file, so no NUL byte (the system
+// would cut the name there) and, for an output, no folder (a trailing '/', or a folder that exists).
+std::string requirePath(const Context& context, const toml::node& node, const std::string& key, bool output) {
+    std::string path = requireString(context, node, key);
+    if (path.find('\0') != std::string::npos)
+        context.fail(lineOf(node), key, "holds a NUL byte, which no file name can");
+    std::error_code error;
+    if (output && (path.back() == '/' || std::filesystem::is_directory(path, error)))
+        context.fail(lineOf(node), key, "'" + path + "' is a folder: an output path names the file to write");
+    return path;
+}
+
 std::string formatNumber(double value) {
     char text[32];
     std::snprintf(text, sizeof(text), "%.17g", value);
@@ -114,7 +128,12 @@ nlohmann::json parseParam(const Context& context, const toml::node& node, const 
     case ParamType::Integer: {
         if (!node.is_integer()) context.fail(lineOf(node), key, "must be an integer, got " + typeName(node));
         int64_t value = node.as_integer()->get();
-        if (!(double(value) >= spec.min && double(value) <= spec.max))
+        // Compared as integers: as doubles, 2^53 + 1 would round onto a bound of 2^53 and pass.
+        auto integer = [](double b) {
+            return b >= 9.2e18 ? std::numeric_limits<int64_t>::max()
+                               : b <= -9.2e18 ? std::numeric_limits<int64_t>::min() : int64_t(b);
+        };
+        if (value < integer(std::ceil(spec.min)) || value > integer(std::floor(spec.max)))
             context.fail(lineOf(node), key, "must be an integer in " + rangeText(spec) + ", got " + std::to_string(value));
         return value;
     }
@@ -167,7 +186,7 @@ void parseInputs(const Context& context, const toml::table& table, Pipeline& pip
                      : kindName == "bundle"   ? FileKind::Bundle
                      : kindName == "radiance" ? FileKind::Radiance
                                               : FileKind::Sh;
-        input.path = requireString(context, pathNode, where + "." + kindName);
+        input.path = requirePath(context, pathNode, where + "." + kindName, false);
         input.line = lineOf(pathNode);
         pipeline.inputs.push_back(input);
     }
@@ -389,7 +408,7 @@ void parseOutputs(const Context& context, const toml::table& table, Pipeline& pi
         PipelineOutput output;
         output.name = name;
         output.line = lineOf(node);
-        output.path = requireString(context, *path, where + ".path");
+        output.path = requirePath(context, *path, where + ".path", true);
         std::string reference = requireString(context, *from, where + ".from");
         FileKind kind;
         StageInput wire = resolveReference(context, pipeline, pipeline.stages, reference, lineOf(*from), where + ".from", &kind);

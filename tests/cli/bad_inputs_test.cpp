@@ -480,6 +480,16 @@ std::vector<Case> hardeningCases() {
                  for (int i = 0; i < 100000; ++i) key += ".a";
                  return "[stages.s]\nrun = \"scene\"\nname = \"sphere\"\ninputs = { " + key + " = 1 }\n";
              }}}, "run {in}/p.toml --plan --cache-dir {out}/c", 3, "line 4: a dotted key of more than 64 parts"},
+        Case{"pipeline", "seed 2^53 + 1, which rounds onto the bound as a double", {{"p.toml", text(
+                 "[stages.a]\nrun = \"scene\"\nname = \"sphere\"\n[stages.t]\nrun = \"transfer\"\ninputs = { mesh = \"a\" }\n"
+                 "seed = 9007199254740993\n[outputs]\nm = { from = \"t\", path = \"{out}/t.glb\" }\n")}},
+             "run {in}/p.toml --plan --cache-dir {out}/c", 3, "line 7, stages.t.seed: must be an integer in"},
+        Case{"pipeline", "output path is a folder", {{"p.toml", text(
+                 "[stages.a]\nrun = \"scene\"\nname = \"sphere\"\n[outputs]\nm = { from = \"a.mesh\", path = \"{out}/\" }\n")}},
+             "run {in}/p.toml --plan --cache-dir {out}/c", 3, "outputs.m.path: '"},
+        Case{"pipeline", "output path with a NUL byte", {{"p.toml", text(
+                 "[stages.a]\nrun = \"scene\"\nname = \"sphere\"\n[outputs]\nm = { from = \"a.mesh\", path = \"{out}/b\\u0000.glb\" }\n")}},
+             "run {in}/p.toml --plan --cache-dir {out}/c", 3, "holds a NUL byte"},
         Case{"pipeline", "input is a folder", {{"folder.obj/x", text("")}, {"p.toml", text(
                  "[inputs]\nshape = { mesh = \"{in}/folder.obj\" }\n[stages.prep]\nrun = \"meshprep\"\ninputs = { mesh = \"shape\" }\n"
                  "[outputs]\nm = { from = \"prep\", path = \"{out}/m.glb\" }\n")}},
@@ -501,6 +511,7 @@ std::vector<Case> commandLineCases() {
         Case{"cli", "shard past its count", {}, "transfer {in}/b.glb -o {out}/t.glb --shard 3/2", 2, "--shard"},
         Case{"cli", "file name not UTF-8 (Latin-1)", {{"m\xe6.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
              "meshprep {in}/m\xe6.off -o {out}/m.glb --report {out}/r.json", 2, "m\\xe6.off') is not UTF-8"},
+        Case{"cli", "usage error under --log-json", {}, "--log-json merge", 2, "{\"level\":\"error\",\"msg\":\"shards is required\"}"},
         Case{"cli", "element cap not a number", {{"m.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
              "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}}
     };
