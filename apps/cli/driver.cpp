@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <functional>
 #include <vector>
 
@@ -99,6 +100,17 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
             reply(resolved);
         }
         if (answer) throw CLI::RequiredError("--build-info or --resolved-options");
+        // An output's folder must exist before the stage computes anything (the file is written at the end).
+        for (CLI::App* sub : app.get_subcommands())
+            for (const CLI::Option* option : sub->get_options())
+                if (option->check_lname("output") && option->count() > 0)
+                    for (const std::string& path : option->results()) {
+                        const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+                        std::error_code error;
+                        if (!folder.empty() && !std::filesystem::is_directory(folder, error))
+                            throw Error(path, "--output", "its folder " + folder.string() + " does not exist",
+                                        kExitOutput);
+                    }
         checkpoint("command"); // the questions above are not kill points: they change nothing
     });
 

@@ -511,6 +511,8 @@ std::vector<Case> commandLineCases() {
         Case{"cli", "shard past its count", {}, "transfer {in}/b.glb -o {out}/t.glb --shard 3/2", 2, "--shard"},
         Case{"cli", "file name not UTF-8 (Latin-1)", {{"m\xe6.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
              "meshprep {in}/m\xe6.off -o {out}/m.glb --report {out}/r.json", 2, "m\\xe6.off') is not UTF-8"},
+        Case{"cli", "output folder missing, found before any work", {}, "bake {in}/b.glb -o {out}/nodir/b.glb", 4,
+             "nodir/b.glb: --output: its folder"},
         Case{"cli", "usage error under --log-json", {}, "--log-json merge", 2, "{\"level\":\"error\",\"msg\":\"shards is required\"}"},
         Case{"cli", "element cap not a number", {{"m.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
              "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}}
