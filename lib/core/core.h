@@ -44,7 +44,8 @@ std::string readFileBytes(const std::string& path);
 // Writes an artifact atomically: `write` receives a temporary path in the same folder, fills it, and returns;
 // the temporary file is then fsynced and renamed onto `path`. If `write` throws, the temporary file is removed
 // and the exception propagates, so `path` never exists half-written and an older `path` is left untouched.
-// Temporary names are ".NAME.tmp-PID-N", so a SIGKILLed stage leaves at most such a file, never `path`.
+// Temporary names are ".NAME.tmp-HOST-PID-N", so a SIGKILLed stage leaves at most such a file, never `path`; the
+// next write of `path` on that host removes those of processes that no longer exist (a scan of path's folder).
 void writeFileAtomic(const std::string& path, const std::function<void(const std::string& tmpPath)>& write);
 
 // A point where a SIGKILL must leave no corrupt artifact: before and after every rename into place, at the

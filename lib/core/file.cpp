@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fcntl.h>
+#include <filesystem>
+#include <signal.h>
 #include <fstream>
 #include <sstream>
 #include <sys/stat.h>
@@ -24,12 +26,38 @@ std::string readFileBytes(const std::string& path) {
     return bytes.str();
 }
 
+// This host's name, for temporary names that say whose they are (an output folder may be shared by a farm).
+static std::string thisHost() {
+    char name[256] = {};
+    gethostname(name, sizeof name - 1);
+    return name;
+}
+
+// ".NAME.tmp-HOST-" for `path`'s name: what every temporary name of `path` written on this host starts with.
+static std::string temporaryPrefix(const std::string& path) {
+    const std::string name = std::filesystem::path(path).filename().string();
+    return "." + name + ".tmp-" + thisHost() + "-";
+}
+
 static std::string temporaryPath(const std::string& path) {
     static std::atomic<unsigned> counter{0};
-    size_t slash = path.find_last_of('/');
-    std::string folder = slash == std::string::npos ? "" : path.substr(0, slash + 1);
-    std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-    return folder + "." + name + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(counter++);
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    return (parent / temporaryPrefix(path)).string() + std::to_string(getpid()) + "-" + std::to_string(counter++);
+}
+
+// Removes what writers of `path` on this host left when they were killed: ".NAME.tmp-HOST-PID-N" files of
+// processes that no longer exist. Another host's, and a live process's, are left alone.
+static void sweepTemporaryFiles(const std::string& path) {
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    const std::string prefix = temporaryPrefix(path);
+    std::error_code error;
+    for (const auto& item : std::filesystem::directory_iterator(parent.empty() ? "." : parent, error)) {
+        const std::string name = item.path().filename().string();
+        if (name.compare(0, prefix.size(), prefix) != 0) continue;
+        const long pid = std::atol(name.c_str() + prefix.size());
+        if (pid <= 0 || pid == long(getpid()) || kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;
+        std::filesystem::remove(item.path(), error);
+    }
 }
 
 // fsync the file and its folder so a crash after rename never exposes an empty or partial artifact.
@@ -41,6 +69,7 @@ static void syncPath(const std::string& path, bool directory) {
 }
 
 void writeFileAtomic(const std::string& path, const std::function<void(const std::string& tmpPath)>& write) {
+    sweepTemporaryFiles(path);
     std::string tmp = temporaryPath(path);
     try {
         write(tmp);

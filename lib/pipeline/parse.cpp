@@ -559,6 +559,9 @@ Pipeline loadPipeline(const std::string& file) {
         if (std::filesystem::is_directory(input.path, error))
             throw Error(file, "line " + std::to_string(input.line) + ", inputs." + input.name,
                         "input '" + input.path + "' is a folder, not a file", kExitInput);
+        if (std::filesystem::exists(input.path, error) && !std::filesystem::is_regular_file(input.path, error))
+            throw Error(file, "line " + std::to_string(input.line) + ", inputs." + input.name,
+                        "input '" + input.path + "' is not a regular file (a device, a FIFO or a socket)", kExitInput);
         if (!std::filesystem::is_regular_file(input.path, error))
             throw Error(file, "line " + std::to_string(input.line) + ", inputs." + input.name,
                         "missing input file '" + input.path + "' (relative paths start at the current directory " +

@@ -5,6 +5,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 namespace fs = std::filesystem;
 
 static fs::path scratch(const std::string& name) {
@@ -38,6 +41,31 @@ TEST(Core, AtomicWriteReplacesWholeFile) {
     prt::writeBytesAtomic(target.string(), "first version, long");
     prt::writeBytesAtomic(target.string(), "second");
     EXPECT_EQ(prt::readFileBytes(target.string()), "second");
+}
+
+// A writer SIGKILLed between writing and renaming leaves its temporary file (found piling up in a pipeline's output
+// folder by a session that killed `prt run` while it copied outputs out). The next write of that path on this host
+// removes those of dead processes, and keeps a live process's and another host's.
+TEST(Core, AtomicWriteRemovesWhatKilledWritersOfThePathLeft) {
+    fs::path target = scratch("swept.bin");
+    char host[256] = {};
+    gethostname(host, sizeof host - 1);
+    const pid_t dead = fork();
+    if (dead == 0) _exit(0);
+    waitpid(dead, nullptr, 0);
+    const std::string prefix = ".swept.bin.tmp-" + std::string(host) + "-";
+    const fs::path stale = target.parent_path() / (prefix + std::to_string(dead) + "-0");
+    const fs::path live = target.parent_path() / (prefix + std::to_string(getppid()) + "-0");
+    const fs::path elsewhere = target.parent_path() / (".swept.bin.tmp-another-host-" + std::to_string(dead) + "-0");
+    const fs::path otherFile = target.parent_path() / (".other.bin.tmp-" + std::string(host) + "-" + std::to_string(dead) + "-0");
+    for (const fs::path& path : {stale, live, elsewhere, otherFile}) std::ofstream(path) << "left behind";
+    prt::writeBytesAtomic(target.string(), "whole");
+    EXPECT_FALSE(fs::exists(stale));
+    EXPECT_TRUE(fs::exists(live));
+    EXPECT_TRUE(fs::exists(elsewhere));
+    EXPECT_TRUE(fs::exists(otherFile));
+    EXPECT_EQ(prt::readFileBytes(target.string()), "whole");
+    for (const fs::path& path : {live, elsewhere, otherFile}) fs::remove(path);
 }
 
 TEST(Core, WriteIntoMissingFolderFailsCleanly) {
