@@ -239,11 +239,7 @@ RelightModel adaptiveRelightModel(Bundle& bundle, const std::string& source) {
 }
 
 void relightAdaptive(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance) {
-    if (begin > end || end > model.vertexCount)
-        throw Error("", "relightAdaptive", "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
-                                               ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
-                    kExitFailure);
-    checkModelArrays(model, "relightAdaptive");
+    checkRelightCall(model, begin, end, "relightAdaptive");
     if (model.offsets.empty() || model.storage == TransferStorage::Cpca)
         throw Error("", "relightAdaptive", "needs a model with per-vertex orders (offsets), not clustered PCA; relight() "
                                            "takes every model", kExitFailure);

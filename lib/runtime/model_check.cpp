@@ -1,5 +1,6 @@
-// The sizes of a RelightModel's arrays against its counts, storage and layout (checkModelArrays): what relight()
-// checks on every call, so that a model an engine built by hand, or moved from, is refused instead of read past.
+// What relight() and relightAdaptive() check on every call (checkRelightCall): the range, and the sizes of the
+// model's arrays against its counts, storage and layout, so that a model an engine built by hand, or moved from, is
+// refused instead of read past.
 #include "runtime.h"
 
 #include "runtime_internal.h"
@@ -20,8 +21,7 @@ void requireSize(size_t size, size_t expected, const char* place, const char* ar
                       "say " + std::to_string(expected) + " (a model moved from, or arrays changed after loading?)");
 }
 
-} // namespace
-
+// The arrays' sizes against the model's counts, storage and layout.
 void checkModelArrays(const RelightModel& model, const char* place) {
     const size_t V = model.vertexCount;
     if (model.order < 1 || model.order > sh::kMaxOrder)
@@ -61,7 +61,7 @@ void checkModelArrays(const RelightModel& model, const char* place) {
             if (model.bandScales.size() % n != 0) refuse(place, "bandScales are not whole clusters of order bands");
         } else if (coded) { // one start per task block, and (as the loader writes it) the end after the last
             const size_t tasks = (V + kRelightBlock - 1) / kRelightBlock;
-            if (model.bandBlockStarts.size() < tasks || model.bandBlockStarts.size() > tasks + 1)
+            if (model.bandBlockStarts.size() != tasks)
                 requireSize(model.bandBlockStarts.size(), tasks + 1, place, "bandBlockStarts");
             if (model.bandBlockStarts.size() == tasks + 1)
                 requireSize(model.bandScales.size(), model.bandBlockStarts.back(), place, "bandScales");
@@ -71,20 +71,24 @@ void checkModelArrays(const RelightModel& model, const char* place) {
         return;
     }
     // Vertex-blocked (blockRows): blocks of one order, or ragged groups described by blockedRuns.
-    size_t blockedValues = 0, blockedScales = 0;
-    if (model.blockedRuns.empty()) {
-        const size_t blocks = (V + kCodeBlock - 1) / kCodeBlock;
-        blockedValues = blocks * values * kCodeBlock;
-        blockedScales = blocks * n * kCodeBlock;
-    } else {
+    if (!model.blockedRuns.empty()) {
         requireSize(model.blockedRuns.size(), (V + kRelightBlock - 1) / kRelightBlock * 8 + 1, place, "blockedRuns");
-        const BlockedRun& end = model.blockedRuns.back();
-        requireSize(model.blockedLanes.size(), size_t(end.group) * kCodeBlock, place, "blockedLanes");
-        blockedValues = size_t(end.value);
-        blockedScales = size_t(end.scale);
+        requireSize(model.blockedLanes.size(), size_t(model.blockedRuns.back().group) * kCodeBlock, place,
+                    "blockedLanes");
     }
-    requireSize(stored, blockedValues, place, array);
-    if (coded) requireSize(model.bandScales.size(), blockedScales, place, "bandScales");
+    const BlockedSizes blocked = blockedSizes(model, model.blockedRuns);
+    requireSize(stored, blocked.values, place, array);
+    if (coded) requireSize(model.bandScales.size(), blocked.scales, place, "bandScales");
+}
+
+} // namespace
+
+void checkRelightCall(const RelightModel& model, size_t begin, size_t end, const char* place) {
+    if (begin > end || end > model.vertexCount)
+        throw Error("", place, "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
+                                   ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
+                    kExitFailure);
+    checkModelArrays(model, place);
 }
 
 } // namespace prt

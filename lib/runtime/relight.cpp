@@ -135,11 +135,7 @@ void relightTask(void* data, size_t index) {
 
 void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance,
              const JobSystem& jobs) {
-    if (begin > end || end > model.vertexCount)
-        throw Error("", "relight", "vertex range [" + std::to_string(begin) + ", " + std::to_string(end) +
-                                       ") outside the model's " + std::to_string(model.vertexCount) + " vertices",
-                    kExitFailure);
-    checkModelArrays(model, "relight");
+    checkRelightCall(model, begin, end, "relight");
     if (begin == end) return; // nothing to relight: the lighting is not read
     // Cpca: each cluster's mean and directions projected on the lighting once, before any task runs; blocked u8
     // codes: the lighting quantised once.
@@ -152,7 +148,7 @@ void relight(const RelightModel& model, const float* lighting, size_t begin, siz
     // Blocks of kRelightBlock vertices keep the scheduling overhead far below the memory traffic; the caller's job
     // system (or the calling thread) runs them, so the runtime itself never starts a thread. A task is the part of
     // [begin, end) in one block counted from vertex 0, the unit of the graded blocked rows' layout.
-    const size_t tasksCount = begin == end ? 0 : (end - 1) / kRelightBlock - begin / kRelightBlock + 1;
+    const size_t tasksCount = (end - 1) / kRelightBlock - begin / kRelightBlock + 1;
     runTasks(jobs, tasksCount, relightTask, &tasks);
 }
 

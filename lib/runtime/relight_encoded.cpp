@@ -331,12 +331,10 @@ template <class Element>
 void blockRowsOf(RelightModel& model, std::vector<Element>& rows, Element padding,
                  const std::vector<BlockedRun>& runs, std::vector<uint16_t>& lanes) {
     const bool u8 = model.storage == TransferStorage::Uint8, scaled = model.storage != TransferStorage::Float16;
-    const size_t V = model.vertexCount, n0 = size_t(model.order);
-    const size_t blocks = (V + kCodeBlock - 1) / kCodeBlock;
-    const size_t valueCount = runs.empty() ? blocks * 3 * n0 * n0 * kCodeBlock : runs.back().value;
-    const size_t scaleCount = !scaled ? 0 : runs.empty() ? blocks * n0 * kCodeBlock : runs.back().scale;
-    std::vector<Element> blocked(valueCount, padding);
-    std::vector<float> blockedScales(scaleCount, 0.0f);
+    const size_t V = model.vertexCount;
+    const BlockedSizes sizes = blockedSizes(model, runs);
+    std::vector<Element> blocked(sizes.values, padding);
+    std::vector<float> blockedScales(sizes.scales, 0.0f);
     if (!runs.empty()) lanes.assign(runs.back().group * kCodeBlock, kPaddingLane);
     size_t band = 0, placed[9] = {}; // placed[n]: vertices of n bands put in the current task block's groups so far
     for (size_t v = 0; v < V; ++v) {
@@ -385,6 +383,13 @@ std::vector<BlockedRun> blockedRunsOf(const RelightModel& model, bool scaled) {
 }
 
 } // namespace
+
+BlockedSizes blockedSizes(const RelightModel& model, const std::vector<BlockedRun>& runs) {
+    const bool scaled = model.storage != TransferStorage::Float16;
+    if (!runs.empty()) return {size_t(runs.back().value), scaled ? size_t(runs.back().scale) : 0};
+    const size_t n = size_t(model.order), blocks = (size_t(model.vertexCount) + kCodeBlock - 1) / kCodeBlock;
+    return {blocks * 3 * n * n * kCodeBlock, scaled ? blocks * n * kCodeBlock : 0};
+}
 
 std::vector<float> decodedTransfer(const RelightModel& model) {
     const size_t dim = size_t(model.order) * model.order * 3;

@@ -59,11 +59,19 @@ TexelRelightModel adaptiveTexelModel(Bundle& bundle, const std::string& source);
 // irradiance transfer) and the bundle's "diffuse_albedo" layer, checked: [vertexCount, 3], values in [0, 1].
 void readExcludedAlbedo(const Bundle& bundle, const Layer& transfer, const std::string& source, RelightModel& model);
 
-// Throws prt::Error("", place, ...) where the model's arrays do not have the sizes its vertex count, order, storage
-// and layout say (a model moved from, arrays changed after loading, a hand-built model): O(1), the sizes only. The
-// values (offsets' steps, codes, cluster indices, lanes) are as a loader or blockRows left them, which check them.
-// model_check.cpp.
-void checkModelArrays(const RelightModel& model, const char* place);
+// What relight() and relightAdaptive() check on every call (model_check.cpp), throwing prt::Error("", place, ...):
+// the range [begin, end) inside the model's vertices, and the model's arrays of the sizes its vertex count, order,
+// storage and layout say (a model moved from, arrays changed after loading, a hand-built model): O(1), the sizes
+// only. The values (offsets' steps, codes, cluster indices, lanes) are as a loader or blockRows left them, which
+// check them.
+void checkRelightCall(const RelightModel& model, size_t begin, size_t end, const char* place);
+
+// The sizes of the arrays blockRows lays out: values (codes or halves) and band scales (0 for halves), for blocks of
+// one order when `runs` is empty, else as the ragged runs' end says (RelightModel::blockedRuns).
+struct BlockedSizes {
+    size_t values = 0, scales = 0;
+};
+BlockedSizes blockedSizes(const RelightModel& model, const std::vector<BlockedRun>& runs);
 
 // The lighting of the u8 blocked kernel (relight_codes_kernel.inc, relightBlockedU8Kernel): per channel c one
 // scale s_c = max_j |L_jc| / 32767 and each value as an int16 Lq_j = round(L_j / s_c), |s_c Lq_j - L_j| <= 0.51

@@ -154,8 +154,9 @@ void relight(const float* transfer, size_t vertexCount, int coefficientCount, co
 // blockRows checked them. Allocates only for Cpca (the per-call projections).
 // Cost per call: a ragged blocked model computes every task block the range touches whole, and Cpca projects every
 // cluster on the lighting, so streaming a model in small ranges costs those again per range (graded u8 codes of
-// 29,394 vertices in calls of 16 vertices: 235x the time of one call): stream in ranges of whole kRelightBlock blocks. Lighting that is not finite gives
-// infinities or NaN (u8 codes and Cpca: NaN, from the quantisation or from products of infinity and zero).
+// 29,394 vertices in calls of 16 vertices: 235x the time of one call): stream in ranges of whole kRelightBlock
+// blocks. Lighting that is not finite gives infinities or NaN (u8 codes and Cpca: NaN, from the quantisation or from
+// products of infinity and zero).
 void relight(const RelightModel& model, const float* lighting, size_t begin, size_t end, float* radiance,
              const JobSystem& jobs = {});
 
