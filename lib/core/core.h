@@ -56,6 +56,12 @@ void writeFileAtomic(const std::string& path, const std::function<void(const std
 // many points a clean run passes.
 void checkpoint(const char* name);
 
+// This host's name (gethostname): what temporary names and store folders say of their writer.
+std::string hostName();
+// Whether process `pid` of this host has ended (kill(pid, 0) says it does not exist): a writer whose temporary files
+// or folders may be removed. False for pid <= 0 and for processes that exist, whoever's.
+bool processHasEnded(long pid);
+
 // Convenience over writeFileAtomic for an in-memory buffer.
 void writeBytesAtomic(const std::string& path, std::string_view bytes);
 

@@ -26,17 +26,19 @@ std::string readFileBytes(const std::string& path) {
     return bytes.str();
 }
 
-// This host's name, for temporary names that say whose they are (an output folder may be shared by a farm).
-static std::string thisHost() {
+std::string hostName() {
     char name[256] = {};
     gethostname(name, sizeof name - 1);
     return name;
 }
 
-// ".NAME.tmp-HOST-" for `path`'s name: what every temporary name of `path` written on this host starts with.
+bool processHasEnded(long pid) { return pid > 0 && kill(pid_t(pid), 0) != 0 && errno == ESRCH; }
+
+// ".NAME.tmp-HOST-" for `path`'s name (an output folder may be shared by a farm's hosts): what every temporary name
+// of `path` written on this host starts with.
 static std::string temporaryPrefix(const std::string& path) {
     const std::string name = std::filesystem::path(path).filename().string();
-    return "." + name + ".tmp-" + thisHost() + "-";
+    return "." + name + ".tmp-" + hostName() + "-";
 }
 
 static std::string temporaryPath(const std::string& path) {
@@ -55,7 +57,7 @@ static void sweepTemporaryFiles(const std::string& path) {
         const std::string name = item.path().filename().string();
         if (name.compare(0, prefix.size(), prefix) != 0) continue;
         const long pid = std::atol(name.c_str() + prefix.size());
-        if (pid <= 0 || pid == long(getpid()) || kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;
+        if (!processHasEnded(pid)) continue;
         std::filesystem::remove(item.path(), error);
     }
 }

@@ -17,7 +17,6 @@ struct InputFile {
 using StageInputs = std::map<std::string, InputFile>; // by input port
 
 std::string keyHex(const std::string& key); // the key without its "xxh128:" prefix: the entry's folder name
-std::string hostName();
 // STORE/<prefix><key hex>-<host>-<pid>: a folder only this process writes.
 std::string privateEntryPath(const std::string& store, const std::string& prefix, const std::string& key);
 // Renames a finished temporary folder into place as the entry for `key`. An entry already there (another run's)

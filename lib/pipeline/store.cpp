@@ -5,7 +5,6 @@
 #include "core.h"
 
 #include <cerrno>
-#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -72,12 +71,6 @@ std::string keyOf(const nlohmann::json& ingredients) {
 std::string keyHex(const std::string& key) {
     size_t colon = key.find(':');
     return colon == std::string::npos ? key : key.substr(colon + 1);
-}
-
-std::string hostName() {
-    char name[256] = {};
-    gethostname(name, sizeof(name) - 1);
-    return name;
 }
 
 std::string privateEntryPath(const std::string& store, const std::string& prefix, const std::string& key) {
@@ -152,9 +145,9 @@ void sweepStore(const std::string& store) {
         size_t dash = name.rfind('-');
         if (name.size() < 5 + 32 + 2 || dash == std::string::npos) continue;
         std::string owner = name.substr(5 + 32 + 1, dash - (5 + 32 + 1));
-        pid_t pid = pid_t(std::atol(name.c_str() + dash + 1));
+        const long pid = std::atol(name.c_str() + dash + 1);
         // Only this host can tell whether the writer lives; another node's writer may still be at work.
-        if (owner != host || pid <= 0 || kill(pid, 0) == 0 || errno != ESRCH) continue;
+        if (owner != host || !processHasEnded(pid)) continue;
         fs::remove_all(item.path(), error);
     }
 }
