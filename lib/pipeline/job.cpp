@@ -333,12 +333,11 @@ nlohmann::json jobIngredients(const PipelineStage& stage, const std::map<std::st
     return keyIngredients(stage, hashes, shardIndex, shardCount, passes > 1 ? pass : -1);
 }
 
-// The file `port` of an earlier job of the stage, from its store entry. With `verify`, its content must hash to
-// what the entry's manifest recorded (shard bundles carry no checksum of their own; pass files do), else it is
-// refused by name with exit 3.
+// The file `port` of an earlier job of the stage, from its store entry, whose content findStoreEntry checked against
+// the hash the entry's manifest recorded (shard bundles carry no checksum of their own; pass files do).
 std::string storedFile(const PipelineStage& stage, const std::map<std::string, std::string>& hashes,
                        const RunOptions& options, int shardIndex, int shardCount, int pass, const std::string& port,
-                       const std::string& label, bool verify = false) {
+                       const std::string& label) {
     std::string store = storeDir(options);
     std::string key = keyOf(jobIngredients(stage, hashes, shardIndex, shardCount, pass));
     std::optional<StoreEntry> entry = findStoreEntry(store, key, hashMemoFile(options));
@@ -347,11 +346,7 @@ std::string storedFile(const PipelineStage& stage, const std::map<std::string, s
     if (!entry || !entry->manifest["outputs"].contains(port))
         throw Error(store, label, what + " (" + key + ") is not in the store", kExitFailure);
     const nlohmann::json& output = entry->manifest["outputs"][port];
-    std::string file = entry->dir + "/" + output["file"].get<std::string>();
-    if (verify && hashFile(file) != output.value("hash", ""))
-        throw Error(file, label, what + " does not match the hash its store manifest recorded: the entry is corrupt",
-                    kExitInput);
-    return file;
+    return entry->dir + "/" + output["file"].get<std::string>();
 }
 
 // Joins the stored shards of `stage`'s last pass into `dir`, by mergeShardFiles (streamed) or by the stage itself
@@ -364,7 +359,7 @@ nlohmann::json mergeInto(const std::string& dir, const PipelineStage& stage, con
     int last = stagePasses(stage, shardCount) - 1;
     std::vector<std::string> files;
     for (int i = 0; i < shardCount; ++i)
-        files.push_back(storedFile(stage, hashes, options, i, shardCount, last, port.name, label, true));
+        files.push_back(storedFile(stage, hashes, options, i, shardCount, last, port.name, label));
     if (!stage.spec->mergeFlag.empty()) {
         JobExtras extras;
         extras.listFlag = stage.spec->mergeFlag;
