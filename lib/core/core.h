@@ -38,15 +38,29 @@ private:
     int exitCode_;
 };
 
+// `path` with its links resolved (std::filesystem::weakly_canonical, so it need not exist) when that lies strictly
+// inside `folder`, whose links are resolved too; "" when it does not, or when either cannot be resolved. What every
+// reader that follows a name found in a file (a URI, an MTL, a texture) asks before it opens it.
+std::string resolvedInside(const std::string& path, const std::string& folder);
+
 // Reads a whole file. Throws Error naming the path when it is missing or unreadable.
 std::string readFileBytes(const std::string& path);
 
 // Writes an artifact atomically: `write` receives a temporary path in the same folder, fills it, and returns;
 // the temporary file is then fsynced and renamed onto `path`. If `write` throws, the temporary file is removed
 // and the exception propagates, so `path` never exists half-written and an older `path` is left untouched.
-// Temporary names are ".NAME.tmp-HOST-PID-N", so a SIGKILLed stage leaves at most such a file, never `path`; the
-// next write of `path` on that host removes those of processes that no longer exist (a scan of path's folder).
+// Temporary names are ".NAME.tmp-HOST-PID-N-R" (freshTemporaryPath), so a SIGKILLed stage leaves at most such a
+// file, never `path`; the next write of `path` on that host removes those of processes that no longer exist (a
+// scan of path's folder).
 void writeFileAtomic(const std::string& path, const std::function<void(const std::string& tmpPath)>& write);
+
+// A new, empty temporary file for `path`, in its folder, and its name: ".NAME.tmp-HOST-PID-N-R" (R 16 random hex
+// digits) followed by `suffix` (an extension, for writers that choose a format by it). It is created as a new
+// regular file (O_EXCL, O_NOFOLLOW), so a link or a file planted at the name is never written through. First
+// removes the temporaries of `path` that writers on this host left when they were killed (those of processes that
+// no longer exist). For writers that rename the file themselves, as the bake does to name a texture by its
+// content; writeFileAtomic takes its temporaries from here. Throws prt::Error(kExitOutput) naming `path`.
+std::string freshTemporaryPath(const std::string& path, const std::string& suffix = "");
 
 // A point where a SIGKILL must leave no corrupt artifact: before and after every rename into place, at the
 // start of every command, at each progress step, around store commits. Environment (tests only):
@@ -55,6 +69,12 @@ void writeFileAtomic(const std::string& path, const std::function<void(const std
 // each process counts its own; PRT_KILL_TRACE=FILE appends "PID N NAME" per checkpoint, so a test learns how
 // many points a clean run passes.
 void checkpoint(const char* name);
+
+// The concurrency of a stage's TBB task arena for its --threads: -1 (tbb::task_arena::automatic, every processor)
+// for 0 or less, else `threads` but no more than the machine's processors (TBB prints a warning of its own on stderr,
+// outside prt's log, when asked for more). Outputs never depend on it: every stage gives the same bits for any
+// thread count.
+int arenaConcurrency(int threads);
 
 // This host's name (gethostname): what temporary names and store folders say of their writer.
 std::string hostName();
@@ -109,6 +129,8 @@ struct StageCost {
 };
 uint64_t peakMemoryBytes();
 void reportCost(const StageCost& cost);
+// reportCost for `stage` begun at `start` (nowSeconds), having cast `rays`: the time to now, this process's peak.
+void reportCost(const std::string& stage, double start, uint64_t rays);
 
 // Monotonic wall clock in seconds.
 double nowSeconds();
@@ -137,6 +159,12 @@ void checkElementCount(uint64_t count, const std::string& what, const std::strin
 // The product of `factors` (a shape), after the same check; an overflowing product is refused the same way.
 uint64_t checkedProduct(const std::vector<uint64_t>& factors, const std::string& what, const std::string& file,
                         const std::string& place);
+
+// Before a result is written to `path`: every one of `count` values is finite, else prt::Error (kExitInput) naming
+// `path`, the first value that is not (its row of `rowLength` values, and its column) and the likely cause, inputs
+// whose values overflow float on the way (a map texel or a light of 3e38). JSON would write such a value as null,
+// .npy as itself, and the next stage would refuse or propagate it.
+void requireFiniteResult(const float* values, size_t count, size_t rowLength, const std::string& path);
 
 // ---- .npy arrays --------------------------------------------------------------------------------------------
 // float32, C order. Used for per-vertex radiance [V,3] and other per-element outputs.

@@ -1,8 +1,11 @@
-// Memory caps on what a file may claim, checked before anything is allocated for it.
+// Caps on what a file may claim, checked before anything is allocated for it, and on the threads a stage asks for.
 #include "core.h"
 
 #include <cerrno>
+#include <cmath>
+#include <algorithm>
 #include <cstdlib>
+#include <thread>
 
 namespace prt {
 
@@ -41,6 +44,21 @@ uint64_t checkedProduct(const std::vector<uint64_t>& factors, const std::string&
     if (zero) return 0;
     checkElementCount(product, what, file, place);
     return product;
+}
+
+int arenaConcurrency(int threads) {
+    if (threads <= 0) return -1;
+    return std::min(threads, std::max(1, int(std::thread::hardware_concurrency())));
+}
+
+void requireFiniteResult(const float* values, size_t count, size_t rowLength, const std::string& path) {
+    for (size_t i = 0; i < count; ++i)
+        if (!std::isfinite(values[i]))
+            throw Error(path, "row " + std::to_string(i / std::max<size_t>(rowLength, 1)) + ", column " +
+                                  std::to_string(i % std::max<size_t>(rowLength, 1)),
+                        "the result is not finite, so nothing was written: an input's values overflow float on the "
+                        "way (a map texel, a light or a coefficient near 3e38?)",
+                        kExitInput);
 }
 
 } // namespace prt

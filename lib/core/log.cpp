@@ -155,4 +155,13 @@ void reportCost(const StageCost& cost) {
     emit("info", text);
 }
 
+void reportCost(const std::string& stage, double start, uint64_t rays) {
+    StageCost cost;
+    cost.stage = stage;
+    cost.seconds = nowSeconds() - start;
+    cost.rays = rays;
+    cost.peakMemoryBytes = peakMemoryBytes();
+    reportCost(cost);
+}
+
 } // namespace prt

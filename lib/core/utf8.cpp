@@ -49,4 +49,20 @@ std::string utf8FromLatin1(std::string_view text) {
     return out;
 }
 
+std::string printableBytes(std::string_view bytes, size_t maxBytes) {
+    static const char kHex[] = "0123456789abcdef";
+    std::string shown;
+    for (size_t i = 0; i < bytes.size() && i < maxBytes; ++i) {
+        const uint8_t b = uint8_t(bytes[i]);
+        if (b >= 0x20 && b < 0x7f) {
+            shown += char(b);
+        } else {
+            shown += "\\x";
+            shown += kHex[b >> 4];
+            shown += kHex[b & 15];
+        }
+    }
+    return shown;
+}
+
 } // namespace prt

@@ -15,4 +15,8 @@ bool isUtf8(std::string_view text);
 // each byte 0x80..0xff written as its two UTF-8 bytes. The result is always UTF-8, and the same for the same bytes.
 std::string utf8FromLatin1(std::string_view text);
 
+// `bytes` as a message may show them, whatever they are: printable ASCII as itself, every other byte as \xNN
+// (two lower-case hex digits), at most `maxBytes` bytes of it. The result is printable ASCII.
+std::string printableBytes(std::string_view bytes, size_t maxBytes = 200);
+
 } // namespace prt

@@ -4,6 +4,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -66,6 +68,35 @@ TEST(Core, AtomicWriteRemovesWhatKilledWritersOfThePathLeft) {
     EXPECT_TRUE(fs::exists(otherFile));
     EXPECT_EQ(prt::readFileBytes(target.string()), "whole");
     for (const fs::path& path : {live, elsewhere, otherFile}) fs::remove(path);
+}
+
+// Links planted at the temporary names a writer could be guessed to use (this process's id, counters 0..63: what a
+// hostile user of a shared output folder would plant) are never written through: temporaries are created as new
+// files under names with 64 random bits, and the victim the links point at keeps its bytes.
+TEST(Core, AtomicWriteNeverWritesThroughALinkPlantedAtATemporaryName) {
+    fs::path target = scratch("planted.json");
+    fs::path victim = scratch("victim.txt");
+    std::ofstream(victim) << "precious";
+    char host[256] = {};
+    gethostname(host, sizeof host - 1);
+    const std::string prefix = ".planted.json.tmp-" + std::string(host) + "-" + std::to_string(getpid()) + "-";
+    std::vector<fs::path> links;
+    for (int n = 0; n < 64; ++n) {
+        links.push_back(target.parent_path() / (prefix + std::to_string(n)));
+        fs::create_symlink(victim, links.back());
+    }
+    prt::writeBytesAtomic(target.string(), "{}");
+    EXPECT_EQ(prt::readFileBytes(victim.string()), "precious");
+    EXPECT_FALSE(fs::is_symlink(target));
+    EXPECT_EQ(prt::readFileBytes(target.string()), "{}");
+    const std::string fresh = prt::freshTemporaryPath(target.string(), ".exr");
+    EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(fresh)));
+    EXPECT_EQ(fs::file_size(fresh), 0u);
+    EXPECT_NE(prt::freshTemporaryPath(target.string(), ".exr"), fresh);
+    EXPECT_EQ(fresh.substr(fresh.size() - 4), ".exr");
+    for (const fs::path& link : links) fs::remove(link);
+    for (const auto& item : fs::directory_iterator(target.parent_path()))
+        if (item.path().filename().string().rfind(".planted.json.tmp-", 0) == 0) fs::remove(item.path());
 }
 
 TEST(Core, WriteIntoMissingFolderFailsCleanly) {

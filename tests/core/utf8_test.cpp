@@ -40,5 +40,14 @@ TEST(Utf8, Latin1IsTranscodedAndUtf8KeptAsItIs) {
     EXPECT_EQ(utf8FromLatin1(every).size(), 127u + 2u * 128u);
 }
 
+// A message shows any bytes as printable ASCII: control bytes (ESC, DEL, NUL) and every byte past 0x7f escaped.
+TEST(Utf8, PrintableBytesEscapesEverythingButPrintableAscii) {
+    EXPECT_EQ(printableBytes("name-1 ok"), "name-1 ok");
+    EXPECT_EQ(printableBytes("Terraind\xe6k"), "Terraind\\xe6k");
+    EXPECT_EQ(printableBytes(std::string("a\x1b[2Jb\x7f\0c", 9)), "a\\x1b[2Jb\\x7f\\x00c");
+    EXPECT_EQ(printableBytes("\xff\t", 200), "\\xff\\x09");
+    EXPECT_EQ(printableBytes("abcdef", 3), "abc");
+}
+
 } // namespace
 } // namespace prt
