@@ -6,10 +6,10 @@
 #include "image.h"
 #include "runtime.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
-#include <unistd.h>
 
 namespace prt {
 
@@ -17,22 +17,37 @@ namespace {
 
 Error usage(const std::string& flag, const std::string& problem) { return Error("", flag, problem, kExitUsage); }
 
-// The textures of one bake. Each is named by its content (NAME.KIND.<16 hex>.EXT), so a new bake never
-// overwrites a file the previous bundle references: until the new bundle replaces it, the last good result stays
-// whole, and a failure removes only the files this bake created. Once committed, the previous bundle's textures
-// that the new one does not use are removed.
+// The textures of one bake. Each is named by its content (NAME.KIND.<16 hex>.EXT, isBakeTextureName), so a new
+// bake never overwrites a file the previous bundle references: until the new bundle replaces it, the last good
+// result stays whole, and a failure removes only the files this bake created. Once committed, the files in the
+// folder with this bundle's texture names that the new bundle does not use and that were last written before this
+// bake began are removed: the previous bundle's, and what a bake killed between its textures and its bundle left.
+// Newer ones may be a concurrent bake's of the same output, still under way; files of any other name are never
+// touched, whatever a bundle found at the output path lists.
 struct WrittenFiles {
-    std::vector<std::string> paths;   // every texture the new bundle references
-    std::vector<std::string> created; // those that did not exist before
-    std::vector<std::string> previous; // the textures of the bundle being replaced
+    std::string output;                    // NAME.glb
+    std::filesystem::file_time_type began; // when this bake began
+    std::vector<std::string> paths;        // every texture the new bundle references
+    std::vector<std::string> created;      // those that did not exist before
     bool committed = false;
     ~WrittenFiles() {
-        if (committed) {
-            for (const std::string& path : previous)
-                if (std::find(paths.begin(), paths.end(), path) == paths.end()) std::remove(path.c_str());
+        if (!committed) {
+            for (const std::string& path : created) std::remove(path.c_str());
             return;
         }
-        for (const std::string& path : created) std::remove(path.c_str());
+        const std::filesystem::path out(output);
+        const std::filesystem::path folder = out.parent_path().empty() ? std::filesystem::path(".") : out.parent_path();
+        std::error_code error;
+        for (const auto& item : std::filesystem::directory_iterator(folder, error)) {
+            const std::string name = item.path().filename().string();
+            const std::string path = (out.parent_path() / name).string();
+            if (!isBakeTextureName(name, out.stem().string()) ||
+                std::find(paths.begin(), paths.end(), path) != paths.end())
+                continue;
+            std::error_code timeError;
+            const auto written = std::filesystem::last_write_time(item.path(), timeError);
+            if (!timeError && written < began) std::filesystem::remove(item.path(), timeError);
+        }
     }
 };
 
@@ -40,9 +55,8 @@ struct WrittenFiles {
 // and moves it to BASE.KIND.<first 16 hex digits of its content hash>.EXTENSION; returns that path.
 std::string writeContentAddressed(const std::string& base, const std::string& kind, const std::string& extension,
                                   WrittenFiles& written, const std::function<void(const std::string&)>& write) {
-    std::filesystem::path stem(base);
-    std::string tmp = (stem.parent_path() / ("." + stem.filename().string() + "." + kind + ".tmp-" +
-                                             std::to_string(getpid()) + "." + extension)).string();
+    // .BASE.KIND.EXT.tmp-HOST-PID-N-R.EXT: the next bake on this host removes it if this one is killed.
+    std::string tmp = freshTemporaryPath(base + "." + kind + "." + extension, "." + extension);
     write(tmp);
     std::string hash = hashFile(tmp);
     std::string path = base + "." + kind + "." + hash.substr(hash.find(':') + 1, 16) + "." + extension;
@@ -55,24 +69,6 @@ std::string writeContentAddressed(const std::string& base, const std::string& ki
     }
     written.paths.push_back(path);
     return path;
-}
-
-// The external files of the bundle at `path` (params.files of its layers), if it is a readable bundle.
-std::vector<std::string> bundleTextures(const std::string& path) {
-    std::vector<std::string> files;
-    std::error_code error;
-    if (!std::filesystem::exists(path, error)) return files;
-    try {
-        std::filesystem::path folder = std::filesystem::path(path).parent_path();
-        for (const Layer& layer : readBundle(path).layers)
-            if (layer.params.contains("files") && layer.params["files"].is_array())
-                for (const nlohmann::json& name : layer.params["files"])
-                    if (name.is_string() && std::filesystem::path(name.get<std::string>()).filename() == name.get<std::string>())
-                        files.push_back((folder / name.get<std::string>()).string());
-    } catch (const Error&) {
-        // Not a bundle we can read: nothing of it to clean up.
-    }
-    return files;
 }
 
 std::string fileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
@@ -208,6 +204,7 @@ Layer texelSurfaceLayer(const std::vector<float>& atlas, int size, const BakeOpt
 
 void runBake(const BakeOptions& options) {
     double start = nowSeconds();
+    const std::filesystem::file_time_type began = std::filesystem::file_time_type::clock::now();
     if (fileExtension(options.output) != "glb") throw usage("-o", "the output bundle must end in .glb");
     if (options.shardCount < 1 || options.shardIndex < 0 || options.shardIndex >= options.shardCount)
         throw usage("--shard", std::to_string(options.shardIndex) + "/" + std::to_string(options.shardCount) +
@@ -223,7 +220,8 @@ void runBake(const BakeOptions& options) {
     // Textures first, the bundle that references them last.
     std::string base = options.output.substr(0, options.output.size() - 4);
     WrittenFiles written;
-    written.previous = bundleTextures(options.output);
+    written.output = options.output;
+    written.began = began;
     uint64_t storedBytes = 0;
     Layer layer = coefficientLayer("texel_transfer", "sh_transfer_rgb", "transfer", baked.transfer, baked.params,
                                    options, base, written, storedBytes);

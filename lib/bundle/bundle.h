@@ -121,6 +121,12 @@ nlohmann::json conventionRecord();
 // Every accessor is bounds-checked against its buffer, so a malformed file cannot cause an out-of-bounds read.
 Bundle readBundle(const std::string& path);
 
+// Whether `name` (a plain file name) is one a bake names its external textures by for the bundle BUNDLE_STEM.glb:
+// BUNDLE_STEM.KIND.<16 lower-case hex digits of the content hash>.EXT, with KIND transfer, bounce, surface or normal
+// (transfer.T000 and bounce.T000, any three digits, for u8 planes) and EXT exr, png or json (docs/bundle.md,
+// "Texel layers"). The files a writer may remove when it replaces that bundle: never any other file beside it.
+bool isBakeTextureName(const std::string& name, const std::string& bundleStem);
+
 // ---- scene assets (version 3; asset.h) --------------------------------------------------------------------------
 
 // A scene bundle (no layers) of a glTF model built in memory, e.g. from another format (lib/mesh reads OBJ with

@@ -6,6 +6,7 @@
 #include "core.h"
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <numeric>
 
@@ -24,10 +25,13 @@ nlohmann::json withoutShardParams(nlohmann::json params) {
     return params;
 }
 
+// A shard layer's whole-number parameter `key`: a number in [0, 2^53] (what a bundle's JSON stores exactly).
 uint64_t rowParam(const Layer& layer, const char* key, const std::string& file) {
     const nlohmann::json& value = layer.params.contains(key) ? layer.params[key] : nlohmann::json();
-    if (!value.is_number() || value.get<double>() < 0)
-        throw Error(file, "layer " + layer.name, std::string("shard layer has no valid '") + key + "'");
+    if (!value.is_number() || !(value.get<double>() >= 0) || value.get<double>() > 9007199254740992.0 ||
+        value.get<double>() != std::floor(value.get<double>()))
+        throw Error(file, "layer " + layer.name, std::string("shard layer has no valid '") + key +
+                                                     "' (a whole number from 0 to 2^53)", kExitInput);
     return uint64_t(value.get<double>());
 }
 
@@ -144,9 +148,17 @@ JoinPlan joinLayers(const Bundle& first, const std::vector<std::vector<Layer>>& 
             if (begin != nextRow || end < begin || end > vertices || part->shape[0] != end - begin)
                 throw Error(files[s], "layer " + layer.name, "rows [" + std::to_string(begin) + ", " + std::to_string(end) +
                                                                  ") do not continue at row " + std::to_string(nextRow), kExitInput);
+            if (rowParam(*part, "vertex_count", files[s]) != vertices)
+                throw Error(files[s], "layer " + layer.name, "vertex_count differs from " + files[0] + "'s", kExitInput);
             nextRow = end;
-            for (const char* key : kCounterParams)
-                if (part->params.contains(key)) counters[key] = counters.value(key, uint64_t(0)) + part->params[key].get<uint64_t>();
+            for (const char* key : kCounterParams) {
+                if (!part->params.contains(key)) continue;
+                const uint64_t sum = counters.value(key, uint64_t(0)) + rowParam(*part, key, files[s]);
+                if (sum > (uint64_t(1) << 53))
+                    throw Error(files[s], "layer " + layer.name, std::string("the shards' '") + key +
+                                                                     "' sum past 2^53", kExitInput);
+                counters[key] = sum;
+            }
         }
         if (nextRow != vertices)
             throw Error(files[plan.order[count - 1]], "layer " + layer.name, "shards end at row " + std::to_string(nextRow) +

@@ -3,6 +3,7 @@
 #include "pipeline.h"
 
 #include "core.h"
+#include "utf8.h"
 
 #include <toml++/toml.h>
 
@@ -506,13 +507,7 @@ Pipeline parsePipeline(std::string_view text, const std::string& file) {
     }
     // The name goes into Slurm job names and scripts, so the default (the file stem) obeys the same rule.
     if (!isName(pipeline.name)) {
-        std::string shown;
-        for (char c : pipeline.name) {
-            char escaped[8];
-            std::snprintf(escaped, sizeof escaped, "\\x%02x", unsigned((unsigned char)c));
-            shown += std::isprint((unsigned char)c) ? std::string(1, c) : std::string(escaped);
-        }
-        context.fail(1, "pipeline.name", "the file stem '" + shown + "' is the default name but is not one (letters, digits, "
+        context.fail(1, "pipeline.name", "the file stem '" + printableBytes(pipeline.name) + "' is the default name but is not one (letters, digits, "
                                          "'_' and '-'): rename the file or set name in a [pipeline] table");
     }
     if (const toml::node* node = root.get("inputs")) parseInputs(context, requireTable(context, *node, "inputs"), pipeline);
@@ -567,6 +562,27 @@ Pipeline loadPipeline(const std::string& file) {
                         "missing input file '" + input.path + "' (relative paths start at the current directory " +
                             std::filesystem::current_path().string() + ")",
                         kExitInput);
+    }
+    // What the parse compared by name, compared again by the file each path leads to (absolute paths, links, "..").
+    namespace fs = std::filesystem;
+    for (size_t i = 0; i < pipeline.outputs.size(); ++i) {
+        const PipelineOutput& output = pipeline.outputs[i];
+        const std::string place = "line " + std::to_string(output.line) + ", outputs." + output.name + ".path";
+        std::error_code error;
+        const fs::path resolved = fs::weakly_canonical(fs::absolute(output.path), error);
+        for (size_t j = 0; j < i; ++j)
+            if (fs::weakly_canonical(fs::absolute(pipeline.outputs[j].path), error) == resolved)
+                throw Error(file, place, "'" + output.path + "' is the file output '" + pipeline.outputs[j].name +
+                                             "' writes too (line " + std::to_string(pipeline.outputs[j].line) + ")",
+                            kExitInput);
+        if (!fs::exists(output.path, error)) continue;
+        if (fs::equivalent(output.path, file, error))
+            throw Error(file, place, "'" + output.path + "' is this pipeline file", kExitInput);
+        for (const PipelineInput& input : pipeline.inputs)
+            if (fs::equivalent(output.path, input.path, error))
+                throw Error(file, place, "'" + output.path + "' is the file of input '" + input.name +
+                                             "' (line " + std::to_string(input.line) + "): the run would overwrite it",
+                            kExitInput);
     }
     return pipeline;
 }

@@ -110,6 +110,9 @@ std::vector<std::string> bundleCompanionNames(const std::string& bundleFile) {
     for (const Layer& layer : readBundleHeader(bundleFile).bundle.layers) {
         if (!layer.params.contains("files") || !layer.params["files"].is_array()) continue;
         for (const nlohmann::json& name : layer.params["files"]) {
+            if (!name.is_string())
+                throw Error(bundleFile, "layer \"" + layer.name + "\" params.files", "holds a " +
+                            std::string(name.type_name()) + ", not a file name", kExitInput);
             fs::path relative = name.get<std::string>();
             if (relative.is_absolute() || relative.filename() != relative)
                 throw Error(bundleFile, "layer \"" + layer.name + "\" params.files",
@@ -475,8 +478,12 @@ nlohmann::json copyOutputs(const Pipeline& pipeline, const std::map<std::string,
             files.push_back(target);
         }
         copyIfChanged(copy.file, output.path, copy.hash, memo);
+        // Only what a bake names its textures by: a bundle found at the path may list any file beside it.
+        const std::string stem = fs::path(output.path).stem().string();
         for (const std::string& old : previous)
-            if (std::find(files.begin(), files.end(), old) == files.end()) fs::remove(old, error);
+            if (std::find(files.begin(), files.end(), old) == files.end() &&
+                isBakeTextureName(fs::path(old).filename().string(), stem))
+                fs::remove(old, error);
         copied[output.name] = {{"path", output.path}, {"hash", copy.hash}, {"kind", fileKindName(copy.kind)},
                                {"from", output.stage + "." + output.port}};
         if (!files.empty()) copied[output.name]["files"] = files;

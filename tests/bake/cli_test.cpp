@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -165,7 +166,18 @@ TEST_F(BakeCli, KilledBakeNeverBreaksTheLastGoodResult) {
                            (dir / "probe.glb").string() + flags + " --seed 2").c_str()), 0);
     long total = long(fs::file_size(counter));
     ASSERT_GT(total, 3);
+    auto bakeFiles = [&] {
+        std::vector<std::string> names;
+        for (const auto& item : fs::directory_iterator(out)) {
+            const std::string name = item.path().filename().string();
+            if (name.rfind("baked.", 0) == 0 || name.rfind(".baked.", 0) == 0) names.push_back(name);
+        }
+        std::sort(names.begin(), names.end());
+        return names;
+    };
     int killed = 0;
+    long messiest = 1; // the kill point that left the most files
+    size_t mostLeft = 0;
     for (long point = 1; point <= total; ++point) {
         SCOPED_TRACE("kill point " + std::to_string(point) + " of " + std::to_string(total));
         int status = std::system(("PRT_KILL_AT=" + std::to_string(point) + " " + PRT_EXECUTABLE + " --quiet bake " + input +
@@ -176,9 +188,24 @@ TEST_F(BakeCli, KilledBakeNeverBreaksTheLastGoodResult) {
         if (now != good) { // the new bake landed: later kills leave it (same content, same names)
             good = now;
         }
+        if (bakeFiles().size() > mostLeft) mostLeft = bakeFiles().size(), messiest = point;
     }
     EXPECT_EQ(killed, total);
     std::printf("bake kill test: %ld kill points, each left a loadable bundle\n", total);
+
+    // What the kills left (hidden temporaries, textures written before a bundle that never landed) goes with the
+    // next bake of the output: the folder then holds the bundle and exactly the textures it names.
+    std::system(("PRT_KILL_AT=" + std::to_string(messiest) + " " + PRT_EXECUTABLE + " --quiet bake " + input + " -o " +
+                 output + flags + " --seed 3 2>/dev/null").c_str());
+    const size_t leftByKills = bakeFiles().size();
+    ASSERT_EQ(run("bake " + input + " -o " + output + flags + " --seed 4").exitCode, 0);
+    std::vector<std::string> named = {"baked.glb"};
+    for (const Layer& layer : readBundle(output).layers)
+        if (layer.params.contains("files"))
+            for (const nlohmann::json& file : layer.params["files"]) named.push_back(file.get<std::string>());
+    std::sort(named.begin(), named.end());
+    EXPECT_EQ(bakeFiles(), named);
+    EXPECT_GT(leftByKills, named.size()) << "the kills left nothing to clean, so this proves nothing";
 }
 
 } // namespace

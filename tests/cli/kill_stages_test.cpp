@@ -2,7 +2,7 @@
 // a clean run of the stage counts its checkpoints (command start, progress steps, before and after each rename);
 // then runs die by SIGKILL at points spread over them. After every kill each output is absent or byte for byte the
 // clean run's (never partial), and a rerun gives the clean bytes. (A kill between writing and renaming leaves the
-// hidden temporary .NAME.tmp-HOST-PID-N behind, never read, until the next write of that output on the host
+// hidden temporary .NAME.tmp-HOST-PID-N-R behind, never read, until the next write of that output on the host
 // removes it.)
 // `prt run` and the bake have their own kill tests (tests/pipeline/kill_test.cpp, tests/bake/cli_test.cpp).
 #include "core.h"
