@@ -77,12 +77,28 @@ export function serve(dataDir, port = 0) {
       if (answerListing(request.url, dataDir, response)) return;
       const { status, file } = resolveTarget(roots, request.url);
       if (status !== 200) { refuse(status); return; }
-      fs.readFile(file, (error, bytes) => {
-        try {
-          if (error) { refuse(error.code === 'EISDIR' ? 403 : 404); return; }
-          response.writeHead(200, { 'content-type': types[path.extname(file)] || 'application/octet-stream' })
-            .end(request.method === 'HEAD' ? undefined : bytes);
-        } catch { refuse(500); }
+      // Regular files only (a FIFO would hold a worker thread forever, a device never end), streamed, so a large
+      // file costs no more memory than a small one. O_NONBLOCK: opening a FIFO returns at once; fstat then refuses it.
+      fs.open(file, fs.constants.O_RDONLY | fs.constants.O_NONBLOCK, (openError, fd) => {
+        if (openError) { refuse(openError.code === 'EISDIR' ? 403 : 404); return; }
+        fs.fstat(fd, (statError, stats) => {
+          try {
+            if (statError || !stats.isFile()) {
+              fs.close(fd, () => {});
+              refuse(statError ? 404 : 403);
+              return;
+            }
+            response.writeHead(200, {
+              'content-type': types[path.extname(file)] || 'application/octet-stream',
+              'content-length': stats.size,
+            });
+            if (request.method === 'HEAD') { fs.close(fd, () => {}); response.end(); return; }
+            const stream = fs.createReadStream(null, { fd, autoClose: true });
+            stream.on('error', () => response.destroy());
+            response.on('close', () => stream.destroy());
+            stream.pipe(response);
+          } catch { fs.close(fd, () => {}); refuse(500); }
+        });
       });
     } catch {
       refuse(400);

@@ -59,8 +59,9 @@ std::string pipelineToml(const Result& result, const Options& options, const std
     std::string noise;
     for (size_t m = 0; m < result.referenceNoise.size() && m < envPaths.size(); ++m) {
         char text[64];
+        // The map by its key's name: a file stem may hold a newline, which would end the comment.
         std::snprintf(text, sizeof text, "%s%s %.4g", m ? ", " : "",
-                      std::filesystem::path(envPaths[m]).stem().string().c_str(), result.referenceNoise[m]);
+                      bareKey(std::filesystem::path(envPaths[m]).stem().string()).c_str(), result.referenceNoise[m]);
         noise += text;
     }
     char head[1600];

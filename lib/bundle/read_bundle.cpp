@@ -36,12 +36,10 @@ struct ExternalFiles {
 };
 
 static bool insideFolder(const std::string& candidate, ExternalFiles& files) {
+    if (!resolvedInside(candidate, files.folder.string()).empty()) return true;
     std::error_code error;
     std::filesystem::path resolved = std::filesystem::weakly_canonical(candidate, error);
-    if (error) return false;
-    auto mismatch = std::mismatch(files.folder.begin(), files.folder.end(), resolved.begin(), resolved.end());
-    if (mismatch.first == files.folder.end() && resolved != files.folder) return true;
-    if (files.refused.empty() && std::filesystem::exists(resolved, error)) files.refused = resolved.string();
+    if (!error && files.refused.empty() && std::filesystem::exists(resolved, error)) files.refused = resolved.string();
     return false;
 }
 

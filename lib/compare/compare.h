@@ -33,7 +33,7 @@ ErrorMetrics compareFiles(const std::string& resultPath, const std::string& refe
 
 // Writes rgb rows (rgb.size() a multiple of 3) atomically, by extension: .npy (float32 [N,3]) or .csv (header
 // "r,g,b", then one row "r,g,b" per line, printed so every float reads back bit-exact).
-// Throws prt::Error(kExitUsage) for any other extension.
+// Throws prt::Error(kExitUsage) for any other extension, and (requireFiniteResult) for a value that is not finite.
 void writeVertexRadiance(const std::string& path, const std::vector<float>& rgb);
 
 // Reads rgb rows from .npy (float32 [N,3]) or .csv (N lines "r,g,b", an optional header line first).
@@ -53,8 +53,8 @@ struct ImageComparison {
     double meanRelativeError = 0.0, p95RelativeError = 0.0, maxRelativeError = 0.0; // over the mask
     std::vector<float> relativeError; // per pixel; -1 outside the mask
 };
-// Needs result and reference of width * height * 3 values; mask of width * height values (> 0.5 is inside), or
-// null for every pixel.
+// Needs result and reference of width * height * 3 values, finite (a NaN pixel's error is NaN; the percentile
+// then has no order); mask of width * height values (> 0.5 is inside), or null for every pixel.
 ImageComparison compareImages(const float* result, const float* reference, const float* mask, int width, int height);
 
 // An 8-bit RGB picture, row 0 at the top.

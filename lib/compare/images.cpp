@@ -18,11 +18,11 @@ double luminance(const float* rgb) {
     return kLuminance[0] * rgb[0] + kLuminance[1] * rgb[1] + kLuminance[2] * rgb[2];
 }
 
-// Viridis at five stops, interpolated linearly: dark blue (no error) to yellow (the top of the scale).
+// Viridis at five stops, interpolated linearly: dark blue (no error) to yellow (the top of the scale, and NaN).
 void falseColour(double t, uint8_t out[3]) {
     static const double stops[5][3] = {{0.267, 0.005, 0.329}, {0.229, 0.322, 0.546}, {0.128, 0.567, 0.551},
                                        {0.369, 0.789, 0.383}, {0.993, 0.906, 0.144}};
-    t = std::clamp(t, 0.0, 1.0) * 4.0;
+    t = (t >= 0.0 ? std::min(t, 1.0) : std::isnan(t) ? 1.0 : 0.0) * 4.0;
     int i = std::min(3, int(t));
     double f = t - i;
     for (int c = 0; c < 3; ++c) out[c] = uint8_t(std::lround(255.0 * (stops[i][c] * (1 - f) + stops[i + 1][c] * f)));

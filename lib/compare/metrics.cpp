@@ -60,6 +60,7 @@ ErrorMetrics compareFiles(const std::string& resultPath, const std::string& refe
         throw Error(resultPath, "",
                     std::to_string(result.size() / 3) + " rows, but the reference " + referencePath + " has " +
                         std::to_string(reference.size() / 3));
+    if (result.empty()) throw Error(resultPath, "", "has no rows: nothing to compare");
     return compareRadiance(result.data(), reference.data(), result.size() / 3);
 }
 

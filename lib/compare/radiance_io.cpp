@@ -80,6 +80,7 @@ std::vector<float> readNpyRows(const std::string& path) {
 void writeVertexRadiance(const std::string& path, const std::vector<float>& rgb) {
     std::string extension = fileExtension(path);
     if (rgb.size() % 3 != 0) throw Error(path, "", "internal: radiance is not rgb rows", kExitFailure);
+    requireFiniteResult(rgb.data(), rgb.size(), 3, path);
     if (extension == "npy") return writeNpy(path, rgb, {rgb.size() / 3, 3});
     if (extension != "csv") throw Error(path, "", "unknown radiance format (use .npy or .csv)", kExitUsage);
     std::string text = "r,g,b\n";

@@ -21,7 +21,12 @@ void checkExrHeaders(const std::string& path) {
     unsigned char start[8];
     if (fileSize < 8 || !in.read(reinterpret_cast<char*>(start), 8)) return;
     static const unsigned char kMagic[4] = {0x76, 0x2f, 0x31, 0x01};
-    if (std::memcmp(start, kMagic, 4) != 0) return; // not OpenEXR: nothing to check here
+    if (std::memcmp(start, kMagic, 4) != 0) {
+        // OpenImageIO would try its other readers on a file named .exr, past this check and the fuzzed path.
+        if (fileExtension(path) == "exr")
+            throw Error(path, "byte 0", "named .exr but not OpenEXR (no OpenEXR magic number): rename it to its format");
+        return; // not OpenEXR: nothing to check here
+    }
     const bool multipart = (start[5] & 0x10) != 0;   // version field bit 12
     auto refuse = [&](const std::string& problem) { throw Error(path, "OpenEXR header", problem); };
 

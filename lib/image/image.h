@@ -25,8 +25,9 @@ struct EnvironmentMap {
 
 // Before OpenImageIO opens an OpenEXR file: throws prt::Error(path, "OpenEXR header", ...) when an attribute
 // declares more bytes than the file holds after it, or a name or the header list runs past the end. OpenEXR
-// itself would allocate what the attribute declares. Files of other formats pass unchecked. Both readers below
-// and readImageChannels call it.
+// itself would allocate what the attribute declares. A file named .exr that is not OpenEXR is refused (OpenImageIO
+// would read it with another format's reader); files of other formats pass unchecked. Both readers below and
+// readImageChannels call it.
 void checkExrHeaders(const std::string& path);
 
 // Reads any image OpenImageIO reads, keeping the first three channels (grey is replicated).

@@ -28,11 +28,8 @@ std::filesystem::path resolveInFolder(const std::filesystem::path& folder, std::
                                       const std::string& place) {
     for (char& c : name)
         if (c == '\\') c = '/';
-    std::error_code error;
-    std::filesystem::path base = std::filesystem::weakly_canonical(folder, error);
-    std::filesystem::path resolved = std::filesystem::weakly_canonical(base / name, error);
-    auto mismatch = std::mismatch(base.begin(), base.end(), resolved.begin(), resolved.end());
-    if (error || mismatch.first != base.end() || resolved == base)
+    const std::string resolved = resolvedInside((folder / name).string(), folder.string());
+    if (resolved.empty())
         throw Error(file, place, "'" + name.substr(0, 80) + "' lies outside the OBJ file's folder; prt follows no path out of it");
     return resolved;
 }

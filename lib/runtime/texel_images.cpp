@@ -39,7 +39,10 @@ std::string referencedFile(const std::string& owner, const std::string& uri, con
         throw Error(owner, place, "uri '" + uri + "' is not a path inside the bundle's folder");
     std::error_code error;
     fs::path resolved = fs::canonical(owner, error); // a linked bundle's textures lie next to its target
-    fs::path path = (error ? fs::path(owner) : resolved).parent_path() / uri;
+    const fs::path folder = (error ? fs::path(owner) : resolved).parent_path();
+    fs::path path = folder / uri;
+    if (fs::exists(fs::symlink_status(path, error)) && resolvedInside(path.string(), folder.string()).empty())
+        throw Error(owner, place, "uri '" + uri + "' leads out of the bundle's folder (through a link)");
     if (!fs::is_regular_file(path, error))
         throw Error(path.string(), "", "referenced by " + owner + " (" + place + ") but not found");
     if (!hash.is_string()) throw Error(owner, place, "no content hash recorded for " + uri);

@@ -131,5 +131,30 @@ TEST(Autoconfig, LowerOrdersAreTheFirstCoefficientsOfTheSameRun) {
     }
 }
 
+// A map's file name is the user's: one holding a newline and a TOML table must not end the comment it is quoted in
+// and add an output to the pipeline (a stem gives the map's key and the noise line its name, both as bare keys).
+TEST(Autoconfig, AMapsFileNameCannotAddTomlToThePipeline) {
+    Result result;
+    result.chosen.config.order = 3;
+    result.chosen.config.samples = 64;
+    result.referenceNoise = {0.01};
+    Options options;
+    const std::string hostile = "maps/x\n[outputs.e]\nfrom=\"transfer\"\npath=\"pwn\"\n#.exr";
+    const std::string toml = pipelineToml(result, options, "mesh.glb", {hostile}, "out/bundle.glb", "p");
+    size_t tables = 0;
+    for (size_t begin = 0; begin < toml.size();) {
+        size_t end = toml.find('\n', begin);
+        if (end == std::string::npos) end = toml.size();
+        const std::string line = toml.substr(begin, end - begin);
+        EXPECT_NE(line.rfind("[outputs.", 0), 0u) << line;
+        EXPECT_NE(line.rfind("path=", 0), 0u) << line;
+        tables += line.rfind("[", 0) == 0;
+        begin = end + 1;
+    }
+    EXPECT_GE(tables, 4u); // pipeline, inputs, the stages, outputs
+    EXPECT_NE(toml.find("env-x--outputs-e--from--transfer--path--pwn---"), std::string::npos) << toml;
+}
+
 } // namespace
 } // namespace prt::autoconfig
+

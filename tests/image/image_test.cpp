@@ -141,11 +141,12 @@ TEST_F(ImageTest, MissingFileNamesTheFile) {
     expectError([&] { prt::readEnvironmentMap(path); }, {path, "not found"});
 }
 
+// OpenImageIO would try its other readers on it (a PNG or HDR so named was read): refused by its magic number.
 TEST_F(ImageTest, TextRenamedExrIsNotAnImage) {
     std::string path = file("notes.exr");
     std::ofstream(path) << "these are notes, not pixels\n";
-    expectError([&] { prt::readImage(path); }, {path, "not a readable image"});
-    expectError([&] { prt::readEnvironmentMap(path); }, {path});
+    expectError([&] { prt::readImage(path); }, {path, "named .exr but not OpenEXR"});
+    expectError([&] { prt::readEnvironmentMap(path); }, {path, "not OpenEXR"});
 }
 
 // A deep EXR stores per-pixel sample lists rather than an image: named as such, not misread.

@@ -18,6 +18,9 @@ fs.writeFileSync(path.join(work, 'secret.txt'), 'secret\n');
 // Links inside the served folder that lead out of it: to a file and to a folder.
 fs.symlinkSync(path.join(work, 'secret.txt'), path.join(work, 'out/link.txt'));
 fs.symlinkSync(work, path.join(work, 'out/up'));
+// Not regular files: a FIFO (reading one would hold a worker thread until a writer came) and a folder.
+spawnSync('mkfifo', [path.join(work, 'out/fifo.glb')]);
+fs.mkdirSync(path.join(work, 'out/folder.glb'));
 
 let failed = false;
 const check = (ok, what) => { console.log(`${ok ? 'ok' : 'FAILED'}: ${what}`); failed ||= !ok; };
@@ -67,6 +70,14 @@ try {
     const bad = await get(port, target);
     check(bad.status === 400, `malformed ${target} is answered 400 (${bad.status})`);
   }
+  // Node's file-system pool has four threads: eight requests for the FIFO would hold them all if any blocked.
+  for (let i = 0; i < 8; ++i) {
+    const fifo = await Promise.race([get(port, '/data/fifo.glb'),
+      new Promise((resolve) => setTimeout(() => resolve({ status: 'no answer in 5 s' }), 5000))]);
+    if (i === 0) check(fifo.status === 403, `a FIFO is refused (${fifo.status})`);
+  }
+  const folder = await get(port, '/data/folder.glb');
+  check(folder.status === 403, `a folder is refused (${folder.status})`);
   const alive = await get(port, '/data/hello.json');
   check(alive.status === 200, `the server still serves after malformed requests (${alive.status})`);
   for (const host of ['evil.example', `evil.example:${port}`, `127.0.0.1.evil.example:${port}`, `localhost:${port + 1}`,
