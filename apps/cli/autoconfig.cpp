@@ -95,11 +95,7 @@ void runAutoconfig(const AutoconfigArgs& args, const CLI::App& command) {
                   nowSeconds() - start);
     logInfo(line);
 
-    StageCost cost;
-    cost.stage = "autoconfig";
-    cost.seconds = nowSeconds() - start;
-    cost.peakMemoryBytes = peakMemoryBytes();
-    reportCost(cost);
+    reportCost("autoconfig", start, result.rays);
 }
 
 } // namespace
@@ -115,7 +111,7 @@ void addAutoconfigCommand(CLI::App& app) {
     command->add_option("-o,--output", args->output, "Pipeline file (.toml) for `prt run`")->required();
     command->add_option("--bundle", args->bundle,
                         "Where the pipeline puts the bundle (default out/autoconfig/MESH.prt.glb)");
-    command->add_option("--report", args->report, "Also write the search (Pareto front, choice, times) as JSON");
+    outputFile(command->add_option("--report", args->report, "Also write the search (Pareto front, choice, times) as JSON"));
     command->add_option("--name", args->name, "Pipeline name (default: the output's stem)");
     command->add_option("--albedo", args->albedo, "Diffuse albedo R,G,B or one grey value (default 0.8)");
     command->add_option("--seed", args->seed, "Seed of transfer directions, reference paths and subsets (default 0)");

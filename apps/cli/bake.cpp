@@ -116,6 +116,8 @@ void addBakeCommand(CLI::App& app) {
                         "Join these shard bundles (every --shard I/N of one bake, any order, baked with the same "
                         "options as given here), then fill, stitch and write as the unsharded bake does")
         ->excludes(shard);
+    optionNeeds(command, "--cage", "--high");
+    optionNeeds(command, "--low-position", "--high");
     command->callback([args] { runBakeCommand(*args); });
 }
 

@@ -50,6 +50,16 @@ nlohmann::json buildInfo();
 // these in-process instead of starting prt again); anything else is a usage error.
 int runDriver(int argc, char** argv, const char* onlyCommand = nullptr, nlohmann::json* answer = nullptr);
 
+// Marks `option` as naming a file the command writes besides -o (shown as OUTPUT in --help), and returns it. Before
+// the command runs, the driver checks every output's path: its folder exists, it is not a folder, no two outputs
+// share it, and it is none of the command's input files.
+inline constexpr const char* kOutputTypeName = "OUTPUT";
+CLI::Option* outputFile(CLI::Option* option);
+
+// Makes `option` of `command` need `needed` (CLI11's needs: given without it, a usage error names both), for the
+// options that only mean something beside another and would otherwise be accepted and ignored. Both must exist.
+void optionNeeds(CLI::App* command, const char* option, const char* needed);
+
 // Parses --albedo: "R,G,B" or a single grey value, each in [0, 1], kept in double so bundles record what was
 // typed. Throws prt::Error(kExitUsage) naming --albedo otherwise.
 std::array<double, 3> parseAlbedo(const std::string& text);
@@ -88,7 +98,8 @@ void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bund
 // (prt::Error(kExitUsage) naming `option`) before anything is allocated. Returns the product.
 uint64_t checkCommandLineSize(const std::vector<uint64_t>& factors, const std::string& what, const char* option);
 
-// Number of worker threads to use: `requested` if positive, else the hardware concurrency.
+// Number of worker threads to use for --threads: `requested` if positive, the hardware concurrency for 0. Throws
+// prt::Error(kExitUsage) naming --threads for a negative count.
 int resolveThreads(int requested);
 
 } // namespace prt::cli

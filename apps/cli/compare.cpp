@@ -7,6 +7,7 @@
 #include "image.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <nlohmann/json.hpp>
 
@@ -59,6 +60,20 @@ void report(nlohmann::ordered_json& document, const std::string& path) {
     std::fputs(text.c_str(), stdout);
 }
 
+// Reads an image to compare: every pixel finite (a NaN would order no error and index no colour), naming the first
+// that is not.
+Image readComparedImage(const std::string& path) {
+    Image image = readImage(path);
+    for (size_t i = 0; i < image.rgb.size(); ++i)
+        if (!std::isfinite(image.rgb[i])) {
+            const size_t pixel = i / 3;
+            throw Error(path, "pixel (" + std::to_string(pixel % size_t(image.width)) + ", " +
+                                  std::to_string(pixel / size_t(image.width)) + "), channel " + "RGB"[i % 3],
+                        "value is not finite");
+        }
+    return image;
+}
+
 void runCompareImages(const CompareOptions& options) {
     if (fileExtension(options.output) != "png")
         throw Error(options.output, "-o", "with --image the output is the error picture and must end in .png",
@@ -66,7 +81,7 @@ void runCompareImages(const CompareOptions& options) {
     if (!options.strip.empty() && fileExtension(options.strip) != "png")
         throw Error(options.strip, "--strip", "must end in .png", kExitUsage);
     if (!(options.scaleTop > 0.0)) throw Error("", "--scale", "must be positive", kExitUsage);
-    Image result = readImage(options.result), reference = readImage(options.reference);
+    Image result = readComparedImage(options.result), reference = readComparedImage(options.reference);
     if (result.width != reference.width || result.height != reference.height)
         throw Error(options.result, "", std::to_string(result.width) + "x" + std::to_string(result.height) +
                                             " pixels, but " + options.reference + " has " +
@@ -74,6 +89,8 @@ void runCompareImages(const CompareOptions& options) {
     std::vector<float> mask = coverageMask(options.result);
     ImageComparison comparison = compareImages(result.rgb.data(), reference.rgb.data(),
                                                mask.empty() ? nullptr : mask.data(), result.width, result.height);
+    if (comparison.maskPixels == 0)
+        throw Error(options.result, "A channel", "covers no pixel (none above 0.5): nothing to compare");
     Picture error = relativeErrorPicture(comparison, options.scaleTop);
     writePicture(options.output, error);
     if (!options.strip.empty())
@@ -100,7 +117,11 @@ void runCompareImages(const CompareOptions& options) {
 }
 
 void runCompare(const CompareOptions& options) {
-    if (options.image) return runCompareImages(options);
+    const double start = nowSeconds();
+    if (options.image) {
+        runCompareImages(options);
+        return reportCost("compare", start, 0);
+    }
     if (!options.strip.empty()) throw Error("", "--strip", "goes with --image", kExitUsage);
     ErrorMetrics metrics = compareFiles(options.result, options.reference);
     // Non-finite metrics (a flat reference) print as null.
@@ -110,6 +131,7 @@ void runCompare(const CompareOptions& options) {
     };
     addMetrics(document, metrics);
     report(document, options.output);
+    reportCost("compare", start, 0);
 }
 
 } // namespace
@@ -125,12 +147,14 @@ void addCompareCommand(CLI::App& app) {
     command->add_flag("--image", options->image,
                       "A and B are images (.exr) of one camera: metrics over A's A channel (coverage; every pixel "
                       "without one), -o DIFF.png the relative luminance error in false colour with a legend");
-    command->add_option("--strip", options->strip, "With --image: also write result | reference | error (.png)");
-    command->add_option("--metrics", options->metricsOutput, "With --image: also write the metrics JSON here");
+    outputFile(command->add_option("--strip", options->strip, "With --image: also write result | reference | error (.png)"));
+    outputFile(command->add_option("--metrics", options->metricsOutput, "With --image: also write the metrics JSON here"));
     command->add_option("--scale", options->scaleTop, "With --image: relative error at the top of the colour scale")
         ->capture_default_str();
     command->add_option("--exposure", options->exposure, "With --image: stops for the strip's tone map (compare.h toneMap)")
         ->capture_default_str();
+    optionNeeds(command, "--scale", "--image");
+    optionNeeds(command, "--exposure", "--image");
     command->callback([options] { runCompare(*options); });
 }
 

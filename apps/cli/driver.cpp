@@ -5,12 +5,15 @@
 #include "utf8.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <new>
 #include <vector>
 
 #ifndef PRT_VERSION
@@ -26,6 +29,57 @@ bool wantsJsonLog(int argc, char** argv) {
     return std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--log-json") == 0; });
 }
 
+// The option's name as a message shows it: its long name, else its positional name.
+std::string optionName(const CLI::Option& option) {
+    return option.get_lnames().empty() ? option.get_name() : "--" + option.get_lnames().front();
+}
+
+// Every number a command takes is finite: CLI11 reads "nan", "inf" and "1e999" as doubles, and no stage has a use
+// for them (a NaN angle reached Embree's ray check, an infinite tolerance a bundle's JSON). Throws prt::Error
+// (kExitUsage) naming the option.
+void checkFiniteNumbers(const CLI::App& command) {
+    for (const CLI::Option* option : command.get_options()) {
+        if (option->get_type_name().rfind("FLOAT", 0) != 0) continue;
+        for (const std::string& text : option->results()) {
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            if (end != text.c_str() && *end == '\0' && !std::isfinite(value))
+                throw Error("", optionName(*option), "'" + text + "' is not a finite number", kExitUsage);
+        }
+    }
+}
+
+// Before a command computes anything: each file it writes (-o and the options marked by outputFile) has an
+// existing folder (else kExitOutput), is not a folder itself, is written by one option only, and is none of the
+// existing files the command's other options name, its inputs (else kExitUsage): an output written over its input
+// would lose the input, or be read half-written by the stage itself.
+void checkOutputPaths(const CLI::App& command) {
+    namespace fs = std::filesystem;
+    std::vector<std::pair<std::string, std::string>> outputs, others; // (option, path)
+    for (const CLI::Option* option : command.get_options()) {
+        const bool output = option->check_lname("output") || option->get_type_name() == kOutputTypeName;
+        for (const std::string& path : option->results()) (output ? outputs : others).push_back({optionName(*option), path});
+    }
+    std::error_code error;
+    for (size_t i = 0; i < outputs.size(); ++i) {
+        const auto& [flag, path] = outputs[i];
+        const fs::path folder = fs::path(path).parent_path();
+        if (!folder.empty() && !fs::is_directory(folder, error))
+            throw Error(path, flag, "its folder " + folder.string() + " does not exist", kExitOutput);
+        if (fs::is_directory(path, error)) throw Error(path, flag, "is a folder, not a file to write", kExitOutput);
+        const fs::path resolved = fs::weakly_canonical(fs::absolute(path, error), error);
+        for (size_t j = 0; j < i; ++j)
+            if (fs::weakly_canonical(fs::absolute(outputs[j].second, error), error) == resolved)
+                throw Error(path, flag, "is also the output of " + outputs[j].first + ": give each output its own file",
+                            kExitUsage);
+        if (!fs::exists(path, error)) continue;
+        for (const auto& [otherFlag, other] : others)
+            if (fs::is_regular_file(other, error) && fs::equivalent(path, other, error))
+                throw Error(path, flag, "is also the input given as " + otherFlag + ": write the output elsewhere",
+                            kExitUsage);
+    }
+}
+
 } // namespace
 
 int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* answer) {
@@ -33,12 +87,7 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     // File names and values go into JSON (reports, logs, bundles, cache keys), which holds UTF-8 only.
     for (int i = 1; i < argc; ++i)
         if (!isUtf8(argv[i])) {
-            std::string shown;
-            for (const char* c = argv[i]; *c && shown.size() < 200; ++c) {
-                char escaped[8];
-                std::snprintf(escaped, sizeof escaped, "\\x%02x", unsigned((unsigned char)*c));
-                shown += (unsigned char)*c < 0x80 ? std::string(1, *c) : std::string(escaped);
-            }
+            const std::string shown = printableBytes(argv[i]);
             if (!answer) { // the message obeys --log-json, though the flags are not parsed yet
                 LogOptions options;
                 options.json = wantsJsonLog(argc, argv);
@@ -100,17 +149,10 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
             reply(resolved);
         }
         if (answer) throw CLI::RequiredError("--build-info or --resolved-options");
-        // An output's folder must exist before the stage computes anything (the file is written at the end).
-        for (CLI::App* sub : app.get_subcommands())
-            for (const CLI::Option* option : sub->get_options())
-                if (option->check_lname("output") && option->count() > 0)
-                    for (const std::string& path : option->results()) {
-                        const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-                        std::error_code error;
-                        if (!folder.empty() && !std::filesystem::is_directory(folder, error))
-                            throw Error(path, "--output", "its folder " + folder.string() + " does not exist",
-                                        kExitOutput);
-                    }
+        for (CLI::App* sub : app.get_subcommands()) {
+            checkFiniteNumbers(*sub);
+            checkOutputPaths(*sub);
+        }
         checkpoint("command"); // the questions above are not kill points: they change nothing
     });
 
@@ -153,6 +195,12 @@ int runDriver(int argc, char** argv, const char* onlyCommand, nlohmann::json* an
     } catch (const Error& e) {
         logError(e.what());
         return e.exitCode();
+    } catch (const std::bad_alloc&) {
+        // Not a bug of prt's: the input needs more memory than the process may have.
+        logError("out of memory: the inputs need more memory than this process may use (a file may claim up to "
+                 "PRT_MAX_ELEMENTS elements; set PRT_MAX_ELEMENTS=N in the environment to lower that cap and have "
+                 "such files refused by name)");
+        return kExitFailure;
     } catch (const std::exception& e) {
         logError(std::string("internal error: ") + e.what());
         return kExitFailure;

@@ -52,7 +52,7 @@ void runEnvlight(const EnvlightArgs& args) {
     options.smoothingFwhm = args.smoothingDegrees * kDegree;
     options.minRadius = args.minRadiusDegrees * kDegree;
     options.maxRadius = args.maxRadiusDegrees * kDegree;
-    options.detectionWindow = sh::parseWindow(args.detectionWindow);
+    options.detectionWindow = sh::parseWindow(args.detectionWindow, "--detection-window");
     options.refine = !args.thesisLights;
     options.fixedRadius = args.fixedRadiusDegrees * kDegree;
     double R[9];
@@ -126,7 +126,8 @@ void addEnvlightCommand(CLI::App& app) {
     command->add_option("--order", args->order, "SH bands L of the residual (L*L coefficients; default 5)");
     command->add_option("--max-lights", args->maxLights, "At most this many lights K (default 4)");
     command->add_option("--min-lights", args->minLights, "Fail (exit 3) unless at least this many lights are found");
-    command->add_option("--rotate-y", args->rotateYDegrees, "Turn the environment by this many degrees about +Y first");
+    command->add_option("--rotate-y", args->rotateYDegrees, "Turn the environment by this many degrees about +Y first")
+        ->check(CLI::Range(-360.0, 360.0));
     command->add_option("--elbow", args->elbow, "Weber-law elbow threshold in [0, 1) (default 0.05)");
     command->add_option("--min-contrast", args->minContrast,
                         "A peak's smoothed residual must reach this times the mean luminance (default 1)");
@@ -147,6 +148,8 @@ void addEnvlightCommand(CLI::App& app) {
                         "Residual orders --choose-lights tries with the lights (default: --order and --plain-order); "
                         "it keeps the (order, K) of least predicted error")
         ->delimiter(',');
+    optionNeeds(command, "--fixed-radius", "--thesis-lights");
+    optionNeeds(command, "--plain-order", "--choose-lights");
     command->callback([args] { runEnvlight(*args); });
 }
 

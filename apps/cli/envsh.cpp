@@ -40,6 +40,7 @@ void runEnvsh(const EnvshOptions& options) {
         coeffs.swap(rotated);
     }
     sh::applyWindow(window, options.order, coeffs.data(), 3);
+    requireFiniteResult(coeffs.data(), coeffs.size(), 3, options.output);
 
     nlohmann::ordered_json coefficients = nlohmann::ordered_json::array();
     for (size_t i = 0; i < coeffs.size(); i += 3) coefficients.push_back({coeffs[i], coeffs[i + 1], coeffs[i + 2]});
@@ -84,7 +85,8 @@ void addEnvshCommand(CLI::App& app) {
         ->required();
     command->add_option("-o,--output", options->output, "Output prt-sh JSON")->required();
     command->add_option("--rotate-y", options->rotateYDegrees,
-                        "Rotate the lighting by this many degrees about +Y (right-handed) before writing");
+                        "Rotate the lighting by this many degrees about +Y (right-handed) before writing")
+        ->check(CLI::Range(-360.0, 360.0));
     command->add_option("--window", options->window, "Band window against ringing: none, hann or lanczos");
     command->callback([options] { runEnvsh(*options); });
 }

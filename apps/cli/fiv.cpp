@@ -86,9 +86,9 @@ void runFivCommand(FivArgs args) {
 // The options both subcommands share: `prt fiv-visibility` is `prt fiv --visibility-only`, a stage of its own
 // so that pipelines cache and shard the environment-independent half apart from the reduction.
 static void addFivOptions(CLI::App* command, const std::shared_ptr<FivArgs>& args, bool visibilityStage) {
+    // Not required by CLI11: --merge SHARD... takes the words after it, and then needs no mesh (checkFivOptions).
     command->add_option("input", args->stage.inputs,
-                        "Occluder mesh (.glb, closed), or the visibility bundle(s) of `--visibility-only` (all shards)")
-        ->required();
+                        "Occluder mesh (.glb, closed), or the visibility bundle(s) of `--visibility-only` (all shards)");
     command->add_option("-o,--output", args->stage.output, "Output bundle (.glb)")->required();
     if (!visibilityStage)
         command->add_option("--env", args->stage.env, "Environment map (2:1 equirectangular or 1:6 cube strip)");

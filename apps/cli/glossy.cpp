@@ -172,7 +172,8 @@ glossy::GlossyOptions glossyOptions(const GlossyArgs& args) {
 }
 
 // `--compare-solvers N`: both solvers on the first N problems of the mesh, reported as an event and to --stats.
-void reportSolverComparison(const GlossyArgs& args, const TriMesh& mesh, const glossy::GlossyOptions& options) {
+void reportSolverComparison(const GlossyArgs& args, const TriMesh& mesh, const glossy::GlossyOptions& options,
+                            double start) {
     glossy::SolverComparison c = glossy::compareSolvers(mesh, options, args.compareSolvers);
     nlohmann::json record = {{"problems", c.problems}, {"lobes", args.lobes}, {"grid", args.grid},
                              {"brdf", args.brdf}, {"threads", options.solverOptions.threads},
@@ -192,6 +193,7 @@ void reportSolverComparison(const GlossyArgs& args, const TriMesh& mesh, const g
     summary.erase("pocl_costs"), summary.erase("ceres_costs");
     logEvent("glossy_solver_comparison", summary.dump());
     if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
+    reportCost("glossy", start, c.rays);
 }
 
 void runGlossy(const GlossyArgs& args) {
@@ -215,7 +217,7 @@ void runGlossy(const GlossyArgs& args) {
     if (mesh.normals.empty()) throw Error(args.input, "mesh", "has no normals: run `prt meshprep` on it first");
     logInfo("glossy: " + args.input + " (" + std::to_string(mesh.vertexCount()) + " vertices), " + args.brdf + ", " +
             std::to_string(args.lobes) + " lobes, " + args.solver + ", grid 6x" + std::to_string(args.grid) + "^2");
-    if (args.compareSolvers > 0) return reportSolverComparison(args, mesh, options);
+    if (args.compareSolvers > 0) return reportSolverComparison(args, mesh, options, start);
     // Shards are vertex ranges: every row is computed as the whole run computes it (lib/glossy and lib/transfer
     // guarantee rows independent of the range), so `prt merge` joins them bit for bit.
     RowRange range = shardRows(mesh.vertexCount(), shardIndex, shardCount);
@@ -271,12 +273,7 @@ void runGlossy(const GlossyArgs& args) {
     logEvent("glossy_stats", record.dump());
     if (!args.stats.empty()) writeBytesAtomic(args.stats, record.dump(2) + "\n");
 
-    StageCost cost;
-    cost.stage = "glossy";
-    cost.seconds = nowSeconds() - start;
-    cost.rays = stats.rays;
-    cost.peakMemoryBytes = peakMemoryBytes();
-    reportCost(cost);
+    reportCost("glossy", start, stats.rays);
 }
 
 } // namespace
@@ -328,13 +325,13 @@ void addGlossyCommand(CLI::App& app) {
                         "With --from-below: the one-sided weight rho, (0, 1e6] (default 10)");
     command->add_option("--iterations", args->iterations, "LM iteration limit per fit (default 100)");
     command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
-    command->add_option("--stats", args->stats, "Also write the fit statistics as JSON to this file");
+    outputFile(command->add_option("--stats", args->stats, "Also write the fit statistics as JSON to this file"));
     command->add_option("--compare-solvers", args->compareSolvers,
                         "Instead of a bundle: solve the first N fit problems with both solvers and report time, "
                         "cost and agreement (JSON on stderr and in --stats)");
-    command->add_option("--vertex-stats", args->vertexStats,
+    outputFile(command->add_option("--vertex-stats", args->vertexStats,
                         "Also write per-vertex diagnostics [V,6] (.npy): normal, visible share, mean and worst "
-                        "relative fit error");
+                        "relative fit error"));
     command->add_option("--lobe-type", args->lobeType, "Lobe layer storage: float16 (default) or float32");
     command->add_flag("--indirect-glossy", args->indirectGlossy,
                       "Also fit the glossy reflection of light that bounced once diffusely off the mesh (grey "
@@ -342,6 +339,7 @@ void addGlossyCommand(CLI::App& app) {
     command->add_option("--shard", args->shard,
                         "Compute only vertex range I of N (0-based) into a shard bundle; `prt merge` joins the N "
                         "shards into the unsharded bundle, bit for bit");
+    optionNeeds(command, "--overshoot", "--from-below");
     command->callback([args] { runGlossy(*args); });
 }
 

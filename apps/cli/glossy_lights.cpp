@@ -39,7 +39,7 @@ GlossyHybrid prepareGlossyHybrid(const GlossyHybridOptions& options) {
     if (options.bounceWindow == "off")
         hybrid.diffuse.bounce.clear();
     else
-        hybrid.lighting.bounceWindow = sh::parseWindow(options.bounceWindow);
+        hybrid.lighting.bounceWindow = sh::parseWindow(options.bounceWindow, "--bounce-window");
 
     const EnvironmentMap map = readEnvironmentMap(options.env);
     if (map.layout != EnvLayout::Equirectangular)

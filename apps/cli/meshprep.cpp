@@ -17,7 +17,7 @@ void addMeshprepCommand(CLI::App& app) {
         app.add_subcommand("meshprep", "Validate and clean a mesh (.obj .ply .off .stl .gltf .glb) into a bundle (.glb)");
     command->add_option("input", options->input, "Input mesh")->required();
     command->add_option("-o,--output", options->output, "Output bundle (.glb)")->required();
-    command->add_option("--report", options->report, "Write a JSON report: counts, bounds, boundary, fixes, vertex map");
+    outputFile(command->add_option("--report", options->report, "Write a JSON report: counts, bounds, boundary, fixes, vertex map"));
     command
         ->add_option("--weld-tolerance", options->weldTolerance, "Weld vertices closer than this times the bounding box diagonal")
         ->capture_default_str();

@@ -126,6 +126,12 @@ void parsePhongBrdf(const std::string& text, double& exponent, double& ks) {
     ks = values[1];
 }
 
+CLI::Option* outputFile(CLI::Option* option) { return option->type_name(kOutputTypeName); }
+
+void optionNeeds(CLI::App* command, const char* option, const char* needed) {
+    command->get_option(option)->needs(command->get_option(needed));
+}
+
 std::array<float, 3> parsePoint(const std::string& text, const char* option) {
     std::vector<float> values;
     for (const std::string& item : commaItems(text)) {
@@ -148,6 +154,7 @@ uint64_t checkCommandLineSize(const std::vector<uint64_t>& factors, const std::s
 }
 
 int resolveThreads(int requested) {
+    if (requested < 0) throw Error("", "--threads", "must be >= 0 (0: all cores)", kExitUsage);
     if (requested > 0) return requested;
     unsigned hw = std::thread::hardware_concurrency();
     return hw > 0 ? int(hw) : 1;

@@ -237,8 +237,8 @@ void addReferenceCommand(CLI::App& app) {
     command->add_option("--seed", options->seed, "Random seed; same seed, same output for any thread count")
         ->capture_default_str();
     command->add_option("--threads", options->threads, "Worker threads (default: all)");
-    command->add_option("--stderr-out", options->standardErrorOutput,
-                        "Also write the standard error of each value, in the same format as -o");
+    outputFile(command->add_option("--stderr-out", options->standardErrorOutput,
+                        "Also write the standard error of each value, in the same format as -o"));
     command->add_option("--image", options->imageSize, "Render a W,H pinhole image instead, e.g. 640,480");
     command->add_option("--camera", options->camera,
                         "With --image: EYE,TARGET,UP,FOVY as 10 comma-separated numbers (three x,y,z triples, then "

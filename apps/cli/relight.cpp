@@ -196,7 +196,7 @@ void runHybridRelight(const RelightOptions& options, double start, const Pinhole
     if (options.bounceWindow == "off")
         model.bounce.clear();
     else
-        lighting.bounceWindow = sh::parseWindow(options.bounceWindow);
+        lighting.bounceWindow = sh::parseWindow(options.bounceWindow, "--bounce-window");
 
     double visibilityStart = nowSeconds();
     std::vector<envlight::ConeLight> cones;
@@ -361,6 +361,8 @@ void addGlossyTowardEye(const GlossyModel& glossy, const EnvironmentMap& environ
 void checkRelightFlags(const RelightOptions& options, bool imageMode, PinholeCamera& camera) {
     // writeVertexRadiance checks this too, but only after the work; a typo should fail at once.
     std::string outputExtension = fileExtension(options.output);
+    if (options.exposure != 0.0f && outputExtension != "png")
+        throw Error("", "--exposure", "tone-maps a .png picture (--image); other outputs keep linear radiance", kExitUsage);
     if (imageMode != !options.camera.empty())
         throw Error("", "--image", "--image and --camera go together", kExitUsage);
     if (imageMode) {
@@ -532,7 +534,8 @@ void addRelightCommand(CLI::App& app) {
                          "order): the hybrid relight. With --env, the lights must have been made from that map");
     lighting->require_option(1, 2);
     command->add_option("--rotate-y", options->rotateYDegrees,
-                        "Turn the lighting by this many degrees about +Y (right-handed)");
+                        "Turn the lighting by this many degrees about +Y (right-handed)")
+        ->check(CLI::Range(-360.0, 360.0));
     command->add_option("--window", options->window, "Band window against ringing: none, hann or lanczos");
     command->add_flag("--texels", options->texels,
                       "Relight the bundle's per-texel transfer (\"texel_transfer\", from `prt bake`) into an atlas "
@@ -568,17 +571,18 @@ void addRelightCommand(CLI::App& app) {
     command->add_flag("--irradiance", options->irradiance,
                       "Rows of irradiance E (W/m^2 per unit radiance of the map) instead of outgoing radiance: for a "
                       "scene, pi times its irradiance transfer; else pi * radiance / albedo");
-    command->add_option("--positions", options->positions,
+    outputFile(command->add_option("--positions", options->positions,
                         "Also write each row's world-space position as [V,3] float32 .npy (rows: a scene's receivers in "
-                        "node order, then their vertices), so other tools can match rows by position");
-    command->add_option("--visibility-out", options->visibilityOut,
+                        "node order, then their vertices), so other tools can match rows by position"));
+    outputFile(command->add_option("--visibility-out", options->visibilityOut,
                         "With --lights: also write the cone visibility the relight used, float32 .npy [rows, lights] "
-                        "(the lights as turned by --rotate-y), e.g. for the browser viewer's hybrid");
+                        "(the lights as turned by --rotate-y), e.g. for the browser viewer's hybrid"));
     command->add_option("--visibility-turns", options->visibilityTurns,
                         "With --lights and --visibility-out: cast the cone visibility for N turns about +Y evenly over "
                         "360 degrees (turn t at t*360/N, as --rotate-y casts it) and write them as one uint8 .npy "
                         "[N, rows, lights] (round(255 V)), so the viewer turns the lights freely with their shadows");
     addSpecularRelightOptions(command, options->specular);
+    optionNeeds(command, "--light-samples", "--lights");
     command->callback([options] { runRelight(*options); });
 }
 

@@ -18,16 +18,22 @@ void addSpecularRelightOptions(CLI::App* command, SpecularRelightArgs& args) {
                                             "phong:EXPONENT,KS with --eye: specular through SH triple products from "
                                             "the bundle's specular_visibility layer (`prt specular`)");
     // What the specular relight does not do is refused rather than ignored (called after relight's own options).
-    for (const char* other : {"--texels", "--image", "--camera", "--lights", "--sh", "--rotate-y", "--window"})
+    for (const char* other : {"--texels", "--image", "--camera", "--lights", "--sh", "--rotate-y", "--window",
+                              "--irradiance", "--positions", "--visibility-out", "--visibility-turns"})
         if (CLI::Option* option = command->get_option_no_throw(other)) brdf->excludes(option);
     command->add_option("--light-order", args.lightOrder,
-                        "With --brdf: SH bands of the lighting in the product (default: the visibility's order)");
+                        "With --brdf: SH bands of the lighting in the product (default: the visibility's order)")
+        ->needs(brdf)
+        ->check(CLI::NonNegativeNumber);
     command->add_option("--product-bands", args.productBands,
                         "With --brdf: most bands of the product kept (default: the visibility's order, as seed 004; "
-                        "up to light order + visibility order - 1)");
+                        "up to light order + visibility order - 1)")
+        ->needs(brdf)
+        ->check(CLI::NonNegativeNumber);
     command->add_option("--band-tolerance", args.bandTolerance,
                         "With --brdf: drop the product's bands whose Phong multiplier is below this share of band "
-                        "0's (default 0.02; 0 keeps every band)");
+                        "0's (default 0.02; 0 keeps every band)")
+        ->needs(brdf);
 }
 
 void runSpecularRelight(const SpecularRelightArgs& args, const std::string& bundlePath, const std::string& envPath,

@@ -45,12 +45,7 @@ void finishPicture(const RenderOptions& options, const PinholeCamera& camera, co
     writeRenderedPicture(options.output, image, options.exposure);
     logInfo("render: wrote " + options.output + " (" + std::to_string(camera.width) + "x" +
             std::to_string(camera.height) + ", " + what + ")");
-    StageCost cost;
-    cost.stage = "render";
-    cost.seconds = nowSeconds() - start;
-    cost.rays = image.rays;
-    cost.peakMemoryBytes = peakMemoryBytes();
-    reportCost(cost);
+    reportCost("render", start, image.rays);
 }
 
 // A glossy bundle under cone lights (docs/glossy.md, "Lights through the glossy path"): the diffuse hybrid per
@@ -78,6 +73,10 @@ void runRender(const RenderOptions& options) {
     std::string extension = fileExtension(options.output);
     if (extension != "exr" && extension != "png")
         throw Error(options.output, "-o", "the image must end in .exr (linear) or .png (tone mapped)", kExitUsage);
+    if (options.exposure != 0.0f && extension != "png")
+        throw Error("", "--exposure", "tone-maps a .png; an .exr keeps linear radiance", kExitUsage);
+    if (!options.vertexRadiance.empty() && options.rotateYDegrees != 0.0)
+        throw Error("", "--rotate-y", "turns the lighting of a relight: --vertex-radiance draws given radiance", kExitUsage);
     PinholeCamera camera;
     parsePinholeCamera(options.size, "--size", options.camera, camera);
     sh::Window window = sh::parseWindow(options.window);
@@ -98,7 +97,7 @@ void runRender(const RenderOptions& options) {
         RenderedImage image = renderVertexRadiance(bundle.mesh, radiance, camera);
         writeRenderedPicture(options.output, image, options.exposure);
         logInfo("render: wrote " + options.output + " (given per-vertex radiance)");
-        return;
+        return reportCost("render", start, image.rays);
     }
     if (options.env.empty()) throw Error("", "--env", "give --env (or --vertex-radiance)", kExitUsage);
     if (!options.glossyStack.empty() && (!options.lights.empty() || options.texels))
@@ -202,7 +201,8 @@ void addRenderCommand(CLI::App& app) {
                         "Image: .exr (linear float RGBA, A = coverage) or .png (tone mapped, see --exposure)")
         ->required();
     command->add_option("--rotate-y", options->rotateYDegrees,
-                        "Turn the lighting by this many degrees about +Y (right-handed)");
+                        "Turn the lighting by this many degrees about +Y (right-handed)")
+        ->check(CLI::Range(-360.0, 360.0));
     command->add_option("--window", options->window, "Band window against ringing: none, hann or lanczos");
     command->add_option("--order", options->order, "Relight with only the first ORDER bands (default: all)");
     command->add_option("--exposure", options->exposure,
@@ -223,9 +223,9 @@ void addRenderCommand(CLI::App& app) {
                         "With --lights: window on the lights' SH where they meet the bounce layer (hann, none, lanczos, off)");
     command->add_option("--residual-negatives", options->residualNegatives,
                         "With --lights: keep (default) or clamp the residual map's negative texels");
-    command->add_option("--glossy-stack", options->glossyStack,
+    outputFile(command->add_option("--glossy-stack", options->glossyStack,
                         "Glossy bundle: also write the prefiltered spherical-Gaussian stack its lobes are looked up in "
-                        "(prt-sg-stack, docs/glossy.md; the browser viewer's glossy= input)");
+                        "(prt-sg-stack, docs/glossy.md; the browser viewer's glossy= input)"));
     command->callback([options] { runRender(*options); });
 }
 

@@ -94,7 +94,7 @@ void addRunCommand(CLI::App& app) {
     command->add_option("--threads", options.threads, "Worker threads per stage, local executor (default 0: all cores)")
         ->check(CLI::NonNegativeNumber);
     command->add_option("--cache-dir", options.cacheDir, "Store in DIR/store, run reports in DIR/runs (default .cache)");
-    command->add_option("--report", options.reportPath, "Also write the run report (JSON) here");
+    outputFile(command->add_option("--report", options.reportPath, "Also write the run report (JSON) here"));
     command->add_option("--slurm-partition", options.slurmPartition, "Slurm partition (default: the cluster's)");
     command->add_option("--slurm-cpus-per-task", options.slurmCpusPerTask, "CPUs, and stage threads, per job (default 1)")
         ->check(CLI::Range(1, 4096));
@@ -116,7 +116,11 @@ void addRunCommand(CLI::App& app) {
         "gc", "Remove every store entry that no pipeline's last run needs (each stays fully cached)");
     collect->add_flag("--dry-run", gc->second, "Print what would be removed; remove nothing");
     collect->add_option("--cache-dir", gc->first.cacheDir, "The cache whose store to collect (default .cache)");
-    collect->callback([gc] {
+    collect->callback([gc, collect] {
+        std::error_code error;
+        // A mistyped --cache-dir would report an empty store; the default may not exist yet (no run so far).
+        if (collect->get_option("--cache-dir")->count() > 0 && !std::filesystem::is_directory(gc->first.cacheDir, error))
+            throw Error(gc->first.cacheDir, "--cache-dir", "is not a folder: no cache to collect", kExitInput);
         nlohmann::json result = collectStore(gc->first, gc->second);
         std::printf("%s %zu entries (%.1f MiB), kept %zu entries (%.1f MiB) in %s\n",
                     gc->second ? "would remove" : "removed", result["removed"].size(),

@@ -86,7 +86,7 @@ void addSpecularCommand(CLI::App& app) {
     command->add_option("--samples", args->samples, "Rays per vertex (default 1024)");
     command->add_option("--seed", args->seed, "Seed of the per-vertex direction-set rotation (default 0)");
     command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
-    command->add_option("--stats", args->stats, "Also write the stage's statistics as JSON to this file");
+    outputFile(command->add_option("--stats", args->stats, "Also write the stage's statistics as JSON to this file"));
     command->callback([args] { runSpecular(*args); });
 }
 

@@ -62,9 +62,8 @@ TransferOptions resolveOptions(const TransferArgs& args) {
         options.albedoOverride = true;
     }
     // Bundle JSON holds integers exactly up to 2^53.
-    if (args.seed > (uint64_t(1) << 53)) throw usage("--seed", "must be at most 2^53");
+    if (args.seed > (uint64_t(1) << 53)) throw usage("--seed", "must be a whole number from 0 to 2^53");
     options.seed = args.seed;
-    if (args.threads < 0) throw usage("--threads", "must be >= 0 (0: all cores)");
     options.threads = resolveThreads(args.threads);
     return options;
 }

@@ -98,6 +98,7 @@ struct Result {
     int referenceSamples = 0;           // paths per vertex of the pilot reference
     std::vector<double> referenceNoise; // per map: RMS standard error over RMS radiance on all three subsets' rows
     double pilotTransferSeconds = 0.0, referenceSeconds = 0.0, seconds = 0.0;
+    uint64_t rays = 0; // cast in all: the references, the pilot transfers and the lights' cone visibility
 };
 
 // ---- the pieces (each in its own file) ------------------------------------------------------------------------

@@ -122,6 +122,7 @@ std::vector<ReferenceRadiance> measureReference(const TriMesh& mesh, const std::
     size_t worstMap = 0;
     for (size_t m = 0; m < envs.size(); ++m) {
         reference.push_back(referenceVertexRadianceAt(mesh, envs[m], rows.all, ref));
+        result.rays += reference.back().rays;
         double noise = relativeNoise(reference[m], 0, n);
         if (noise > worstNoise) worstNoise = noise, worstMap = m;
     }
@@ -143,7 +144,10 @@ std::vector<ReferenceRadiance> measureReference(const TriMesh& mesh, const std::
     const int samples = int(std::clamp(std::ceil(wanted), double(ref.samples), double(options.referenceMaxSamples)));
     if (samples > ref.samples) {
         ref.samples = samples;
-        for (size_t m = 0; m < envs.size(); ++m) reference[m] = referenceVertexRadianceAt(mesh, envs[m], rows.all, ref);
+        for (size_t m = 0; m < envs.size(); ++m) {
+            reference[m] = referenceVertexRadianceAt(mesh, envs[m], rows.all, ref);
+            result.rays += reference[m].rays;
+        }
     }
     result.referenceSamples = ref.samples;
     for (size_t m = 0; m < envs.size(); ++m) result.referenceNoise.push_back(relativeNoise(reference[m], 0, n));
@@ -165,6 +169,7 @@ struct Pilots {
     std::vector<std::vector<float>> bounce; // the same for the bounces' part (empty without bounces)
     double hitFraction = 0.0;    // front-face hits per ray at the pilot rows (bounces gather there)
     double secondsPerCost = 0.0; // measured, for the report's seconds only
+    uint64_t rays = 0;           // the pilot transfers cast
 };
 
 Pilots runPilots(const TriMesh& mesh, const Rows& subset, const Options& options) {
@@ -210,6 +215,7 @@ Pilots runPilots(const TriMesh& mesh, const Rows& subset, const Options& options
     for (int s : pilots.samplesAxis)
         for (int b : pilots.bouncesAxis) {
             Transfer t = computeTransferAt(mesh, receivers, transferOptions(maxOrder, s, b));
+            pilots.rays += t.stats.rays;
             if (b > 0 && s == pilots.samplesAxis.back()) pilots.hitFraction = double(t.stats.hits) / (double(n) * s);
             if (b == 0 && s == pilots.samplesAxis.back())
                 pilots.secondsPerCost =
@@ -245,6 +251,7 @@ struct Predictor {
         std::vector<float> visibility;
     };
     std::map<std::array<int, 3>, MapLights> mapLights;
+    uint64_t rays = 0; // the cone visibility cast
 
     const MapLights& lightsOf(size_t m, int order, int k);
     std::vector<float> hybridRadiance(const Config& c, size_t run, size_t m, size_t first, size_t count);
@@ -268,8 +275,10 @@ const Predictor::MapLights& Predictor::lightsOf(size_t m, int order, int k) {
                                           {float(l.radiance[0]), float(l.radiance[1]), float(l.radiance[2])},
                                           float(l.angularRadius)});
     const size_t n = pilots.positions.size() / 3;
+    uint64_t cast = 0;
     lights.visibility = envlight::coneVisibility(mesh, pilots.positions.data(), pilots.normals.data(),
-                                                 pilots.spawn.data(), n, d.lights, options.lightSamples);
+                                                 pilots.spawn.data(), n, d.lights, options.lightSamples, &cast);
+    rays += cast;
     return mapLights.emplace(std::array<int, 3>{int(m), order, k}, std::move(lights)).first->second;
 }
 
@@ -488,13 +497,14 @@ Result autoconfigure(const TriMesh& mesh, const std::vector<EnvironmentMap>& env
     const Pilots pilots = runPilots(mesh, rows, options);
     result.pilotTransferSeconds = nowSeconds() - t0;
 
-    Predictor predictor{mesh, envs, options, pilots, reference, {}, {}};
+    Predictor predictor{mesh, envs, options, pilots, reference, {}, {}, 0};
     for (const EnvironmentMap& env : envs)
         predictor.lightings.push_back(environmentLighting(env, pilots.maxOrder, nullptr, sh::Window::None));
     std::vector<size_t> rowsOf; // candidate -> pilot run
     enumerateCandidates(predictor, mesh.vertexCount(), rows.pilot, options, result, rowsOf);
     result.pareto = paretoFront(result.candidates);
     chooseAndCheck(predictor, rowsOf, rows, options, result);
+    result.rays += pilots.rays + predictor.rays;
     result.seconds = nowSeconds() - start;
     return result;
 }

@@ -40,7 +40,7 @@ std::vector<float> selfIrradiance(const TriMesh& mesh, const CubeEnvironment& en
     const float offset = rayOffset(mesh);
     std::vector<float> out(3 * vertices, 0.0f);
     std::atomic<uint64_t> rays{0};
-    tbb::task_arena arena(threads > 0 ? threads : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(threads));
     arena.execute([&] {
         EmbreeScene embree(mesh);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, vertices, 16), [&](const tbb::blocked_range<size_t>& range) {

@@ -58,7 +58,7 @@ SourceGrid sampleSourceGrid(const TriMesh& occluder, const SmallSources& sources
     out.fraction.assign(samples, 0.0f);
     out.valid.assign(samples, 0);
     std::atomic<uint64_t> sourceRays{0}, insideRays{0};
-    tbb::task_arena arena(options.threads > 0 ? options.threads : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         Tracer tracer(occluder);
         const size_t lines = samples / azimuth;

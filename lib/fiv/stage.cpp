@@ -11,7 +11,8 @@ namespace {
 
 // The flag checks that need no input read: usage errors (kExitUsage) for what cannot go together.
 void checkFivOptions(const FivStageOptions& options) {
-    if (options.inputs.empty()) throw Error("", "fiv", "needs an occluder mesh or visibility bundles", kExitUsage);
+    if (options.inputs.empty() && options.merge.empty())
+        throw Error("", "input", "is required: an occluder mesh, or visibility bundles (or --merge SHARD...)", kExitUsage);
     if (fileExtension(options.output) != "glb") throw Error(options.output, "-o", "needs a .glb file", kExitUsage);
     bool sharded = options.visibility.shardCount > 1;
     if (sharded && !options.visibilityOnly)

@@ -149,7 +149,7 @@ Visibility sampleVisibility(const TriMesh& occluder, const VisibilityOptions& op
     std::vector<std::vector<uint8_t>> bytes(rows);
     vis.valid.assign(rows, 0);
     std::atomic<uint64_t> rays{0};
-    tbb::task_arena arena(options.threads > 0 ? options.threads : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         Tracer tracer(occluder);
         Progress progress("fiv visibility", endLine - firstLine);
@@ -210,7 +210,7 @@ uint64_t addSourceShadows(const TriMesh& occluder, const Visibility& vis, const 
         throw Error("", "fiv", "source shadows need the whole grid reduced from its visibility", kExitFailure);
     const std::vector<double> radii = shellRadii(vis.grid);
     std::atomic<uint64_t> rays{0};
-    tbb::task_arena arena(threads > 0 ? threads : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(threads));
     arena.execute([&] {
         Tracer tracer(occluder);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, samples, 256), [&](const tbb::blocked_range<size_t>& range) {

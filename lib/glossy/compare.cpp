@@ -12,7 +12,9 @@
 
 namespace prt::glossy {
 
-FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t problems);
+// compute.cpp: the mesh's first `problems` fit problems (vertex by vertex, view by view), and the rays that tabulated
+// their radiance.
+FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t problems, uint64_t& rays);
 
 namespace {
 
@@ -29,8 +31,8 @@ double processCpuSeconds() {
 
 SolverComparison compareSolvers(const TriMesh& mesh, const GlossyOptions& options, size_t problems) {
     const DirectionGrid grid = cubeGrid(options.gridResolution);
-    FitBatch start = stageProblems(mesh, options, problems);
     SolverComparison result;
+    FitBatch start = stageProblems(mesh, options, problems, result.rays);
     result.problems = start.problems;
     const int width = start.lobes * kLobeParams;
     // Warm-up: compiles (or loads from PoCL's cache) the kernel, outside the timing.

@@ -316,8 +316,7 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
     const DirectionGrid heldGrid = options.nested ? heldOutGrid(heldOutResolution(options)) : DirectionGrid();
     if (options.nested) result.heldOutError.assign(vertices * kViewCount, -1.0f), result.keptStage.assign(size_t(lobes), 0);
 
-    tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
-                                                            : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(options.solverOptions.threads));
     std::optional<EmbreeScene> scene;
     arena.execute([&] { scene.emplace(mesh); });
     const float offset = rayOffset(mesh);
@@ -409,12 +408,11 @@ GlossyLobes computeGlossyLobes(const TriMesh& mesh, const GlossyOptions& options
     return result;
 }
 
-FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t problems) {
+FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t problems, uint64_t& rayCount) {
     checkOptions(mesh, options);
     const DirectionGrid grid = cubeGrid(options.gridResolution);
     const int width = options.lobes * kLobeParams;
-    tbb::task_arena arena(options.solverOptions.threads > 0 ? options.solverOptions.threads
-                                                            : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(options.solverOptions.threads));
     std::optional<EmbreeScene> scene;
     arena.execute([&] { scene.emplace(mesh); });
     const std::vector<float> spawn = spawnNormals(mesh);
@@ -431,6 +429,7 @@ FitBatch stageProblems(const TriMesh& mesh, const GlossyOptions& options, size_t
                                 chunk.batch.amplitudeMax.begin() + take);
         all.problems += take;
     }
+    rayCount = rays.load();
     return all;
 }
 

@@ -294,6 +294,7 @@ Layer lobeLayer(const GlossyLobes& lobes, const GlossyOptions& options, size_t v
 // ---- solver comparison -------------------------------------------------------------------------------------
 struct SolverComparison {
     size_t problems = 0;
+    uint64_t rays = 0; // cast to tabulate the problems' radiance
     double openClSeconds = 0.0, ceresSeconds = 0.0; // wall clock for all problems, after a warm-up launch
     double openClCpuSeconds = 0.0, ceresCpuSeconds = 0.0; // process CPU time (user + system, all threads) of each
     double initialCost = 0.0, openClCost = 0.0, ceresCost = 0.0; // summed final objectives

@@ -3,6 +3,8 @@
 #include "glossy.h"
 #include "glossy_internal.h"
 
+#include "core.h"
+
 #include <ceres/ceres.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -70,7 +72,7 @@ void solveCeres(const DirectionGrid& grid, FitBatch& batch, const FitWeights& we
         batch.cost[p] = float(2.0 * summary.final_cost); // Ceres's own cost at its end point: half the objective
         batch.iterations[p] = int(summary.iterations.size()) - 1; // iteration 0 is the start
     };
-    tbb::task_arena arena(options.threads > 0 ? options.threads : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, batch.problems, 4), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t p = r.begin(); p < r.end(); ++p) solveOne(p);

@@ -106,7 +106,7 @@ ReferenceRadiance referenceDirectRadiance(const TriMesh& receiver, const std::ve
     result.radiance.assign(3 * vertices, 0.0f);
     result.standardError.assign(3 * vertices, 0.0f);
     std::atomic<uint64_t> rays{0};
-    tbb::task_arena arena(options.threads > 0 ? options.threads : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         bool trace = options.shadows && scene.triangleCount() > 0;
         std::unique_ptr<EmbreeScene> embree = trace ? std::make_unique<EmbreeScene>(scene) : nullptr;

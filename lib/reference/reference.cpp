@@ -78,7 +78,7 @@ uint64_t parallelOverPoints(const char* label, size_t count, const Body& body) {
 // Runs `work` with at most `threads` workers (0: all), Embree's scene build included.
 template <typename Work>
 auto withThreads(int threads, const Work& work) {
-    tbb::task_arena arena(threads > 0 ? threads : int(tbb::task_arena::automatic));
+    tbb::task_arena arena(arenaConcurrency(threads));
     return arena.execute(work);
 }
 

@@ -93,8 +93,9 @@ void rotationY(double degrees, double R[9]);
 
 // ---- windowing and energy ------------------------------------------------------------------------------------
 enum class Window { None, Hann, Lanczos };
-// Parses "none" | "hann" | "lanczos"; throws prt::Error(kExitUsage) otherwise.
-Window parseWindow(const std::string& name);
+// Parses "none" | "hann" | "lanczos"; throws prt::Error(kExitUsage) naming `option` (the flag it came from)
+// otherwise.
+Window parseWindow(const std::string& name, const char* option = "--window");
 const char* windowName(Window window);
 // Per-band weight w_l for a window over `order` bands: Hann (1 + cos(pi l / order)) / 2, Lanczos sinc(l / order).
 double windowWeight(Window window, int l, int order);

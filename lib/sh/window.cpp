@@ -8,11 +8,11 @@
 
 namespace prt::sh {
 
-Window parseWindow(const std::string& name) {
+Window parseWindow(const std::string& name, const char* option) {
     if (name == "none") return Window::None;
     if (name == "hann") return Window::Hann;
     if (name == "lanczos") return Window::Lanczos;
-    throw Error("", "--window", "unknown window '" + name + "' (need none, hann or lanczos)", kExitUsage);
+    throw Error("", option, "unknown window '" + name + "' (need none, hann or lanczos)", kExitUsage);
 }
 
 const char* windowName(Window window) {

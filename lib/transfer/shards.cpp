@@ -89,7 +89,7 @@ ShardRows computeDirectShard(const TriMesh& mesh, const ShardRun& run, const std
     result.total.resize(rows * context.stride);
     if (run.channels == 1) result.exitant.resize(rows * context.coefficients);
     std::vector<HitBlock> hitBlocks(hitBlockCount(rows));
-    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         runDirectPass(context, result.total.data(), run.channels == 1 ? result.exitant.data() : nullptr, &hitBlocks,
                       stats);
@@ -133,7 +133,7 @@ ShardRows computeBounceShard(const TriMesh& mesh, const ShardRun& run, int pass,
     stats.transferBytes = (rows.total.size() + rows.direct.size() + previous.size() + next.size()) * sizeof(float) +
                           cornerRows.size() * sizeof(uint32_t);
     double start = nowSeconds();
-    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         std::optional<Progress> progress;
         if (options.progress) progress.emplace("transfer bounce " + std::to_string(pass), run.rowEnd - run.rowBegin);

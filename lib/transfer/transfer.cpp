@@ -386,7 +386,7 @@ Transfer computeTransfer(const TriMesh& mesh, const TransferOptions& options) {
     total.resize((end - begin) * context.stride);
     stats.transferBytes = total.size() * sizeof(float);
 
-    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         if (options.mode == TransferMode::Unshadowed) {
             stats.directSeconds = unshadowedPass(context, total.data());
@@ -457,7 +457,7 @@ Transfer computeTransferAt(const TriMesh& geometry, const Receivers& receivers, 
     if (gather && options.keepDirect) result.direct.resize(total.size());
     stats.transferBytes = (total.size() + result.direct.size() + outgoing.size()) * sizeof(float);
 
-    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         if (options.mode == TransferMode::Unshadowed) {
             stats.directSeconds = unshadowedPass(context, total.data());

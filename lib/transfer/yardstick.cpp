@@ -28,7 +28,7 @@ RayThroughput castBare(const TriMesh& geometry, const Receivers& receivers, cons
 
     RayThroughput result;
     std::atomic<uint64_t> occluded{0};
-    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaConcurrency(options.threads));
     arena.execute([&] {
         EmbreeScene scene(geometry);
         double start = nowSeconds();

@@ -101,14 +101,20 @@ std::function<std::string()> editedBundle(const std::function<void(json&)>& edit
     };
 }
 
-std::string npy(const std::string& descr, const std::string& shape, size_t dataBytes, bool fortran = false) {
-    std::string header = "{'descr': '" + descr + "', 'fortran_order': " + (fortran ? "True" : "False") + ", 'shape': " + shape + ", }";
+// A version 1.0 .npy of `header` (the dict) and `dataBytes` zero bytes.
+std::string npyWithHeader(std::string header, size_t dataBytes) {
     header.append((64 - (10 + header.size() + 1) % 64) % 64, ' ');
     header += '\n';
     std::string out("\x93NUMPY\x01\x00", 8);
     out += char(header.size() & 0xff);
     out += char(header.size() >> 8);
     return out + header + std::string(dataBytes, '\0');
+}
+
+std::string npy(const std::string& descr, const std::string& shape, size_t dataBytes, bool fortran = false) {
+    return npyWithHeader("{'descr': '" + descr + "', 'fortran_order': " + (fortran ? "True" : "False") + ", 'shape': " +
+                             shape + ", }",
+                         dataBytes);
 }
 
 const std::string kPly = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
@@ -348,7 +354,8 @@ std::vector<Case> meshCases() {
 std::vector<Case> dataCases() {
     return {
         // ---- environment maps (OpenImageIO) ----
-        Case{"exr", "text named .exr", {{"e.exr", text("not an image")}}, "envsh {in}/e.exr --order 3 -o {out}/sh.json", 3, "e.exr"},
+        Case{"exr", "text named .exr", {{"e.exr", text("not an image")}}, "envsh {in}/e.exr --order 3 -o {out}/sh.json", 3,
+             "e.exr: byte 0: named .exr but not OpenEXR"},
         Case{"exr", "missing file", {}, "envsh {in}/absent.exr --order 3 -o {out}/sh.json", 3, "not found"},
         Case{"exr", "folder named .exr", {{"d.exr/x", text("")}}, "envsh {in}/d.exr --order 3 -o {out}/sh.json", 3, "folder"},
         Case{"exr", "truncated EXR", {{"t.exr", text(std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8) + "channels")}},
@@ -364,6 +371,19 @@ std::vector<Case> dataCases() {
              "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "Fortran"},
         Case{"npy", "data shorter than the shape", {{"a.npy", text(npy("<f4", "(2, 3)", 12))}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
              "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "expected 6 floats"},
+        // A header read by searching its text took a big-endian array with a '<f4' elsewhere in it for float32.
+        Case{"npy", "big-endian with a decoy key", {{"a.npy", text(npyWithHeader(
+                 "{'descr': '>f4', 'x': '<f4', 'fortran_order': False, 'shape': (1, 3), }", 12))},
+                 {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "unexpected or repeated key 'x'"},
+        Case{"npy", "big-endian", {{"a.npy", text(npy(">f4", "(1, 3)", 12))}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "little-endian float32 ('<f4'), found '>f4'"},
+        Case{"npy", "Fortran order twice", {{"a.npy", text(npyWithHeader(
+                 "{'descr': '<f4', 'fortran_order': True, 'y': 'fortran_order': False, 'shape': (1, 3), }", 12))},
+                 {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "header, byte"},
+        Case{"npy", "no rows", {{"a.npy", text(npy("<f4", "(0, 3)", 0))}, {"b.npy", text(npy("<f4", "(0, 3)", 0))}},
+             "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "has no rows"},
         Case{"npy", "shape holds text", {{"a.npy", text(npy("<f4", "(one, 3)", 12))}, {"b.npy", text(npy("<f4", "(1, 3)", 12))}},
              "compare {in}/a.npy {in}/b.npy -o {out}/m.json", 3, "non-negative integers"},
         // ---- pipeline TOML ----
@@ -515,7 +535,37 @@ std::vector<Case> commandLineCases() {
              "nodir/b.glb: --output: its folder"},
         Case{"cli", "usage error under --log-json", {}, "--log-json merge", 2, "{\"level\":\"error\",\"msg\":\"shards is required\"}"},
         Case{"cli", "element cap not a number", {{"m.off", text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")}},
-             "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}}
+             "meshprep {in}/m.off -o {out}/m.glb", 2, "PRT_MAX_ELEMENTS", {{"PRT_MAX_ELEMENTS", "lots"}}},
+        // Found by a session trying every stage as a new user (2026-12-06): a NaN angle segfaulted envlight and
+        // tripped Embree's ray check in the hybrid relight; an infinite tolerance failed adapt after its work.
+        Case{"cli", "NaN angle", {}, "envlight {in}/e.exr -o {out}/l.json --rotate-y nan", 2,
+             "--rotate-y: 'nan' is not a finite number"},
+        Case{"cli", "infinite tolerance", {}, "adapt {in}/t.glb -o {out}/a.glb --max-error inf", 2,
+             "--max-error: 'inf' is not a finite number"},
+        Case{"cli", "angle past a turn", {}, "render {in}/t.glb --env {in}/e.exr --camera 0,0,3,0,0,0,0,1,0,40 --size 8,8 "
+             "--rotate-y 400 -o {out}/p.png", 2, "--rotate-y"},
+        Case{"cli", "output over its input", {{"e.exr", text("not read")}}, "envsh {in}/e.exr --order 2 -o {in}/e.exr", 2,
+             "e.exr: --output: is also the input given as env"},
+        Case{"cli", "two outputs on one file", {}, "relight {in}/t.glb --env {in}/e.exr -o {out}/r.npy --positions {out}/r.npy",
+             2, "--positions: is also the output of --output"},
+        Case{"cli", "a second output's folder missing, found before any work", {},
+             "reference {in}/b.glb --env {in}/e.exr --samples 4 -o {out}/r.npy --stderr-out {out}/nodir/e.npy", 4,
+             "nodir/e.npy: --stderr-out: its folder"},
+        Case{"cli", "output is a folder", {}, "compare {in}/t.glb {in}/t.glb -o {out}", 4, "is a folder, not a file to write"},
+        Case{"cli", "negative threads", {}, "reference {in}/b.glb --env {in}/e.exr --samples 4 --threads -1 -o {out}/r.npy",
+             2, "--threads: must be >= 0"},
+        Case{"cli", "irradiance of a specular relight", {},
+             "relight {in}/t.glb --env {in}/e.exr --brdf phong:16,0.4 --eye 0,1,2 --irradiance -o {out}/r.npy", 2,
+             "excludes"},
+        Case{"cli", "fiv-visibility merge of no shard", {}, "fiv-visibility -o {out}/v.glb", 2, "input: is required"},
+        // Flags that mean something only beside another were accepted and ignored without it.
+        Case{"cli", "compare --scale without --image", {}, "compare {in}/a.npy {in}/b.npy --scale 5", 2, "--scale requires --image"},
+        Case{"cli", "glossy --overshoot without --from-below", {}, "glossy {in}/b.glb -o {out}/g.glb --brdf phong:16,0.4 --overshoot 2", 2,
+             "--overshoot requires --from-below"},
+        Case{"cli", "render --exposure for an .exr", {},
+             "render {in}/t.glb --env {in}/e.exr --camera 0,0,3,0,0,0,0,1,0,40 --size 8,8 --exposure 1 -o {out}/p.exr", 2,
+             "--exposure: tone-maps a .png"},
+        Case{"cli", "gc of a cache that is not there", {}, "gc --cache-dir {out}/typo", 3, "typo: --cache-dir: is not a folder"}
     };
 }
 
