@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <limits>
+#include <thread>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -97,6 +101,48 @@ TEST(Core, AtomicWriteNeverWritesThroughALinkPlantedAtATemporaryName) {
     for (const fs::path& link : links) fs::remove(link);
     for (const auto& item : fs::directory_iterator(target.parent_path()))
         if (item.path().filename().string().rfind(".planted.json.tmp-", 0) == 0) fs::remove(item.path());
+}
+
+// What every reader asks before it follows a name found in a file: inside the folder, its links resolved.
+TEST(Core, ResolvedInsideFollowsLinksAndRefusesWhatLeavesTheFolder) {
+    const fs::path folder = scratch("inside");
+    fs::create_directories(folder / "sub");
+    std::ofstream(scratch("outside.txt")) << "x";
+    std::ofstream(folder / "sub" / "in.txt") << "x";
+    fs::remove(folder / "out-link");
+    fs::remove(folder / "in-link");
+    fs::create_symlink(scratch("outside.txt"), folder / "out-link");
+    fs::create_symlink(folder / "sub" / "in.txt", folder / "in-link");
+    EXPECT_EQ(prt::resolvedInside((folder / "sub/in.txt").string(), folder.string()),
+              fs::weakly_canonical(folder / "sub/in.txt").string());
+    EXPECT_NE(prt::resolvedInside((folder / "in-link").string(), folder.string()), "");
+    EXPECT_NE(prt::resolvedInside((folder / "not-yet.txt").string(), folder.string()), ""); // need not exist
+    EXPECT_EQ(prt::resolvedInside((folder / "out-link").string(), folder.string()), "");
+    EXPECT_EQ(prt::resolvedInside((folder / "sub/../../outside.txt").string(), folder.string()), "");
+    EXPECT_EQ(prt::resolvedInside(folder.string(), folder.string()), "");
+    EXPECT_EQ(prt::resolvedInside((folder.string() + "-sibling/x"), folder.string()), ""); // a prefix is not inside
+}
+
+// A result that overflowed float on the way is refused before it is written, naming its first bad value.
+TEST(Core, RequireFiniteResultNamesTheFirstValueThatIsNot) {
+    const float good[6] = {0, 1, 2, 3e38f, -3e38f, 5};
+    EXPECT_NO_THROW(prt::requireFiniteResult(good, 6, 3, "r.npy"));
+    const float bad[6] = {0, 1, 2, 3, std::numeric_limits<float>::infinity(), std::nanf("")};
+    try {
+        prt::requireFiniteResult(bad, 6, 3, "r.npy");
+        FAIL() << "an infinite result was accepted";
+    } catch (const prt::Error& e) {
+        EXPECT_EQ(e.file(), "r.npy");
+        EXPECT_EQ(e.place(), "row 1, column 1");
+        EXPECT_EQ(e.exitCode(), prt::kExitInput);
+    }
+}
+
+TEST(Core, ArenaConcurrencyIsAutomaticForZeroAndNeverPastTheCores) {
+    EXPECT_EQ(prt::arenaConcurrency(0), -1);
+    EXPECT_EQ(prt::arenaConcurrency(-3), -1);
+    EXPECT_EQ(prt::arenaConcurrency(1), 1);
+    EXPECT_EQ(prt::arenaConcurrency(1 << 20), std::max(1, int(std::thread::hardware_concurrency())));
 }
 
 TEST(Core, WriteIntoMissingFolderFailsCleanly) {

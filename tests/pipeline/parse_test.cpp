@@ -72,6 +72,25 @@ TEST(Load, MissingInputFileNamesTheInputAndItsLine) {
     }
 }
 
+// An output whose path differs from an input's by its text but leads to the same file (a link here; an absolute
+// path or ".." alike) would be overwritten by the run: refused when the pipeline is loaded, naming the output's line.
+TEST(Load, AnOutputLeadingToAnInputsFileIsRefused) {
+    test::TempDir dir;
+    test::writeText(dir / "shape.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    std::filesystem::create_symlink(dir / "shape.obj", dir / "link.glb");
+    std::string file = dir / "p.toml";
+    test::writeText(file, "[inputs]\nshape = { mesh = \"" + (dir / "shape.obj") +
+                              "\" }\n[stages.prep]\nrun = \"meshprep\"\ninputs = { mesh = \"shape\" }\n"
+                              "[outputs]\nmesh = { from = \"prep\", path = \"" + (dir / "link.glb") + "\" }\n");
+    try {
+        loadPipeline(file);
+        FAIL() << "an output over an input's file was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.place(), "line 7, outputs.mesh.path");
+        EXPECT_NE(e.problem().find("is the file of input 'shape'"), std::string::npos) << e.what();
+    }
+}
+
 // A relight stage takes one lighting, or the map with its lights (a glossy bundle's lights path); env with sh is
 // refused by the malformed file exactly_one_input.toml.
 TEST(Parse, RelightTakesTheMapWithItsLightsForTheGlossyLightsPath) {
