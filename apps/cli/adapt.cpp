@@ -70,6 +70,11 @@ void runAdapt(const AdaptArgs& args, const CLI::App& command) {
         throw Error("", "--budget", "\"" + args.budget + "\" is not rms or vertex", kExitUsage);
     if (args.scales != "per-vertex" && args.scales != "per-cluster")
         throw Error("", "--scales", "\"" + args.scales + "\" is not per-vertex or per-cluster", kExitUsage);
+    // Given with another format they would be ignored.
+    if (args.components != 0 && args.format != "cpca")
+        throw Error("", "--components", "counts CPCA components: it goes with --format cpca", kExitUsage);
+    if (args.scales == "per-cluster" && args.format != "u8" && args.format != "u16")
+        throw Error("", "--scales", "per-cluster scales are those of --format u8 or u16 codes", kExitUsage);
     if (haveError && args.envs.empty() && args.shFiles.empty())
         throw Error("", "--env", "--max-error needs a lighting prior: one or more --env maps (or --sh files)", kExitUsage);
     if (fileExtension(args.output) != "glb") throw Error(args.output, "-o", "output must end in .glb", kExitUsage);

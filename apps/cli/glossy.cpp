@@ -130,6 +130,8 @@ glossy::GlossyOptions glossyOptions(const GlossyArgs& args) {
     if (!(args.beta >= 0 && args.gamma >= 0 && args.delta >= 0)) throw usage("--coherence", "weights must be >= 0");
     if (args.iterations < 1) throw usage("--iterations", "must be >= 1");
     if (args.compareSolvers == 0 && args.output.empty()) throw usage("-o", "is required");
+    if (args.compareSolvers > 0 && !args.output.empty())
+        throw usage("-o", "--compare-solvers writes no bundle: its figures go to the log and --stats");
     if (args.compareSolvers == 0 && fileExtension(args.output) != "glb")
         throw Error(args.output, "-o", "must end in .glb", kExitUsage);
     options.gridResolution = args.grid;

@@ -565,7 +565,13 @@ std::vector<Case> commandLineCases() {
         Case{"cli", "render --exposure for an .exr", {},
              "render {in}/t.glb --env {in}/e.exr --camera 0,0,3,0,0,0,0,1,0,40 --size 8,8 --exposure 1 -o {out}/p.exr", 2,
              "--exposure: tone-maps a .png"},
-        Case{"cli", "gc of a cache that is not there", {}, "gc --cache-dir {out}/typo", 3, "typo: --cache-dir: is not a folder"}
+        Case{"cli", "gc of a cache that is not there", {}, "gc --cache-dir {out}/typo", 3, "typo: --cache-dir: is not a folder"},
+        Case{"cli", "adapt --components without cpca", {}, "adapt {in}/t.glb -o {out}/a.glb --order 2 --components 3", 2,
+             "--components: counts CPCA components"},
+        Case{"cli", "adapt per-cluster scales of floats", {}, "adapt {in}/t.glb -o {out}/a.glb --order 2 --scales per-cluster",
+             2, "--scales: per-cluster scales are those of --format u8 or u16"},
+        Case{"cli", "glossy -o with --compare-solvers", {},
+             "glossy {in}/b.glb -o {out}/g.glb --brdf phong:16,0.4 --compare-solvers 4", 2, "writes no bundle"}
     };
 }
 
