@@ -33,7 +33,7 @@ void runAutoconfig(const AutoconfigArgs& args, const CLI::App& command) {
     if (fileExtension(args.output) != "toml") throw Error(args.output, "-o", "output must end in .toml", kExitUsage);
     if (args.envs.empty()) throw Error("", "--env", "needs at least one environment map", kExitUsage);
     if (args.pilotVertices < 1) throw Error("", "--pilot-vertices", "must be >= 1", kExitUsage);
-    if (args.seed > (uint64_t(1) << 53)) throw Error("", "--seed", "must be at most 2^53", kExitUsage);
+    if (args.seed > (uint64_t(1) << 53)) throw Error("", "--seed", "must be a whole number from 0 to 2^53", kExitUsage);
 
     autoconfig::Options options;
     options.targetError = args.targetError;

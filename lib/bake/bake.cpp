@@ -36,7 +36,7 @@ void checkOptions(const BakeOptions& options) {
     if (!(options.maxMissFraction >= 0.0 && options.maxMissFraction <= 1.0))
         throw usage("--max-miss", "must lie in [0, 1]");
     if (options.padding < 2) throw usage("--padding", "must be at least 2 texels");
-    if (options.seed > (uint64_t(1) << 53)) throw usage("--seed", "must be at most 2^53");
+    if (options.seed > (uint64_t(1) << 53)) throw usage("--seed", "must be a whole number from 0 to 2^53");
     if (options.threads < 0) throw usage("--threads", "must be >= 0 (0: all cores)");
 }
 

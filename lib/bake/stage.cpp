@@ -37,11 +37,12 @@ struct WrittenFiles {
         }
         const std::filesystem::path out(output);
         const std::filesystem::path folder = out.parent_path().empty() ? std::filesystem::path(".") : out.parent_path();
+        const std::string stem = out.stem().string();
         std::error_code error;
         for (const auto& item : std::filesystem::directory_iterator(folder, error)) {
             const std::string name = item.path().filename().string();
             const std::string path = (out.parent_path() / name).string();
-            if (!isBakeTextureName(name, out.stem().string()) ||
+            if (!isBakeTextureName(name, stem) ||
                 std::find(paths.begin(), paths.end(), path) != paths.end())
                 continue;
             std::error_code timeError;

@@ -8,8 +8,9 @@
 // Any write changes ctime, and ctime cannot be set back (utimensat sets mtime, and moves ctime to now), so a
 // rewritten file, whatever its size and mtime, no longer matches its entry. The second condition is git's "racy"
 // rule: a file written in the same timestamp tick as it was hashed could change again without changing its
-// times, so such a hash is answered to this call only, never recorded, and taken again when next asked. Timestamps are at most one second
-// coarse on the filesystems prt runs on; a coarser one (FAT: 2 s) defeats the rule.
+// times, so such a hash is answered to this call only, never recorded, and taken again when next asked.
+// Timestamps are at most one second coarse on the filesystems prt runs on; a coarser one (FAT: 2 s) defeats the
+// rule.
 #include "pipeline_internal.h"
 
 #include "core.h"

@@ -507,8 +507,9 @@ Pipeline parsePipeline(std::string_view text, const std::string& file) {
     }
     // The name goes into Slurm job names and scripts, so the default (the file stem) obeys the same rule.
     if (!isName(pipeline.name)) {
-        context.fail(1, "pipeline.name", "the file stem '" + printableBytes(pipeline.name) + "' is the default name but is not one (letters, digits, "
-                                         "'_' and '-'): rename the file or set name in a [pipeline] table");
+        context.fail(1, "pipeline.name", "the file stem '" + printableBytes(pipeline.name) +
+                                             "' is the default name but is not one (letters, digits, '_' and '-'): "
+                                             "rename the file or set name in a [pipeline] table");
     }
     if (const toml::node* node = root.get("inputs")) parseInputs(context, requireTable(context, *node, "inputs"), pipeline);
 
@@ -591,16 +592,15 @@ void checkOutputsInside(const Pipeline& pipeline) {
     namespace fs = std::filesystem;
     std::error_code error;
     auto resolved = [&](const fs::path& path) { return fs::weakly_canonical(fs::absolute(path), error); };
-    auto inside = [](const fs::path& path, const fs::path& folder) {
-        auto end = std::mismatch(folder.begin(), folder.end(), path.begin(), path.end()).first;
-        return end == folder.end() || (std::next(end) == folder.end() && end->empty()); // a trailing "/" on folder
-    };
     const fs::path current = resolved(fs::current_path(error));
     const fs::path fileFolder = resolved(fs::path(pipeline.file).parent_path().empty() ? fs::path(".")
                                                                                         : fs::path(pipeline.file).parent_path());
     for (const PipelineOutput& output : pipeline.outputs) {
+        // An output is never a folder (parsePipeline), so "strictly inside" is "inside".
+        if (!resolvedInside(output.path, current.string()).empty() ||
+            !resolvedInside(output.path, fileFolder.string()).empty())
+            continue;
         const fs::path target = resolved(output.path);
-        if (inside(target, current) || inside(target, fileFolder)) continue;
         throw Error(pipeline.file, "line " + std::to_string(output.line) + ", outputs." + output.name + ".path",
                     "'" + output.path + "' resolves to " + target.string() + ", outside the current directory (" +
                         current.string() + ") and the pipeline's folder (" + fileFolder.string() +
